@@ -1,0 +1,1 @@
+"""Capture plan -> mission compiler. Pure: no sockets, no MAVLink links."""

@@ -1,0 +1,67 @@
+"""The `wiris` command line: thin commands over library calls.
+
+Start-up must stay fast: the command modules import only click at module level; pymavlink, lxml,
+shapely and pyproj are imported inside the commands that need them (tests/test_cli_startup.py).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+import click
+
+from cdf.errors import WirisError
+
+
+class WirisGroup(click.Group):
+    """A group that turns WirisError (and anything unexpected) into a one-line message and exit 1."""
+
+    def invoke(self, ctx: click.Context):
+        try:
+            return super().invoke(ctx)
+        except WirisError as err:
+            click.echo(f"error: {err}", err=True)
+            ctx.exit(1)
+        except (click.exceptions.Exit, click.ClickException, click.Abort):
+            raise
+        except KeyboardInterrupt:
+            click.echo("interrupted", err=True)
+            ctx.exit(130)
+        except Exception as err:  # a bug of ours: still no traceback unless asked for
+            if os.environ.get("WIRIS_DEBUG"):
+                raise
+            click.echo(f"internal error: {type(err).__name__}: {err}\n"
+                       "  hint: rerun with WIRIS_DEBUG=1 for a traceback and report it", err=True)
+            ctx.exit(1)
+
+
+@click.group(cls=WirisGroup, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="wiris-tools", prog_name="wiris")
+def cli() -> None:
+    """Tools for Workswell WIRIS and MicaSense RedEdge cameras on MAVLink drones."""
+
+
+def _register() -> None:
+    from wiris_tools.cli import cdf_cmd
+
+    cli.add_command(cdf_cmd.cdf)
+    for mod, name in (("mission_cmd", "mission"), ("camera_cmd", "camera"), ("emulate_cmd", "emulate")):
+        try:
+            module = __import__(f"wiris_tools.cli.{mod}", fromlist=[name])
+        except ModuleNotFoundError as err:
+            if err.name != f"wiris_tools.cli.{mod}":
+                raise
+            continue  # command group not built yet
+        cli.add_command(getattr(module, name))
+
+
+_register()
+
+
+def main() -> None:
+    cli(prog_name="wiris")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
