@@ -43,10 +43,8 @@ def cli() -> None:
 
 
 def _register() -> None:
-    from wiris_tools.cli import cdf_cmd
-
-    cli.add_command(cdf_cmd.cdf)
-    for mod, name in (("mission_cmd", "mission"), ("camera_cmd", "camera"), ("emulate_cmd", "emulate")):
+    for mod, name in (("cdf_cmd", "cdf"), ("mission_cmd", "mission"), ("camera_cmd", "camera"),
+                      ("emulate_cmd", "emulate")):
         try:
             module = __import__(f"wiris_tools.cli.{mod}", fromlist=[name])
         except ModuleNotFoundError as err:
