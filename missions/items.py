@@ -9,18 +9,20 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 import math
+import struct
 
-# MAV_MISSION_TYPE values (common.xml); kept here as names so that pure modules need not import pymavlink.
-MISSION_TYPE_MISSION = 0
-MISSION_TYPE_FENCE = 1
-MISSION_TYPE_RALLY = 2
+# The ArduPilot dialect is a superset of common.xml: one source for every MAVLink number we emit.
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+MISSION_TYPE_MISSION = mavlink.MAV_MISSION_TYPE_MISSION
+MISSION_TYPE_FENCE = mavlink.MAV_MISSION_TYPE_FENCE
+MISSION_TYPE_RALLY = mavlink.MAV_MISSION_TYPE_RALLY
 MISSION_TYPES = {"mission": MISSION_TYPE_MISSION, "fence": MISSION_TYPE_FENCE, "rally": MISSION_TYPE_RALLY}
 
-# MAV_FRAME values used by missions (common.xml).
-FRAME_GLOBAL = 0                  # MAV_FRAME_GLOBAL (AMSL)
-FRAME_MISSION = 2                 # MAV_FRAME_MISSION: params are not a position
-FRAME_GLOBAL_RELATIVE_ALT = 3     # MAV_FRAME_GLOBAL_RELATIVE_ALT (above home)
-FRAME_GLOBAL_TERRAIN_ALT = 10     # MAV_FRAME_GLOBAL_TERRAIN_ALT
+FRAME_GLOBAL = mavlink.MAV_FRAME_GLOBAL                              # altitude AMSL
+FRAME_MISSION = mavlink.MAV_FRAME_MISSION                            # params are not a position
+FRAME_GLOBAL_RELATIVE_ALT = mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT    # altitude above home
+FRAME_GLOBAL_TERRAIN_ALT = mavlink.MAV_FRAME_GLOBAL_TERRAIN_ALT
 
 
 @dataclass(frozen=True)
@@ -60,7 +62,6 @@ class MissionItem:
     def same_on_wire(self, other: "MissionItem") -> bool:
         """Field-by-field equality as a vehicle stores it: floats compared as float32, NaN equal to NaN."""
         def f32(v: float) -> float:
-            import struct
             return struct.unpack("<f", struct.pack("<f", v))[0]
 
         def eq(a: float, b: float) -> bool:
