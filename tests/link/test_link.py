@@ -1,0 +1,241 @@
+"""Link over real UDP sockets on 127.0.0.1: heartbeats, filters, MAVLink 1, the command protocol
+(ACK matching, IN_PROGRESS, retries with confirmation, error results) and MAVLink 2 signing."""
+
+from __future__ import annotations
+
+import math
+import threading
+
+import pytest
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from wiris_tools.errors import LinkError
+from wiris_tools.link import Link, command_name
+from wiris_tools.signing import key_from_text, load_signing_key
+
+
+def pair(*, a_kwargs=None, b_kwargs=None):
+    """A camera-like side bound to a free port and a GCS that sends to it."""
+    a = Link("udpin:127.0.0.1:0", **({"system": 1, "component": 100, "mav_type": mavlink2.MAV_TYPE_CAMERA,
+                                      "heartbeat_s": 0.2} | (a_kwargs or {})))
+    b = Link(f"udpout:127.0.0.1:{a.local_port}", **({"heartbeat_s": 0.2} | (b_kwargs or {})))
+    return a, b
+
+
+@pytest.fixture
+def links():
+    a, b = pair()
+    yield a, b
+    b.close()
+    a.close()
+
+
+class Responder:
+    """Answers COMMAND_LONG on link `a` with scripted results; records the confirmations seen."""
+
+    def __init__(self, link: Link, script: list[list[tuple[int, int]]], from_component: int | None = None):
+        self.link = link
+        self.script = list(script)
+        self.confirmations: list[int] = []
+        self.params: list[tuple] = []
+        self.sub = link.subscribe(self.on_cmd, "COMMAND_LONG", to_me=True)
+
+    def on_cmd(self, msg):
+        self.confirmations.append(msg.confirmation)
+        self.params.append((msg.param1, msg.param2, msg.param3, msg.param4, msg.param5, msg.param6, msg.param7))
+        answers = self.script.pop(0) if self.script else []
+        for result, prog in answers:
+            self.link.send(self.link.mav.command_ack_encode(msg.command, result, prog, 0,
+                                                            msg.get_srcSystem(), msg.get_srcComponent()))
+
+
+def test_heartbeats_carry_our_type_and_ids(links):
+    a, b = links
+    hb = b.wait_heartbeat(timeout=3, component=100)
+    assert (hb.get_srcSystem(), hb.get_srcComponent(), hb.type) == (1, 100, mavlink2.MAV_TYPE_CAMERA)
+    hb = a.wait_heartbeat(timeout=3, system=255)
+    assert (hb.get_srcComponent(), hb.type) == (mavlink2.MAV_COMP_ID_MISSIONPLANNER, mavlink2.MAV_TYPE_GCS)
+
+
+def test_inbox_filters_by_type_source_and_target(links):
+    a, b = links
+    b.wait_heartbeat(timeout=3)
+    with a.inbox("COMMAND_LONG", src_system=255, to_me=True) as box:
+        b.send(b.mav.command_long_encode(7, 100, 1, 0, 0, 0, 0, 0, 0, 0, 0))   # another system
+        b.send(b.mav.command_long_encode(1, 101, 2, 0, 0, 0, 0, 0, 0, 0, 0))   # another component
+        b.send(b.mav.param_request_list_encode(1, 100))                          # another type
+        b.send(b.mav.command_long_encode(0, 0, 3, 0, 0, 0, 0, 0, 0, 0, 0))     # broadcast
+        b.send(b.mav.command_long_encode(1, 100, 4, 0, 0, 0, 0, 0, 0, 0, 0))   # us
+        got = [box.get(1.0), box.get(1.0), box.get(0.3)]
+    assert [m.command for m in got[:2]] == [3, 4] and got[2] is None
+
+
+def test_mavlink1_link_sends_v1_frames_and_reads_v2():
+    a, b = pair(a_kwargs={"mavlink1": True})
+    try:
+        hb = b.wait_heartbeat(timeout=3, component=100)
+        assert hb.get_msgbuf()[0] == 0xFE                # MAVLink 1 start byte
+        hb = a.wait_heartbeat(timeout=3, system=255)
+        assert hb.get_msgbuf()[0] == 0xFD                # the GCS talks MAVLink 2; still understood
+    finally:
+        b.close()
+        a.close()
+
+
+def test_command_accepted_with_nan_params(links):
+    a, b = links
+    b.wait_heartbeat(timeout=3, component=100)
+    r = Responder(a, [[(mavlink2.MAV_RESULT_ACCEPTED, 0)]])
+    ack = b.command_long(1, 100, mavlink2.MAV_CMD_IMAGE_START_CAPTURE, [0, 2.5, 1, math.nan], timeout=1)
+    assert ack.result == mavlink2.MAV_RESULT_ACCEPTED
+    assert r.params[0][:3] == (0, 2.5, 1) and math.isnan(r.params[0][3]) and r.params[0][4:] == (0, 0, 0)
+
+
+def test_in_progress_keeps_waiting_and_reports_progress(links):
+    a, b = links
+    b.wait_heartbeat(timeout=3, component=100)
+    r = Responder(a, [[(mavlink2.MAV_RESULT_IN_PROGRESS, 10), (mavlink2.MAV_RESULT_IN_PROGRESS, 60),
+                       (mavlink2.MAV_RESULT_ACCEPTED, 100)]])
+    seen: list[int] = []
+    b.command_long(1, 100, mavlink2.MAV_CMD_STORAGE_FORMAT, [1, 1], timeout=1, progress=seen.append)
+    assert seen == [10, 60] and r.confirmations == [0]
+
+
+def test_retries_increment_confirmation_then_fail_naming_command(links):
+    a, b = links
+    b.wait_heartbeat(timeout=3, component=100)
+    r = Responder(a, [[], [], [(mavlink2.MAV_RESULT_ACCEPTED, 0)]])
+    b.command_long(1, 100, mavlink2.MAV_CMD_REQUEST_CAMERA_INFORMATION, [1], timeout=0.3, retries=3)
+    assert r.confirmations == [0, 1, 2]
+    r2 = Responder(a, [[]] * 10)
+    a.unsubscribe(r.sub)
+    with pytest.raises(LinkError) as err:
+        b.command_long(1, 100, mavlink2.MAV_CMD_REQUEST_CAMERA_INFORMATION, [1], timeout=0.2, retries=2)
+    assert r2.confirmations == [0, 1, 2]
+    text = str(err.value)
+    assert "MAV_CMD_REQUEST_CAMERA_INFORMATION" in text and "3 tries" in text and "component 100" in text
+
+
+@pytest.mark.parametrize("result", [mavlink2.MAV_RESULT_DENIED, mavlink2.MAV_RESULT_UNSUPPORTED,
+                                    mavlink2.MAV_RESULT_FAILED, mavlink2.MAV_RESULT_TEMPORARILY_REJECTED])
+def test_error_results_raise_with_their_names(links, result):
+    a, b = links
+    b.wait_heartbeat(timeout=3, component=100)
+    Responder(a, [[(result, 0)]])
+    with pytest.raises(LinkError) as err:
+        b.command_long(1, 100, mavlink2.MAV_CMD_SET_CAMERA_MODE, [0, 1], timeout=1, retries=0)
+    assert mavlink2.enums["MAV_RESULT"][result].name in str(err.value)
+    assert "MAV_CMD_SET_CAMERA_MODE" in str(err.value)
+
+
+def test_ack_for_another_command_or_from_another_component_is_ignored(links):
+    a, b = links
+    b.wait_heartbeat(timeout=3, component=100)
+
+    def wrong_then_right(msg):
+        a.send(a.mav.command_ack_encode(msg.command + 1, mavlink2.MAV_RESULT_DENIED, 0, 0, 255, 190))
+        a.send(a.mav.command_ack_encode(msg.command, mavlink2.MAV_RESULT_DENIED, 0, 0, 255, 77))
+        a.send(a.mav.command_ack_encode(msg.command, mavlink2.MAV_RESULT_ACCEPTED, 0, 0, 255, 190))
+
+    a.subscribe(wrong_then_right, "COMMAND_LONG")
+    ack = b.command_long(1, 100, mavlink2.MAV_CMD_VIDEO_START_CAPTURE, [0, 1], timeout=1, retries=0)
+    assert ack.result == mavlink2.MAV_RESULT_ACCEPTED
+
+
+def test_command_name_falls_back_to_number():
+    assert command_name(mavlink2.MAV_CMD_IMAGE_START_CAPTURE) == "MAV_CMD_IMAGE_START_CAPTURE"
+    assert command_name(65000) == "MAV_CMD 65000"
+
+
+def test_bad_connection_strings_are_link_errors():
+    with pytest.raises(LinkError) as err:
+        Link("udpin:nohostport", heartbeat_s=0)
+    assert "connection string" in str(err.value)
+    with pytest.raises(LinkError):
+        Link("udpin:127.0.0.1:0", system=0, heartbeat_s=0)
+
+
+def test_send_after_close_is_a_link_error():
+    a = Link("udpin:127.0.0.1:0", heartbeat_s=0)
+    a.close()
+    with pytest.raises(LinkError):
+        a.send(a.mav.heartbeat_encode(6, 8, 0, 0, 4))
+
+
+# -- signing ---------------------------------------------------------------------------------------
+
+KEY = bytes(range(32))
+
+
+def test_signed_links_talk_and_sign_everything():
+    a, b = pair(a_kwargs={"signing_key": KEY}, b_kwargs={"signing_key": KEY})
+    try:
+        hb = b.wait_heartbeat(timeout=3, component=100)
+        assert hb.get_signed()
+        Responder(a, [[(mavlink2.MAV_RESULT_ACCEPTED, 0)]])
+        assert b.command_long(1, 100, mavlink2.MAV_CMD_REQUEST_CAMERA_SETTINGS, [1], timeout=1).result == 0
+        assert a.stats["rejected_signature"] == 0
+    finally:
+        b.close()
+        a.close()
+
+
+@pytest.mark.parametrize("gcs_kwargs", [{}, {"signing_key": bytes(32)}, {"mavlink1": True}],
+                         ids=["unsigned", "wrong-key", "mavlink1"])
+def test_signed_link_drops_unsigned_and_wrongly_signed(gcs_kwargs):
+    a, b = pair(a_kwargs={"signing_key": KEY}, b_kwargs=gcs_kwargs | {"heartbeat_s": 0.05})
+    try:
+        Responder(a, [[(mavlink2.MAV_RESULT_ACCEPTED, 0)]] * 5)
+        with pytest.raises(LinkError):
+            b.command_long(1, 100, mavlink2.MAV_CMD_REQUEST_CAMERA_SETTINGS, [1], timeout=0.2, retries=1)
+        assert a.stats["rejected_signature"] >= 2
+        assert (255, 190) not in a.heartbeats()
+    finally:
+        b.close()
+        a.close()
+
+
+def test_mavlink1_cannot_be_signed():
+    with pytest.raises(LinkError, match="MAVLink 1 cannot be signed"):
+        Link("udpin:127.0.0.1:0", mavlink1=True, signing_key=KEY, heartbeat_s=0)
+
+
+def test_key_file_hex_and_passphrase_match_mavproxy(tmp_path):
+    from MAVProxy.modules.mavproxy_signing import SigningModule
+
+    hexfile = tmp_path / "key.hex"
+    hexfile.write_text(KEY.hex().upper() + "\n")
+    assert load_signing_key(hexfile) == KEY
+    phrase = tmp_path / "phrase.txt"
+    phrase.write_text("correct horse battery staple\n")
+    # MAVProxy's `signing setup PASSPHRASE` key derivation, called on the real module.
+    assert load_signing_key(phrase) == SigningModule.passphrase_to_key(None, "correct horse battery staple")
+
+
+@pytest.mark.parametrize("content", [b"", b"   \n", b"\xff\xfe\x00", b"x" * 5000])
+def test_bad_key_files_are_link_errors(tmp_path, content):
+    f = tmp_path / "k"
+    f.write_bytes(content)
+    with pytest.raises(LinkError) as err:
+        load_signing_key(f)
+    assert err.value.where == str(f)
+    with pytest.raises(LinkError):
+        load_signing_key(tmp_path / "missing")
+    assert len(key_from_text("a")) == 32
+
+
+def test_callbacks_run_concurrently_with_sends(links):
+    """Thread-safe send: many threads sending at once produce intact frames (no CRC failures)."""
+    a, b = links
+    with a.inbox("STATUSTEXT") as box:
+        def spam(n):
+            for i in range(50):
+                b.send(b.mav.statustext_encode(6, f"t{n}-{i}".encode()))
+        threads = [threading.Thread(target=spam, args=(n,)) for n in range(4)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        got = [box.get(2.0) for _ in range(200)]
+    assert all(m is not None for m in got)
+    assert a.stats["bad"] == 0
