@@ -1,0 +1,461 @@
+"""The camera catalogue: every fact about a camera model, read once from cdf/tables/*.yaml.
+
+The same values drive the camera definition XML, the emulators, the command builders and the plan
+compiler's validation of settings, so a fact is written in exactly one table. A family table may
+`extend` a vendor table (workswell.yaml holds the manual's enumerators, commands and setting groups)
+and say what differs per model (`groups`, `overrides`, imagers).
+
+Loading checks the tables themselves (names fit PARAM_EXT's 16 characters, defaults are legal, every
+reference resolves) and raises CdfError naming the table and the entry.
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable
+
+from cdf.errors import CdfError
+
+TABLES_DIR = Path(__file__).resolve().parent / "tables"
+
+PARAM_NAME_MAX = 16  # PARAM_EXT_* param_id is char[16] (common.xml)
+CDF_TYPES = ("uint8", "int8", "uint16", "int16", "uint32", "int32", "uint64", "int64", "float", "double")
+INTEGER_RANGES = {
+    "uint8": (0, 255), "int8": (-128, 127), "uint16": (0, 65535), "int16": (-32768, 32767),
+    # MAVSDK parses uint32 with std::stoi: values above 2**31-1 throw, so the usable range is int32's top.
+    "uint32": (0, 2**31 - 1), "int32": (-(2**31), 2**31 - 1),
+    "uint64": (0, 2**63 - 1), "int64": (-(2**63), 2**63 - 1),
+}
+
+
+@dataclass(frozen=True)
+class Option:
+    value: int
+    key: str      # the name capture plans use
+    name: str     # the label a ground station shows
+
+
+@dataclass(frozen=True)
+class Enumerator:
+    id: str
+    title: str
+    options: tuple[Option, ...]
+    flags: bool = False
+    exclusive: tuple[tuple[str, ...], ...] = ()   # flag keys that must not be combined
+    source: str = ""
+    note: str = ""
+
+    def by_key(self, key: str) -> Option | None:
+        return next((o for o in self.options if o.key == key), None)
+
+    def by_value(self, value: int) -> Option | None:
+        return next((o for o in self.options if o.value == value), None)
+
+    def combinations(self, without: Iterable[str] = ()) -> tuple[Option, ...]:
+        """Every allowed non-empty OR of flags, as options (value = the OR, name = names joined)."""
+        usable = [o for o in self.options if o.key not in set(without)]
+        combos = []
+        for n in range(1, len(usable) + 1):
+            for group in itertools.combinations(usable, n):
+                keys = {o.key for o in group}
+                if any(set(ex) <= keys for ex in self.exclusive):
+                    continue
+                combos.append(Option(value=sum(o.value for o in group), key="+".join(o.key for o in group),
+                                     name=" + ".join(o.name for o in group)))
+        return tuple(sorted(combos, key=lambda o: o.value))
+
+
+@dataclass(frozen=True)
+class CommandSlot:
+    """How a setting reaches the camera: a MAV_CMD param, or a message (RedEdge's PARAM_SET, DIGICAM_*)."""
+
+    cmd: str | None = None          # MAV_CMD_* name
+    param: int | None = None        # 1..7
+    offset: int = 0                 # added on the wire ("Layout increased by 1")
+    when: tuple[tuple[str, int], ...] = ()   # the slot carries this setting only while these settings hold these values
+    keep: tuple[str, ...] = ("nan",)          # wire values meaning "leave as is": "nan" and/or "0"
+    message: str | None = None      # for message-driven settings: PARAM_SET, DIGICAM_CONFIGURE
+    field: str | None = None        # the message field
+
+    def encode(self, value: float) -> float:
+        return float(value) + self.offset
+
+    def decode(self, wire: float) -> float | None:
+        """The setting value a wire value asks for, or None when the wire value means keep."""
+        if math.isnan(wire) or ("0" in self.keep and wire == 0):
+            return None
+        return wire - self.offset
+
+
+@dataclass(frozen=True)
+class Setting:
+    key: str
+    param: str
+    type: str
+    label: str
+    default: float | int | None
+    enum: Enumerator | None = None
+    flags: bool = False                        # enum is a flag set; options are its combinations
+    options: tuple[Option, ...] = ()            # explicit options (enum options or flag combinations)
+    min: float | None = None
+    max: float | None = None
+    step: float | None = None
+    unit: str | None = None
+    decimals: int | None = None
+    command: CommandSlot | None = None
+    hides: tuple[tuple[int, tuple[str, ...]], ...] = ()   # option value -> PARAM names hidden
+    updates: tuple[str, ...] = ()
+    in_cdf: bool = True
+    source: str = ""
+    note: str = ""
+
+    @property
+    def is_integer(self) -> bool:
+        return self.type in INTEGER_RANGES
+
+    def option_by_key(self, key: str) -> Option | None:
+        return next((o for o in self.options if o.key == key), None)
+
+    def check(self, value: Any) -> float | int:
+        """The typed value of a plan/CLI value for this setting, or CdfError with the allowed values.
+
+        Accepts an option key ("manual"), a list of flag keys (["radiometric_jpeg", "visible_jpeg"]),
+        or a number within the options or the range.
+        """
+        if self.options:
+            if isinstance(value, (list, tuple)) and self.flags:
+                keys = [str(v) for v in value]
+                allowed = {o.key for o in self.enum.options} if self.enum else set()
+                bad = [k for k in keys if k not in allowed]
+                if bad or not keys:
+                    raise CdfError(f"{self.key}: {bad[0] if bad else 'an empty list'} is not a choice",
+                                   hint=f"choose one or more of {', '.join(sorted(allowed))}")
+                option = self.option_by_key("+".join(o.key for o in self.enum.options if o.key in keys))
+                if option is None:
+                    raise CdfError(f"{self.key}: {' + '.join(keys)} cannot be combined",
+                                   hint=self.enum.note or "see the camera manual")
+                return option.value
+            if isinstance(value, str):
+                option = self.option_by_key(value)
+                if option is None:
+                    raise CdfError(f"{self.key}: {value!r} is not a choice",
+                                   hint=f"choose one of {', '.join(o.key for o in self.options)}")
+                return option.value
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                if any(o.value == value for o in self.options):
+                    return int(value)
+            raise CdfError(f"{self.key}: {value!r} is not a choice",
+                           hint=f"choose one of {', '.join(o.key for o in self.options)}")
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise CdfError(f"{self.key}: expected a number{f' in {self.unit}' if self.unit else ''}, got {value!r}",
+                           hint=self.range_text())
+        if (self.min is not None and value < self.min) or (self.max is not None and value > self.max):
+            raise CdfError(f"{self.key}: {value} is out of range", hint=self.range_text())
+        if self.is_integer:
+            if value != int(value):
+                raise CdfError(f"{self.key}: {value} is not a whole number", hint=self.range_text())
+            return int(value)
+        return float(value)
+
+    def range_text(self) -> str:
+        if self.min is None and self.max is None:
+            return "any number"
+        unit = f" {self.unit}" if self.unit else ""
+        step = f" in steps of {_fmt(self.step)}" if self.step else ""
+        return f"allowed: {_fmt(self.min)} to {_fmt(self.max)}{unit}{step}"
+
+
+@dataclass(frozen=True)
+class Imager:
+    id: str
+    known: bool
+    resolution_px: tuple[int, int] | None = None
+    pixel_pitch_um: float | None = None
+    sensor_mm: tuple[float, float] | None = None
+    lenses_mm: tuple[float, ...] = ()
+    min_interval_s: float | None = None
+    bands: int | None = None
+    assumed: tuple[str, ...] = ()     # which of the facts above are assumptions, not sourced
+    sources: tuple[tuple[str, str], ...] = ()
+    note: str = ""
+
+    @property
+    def sensor_size_mm(self) -> tuple[float, float] | None:
+        """Sensor width and height: given, or pitch × resolution. For a sensor whose aspect ratio does not
+        match the image (the Security's visible camera) the height follows the image's aspect ratio."""
+        if self.resolution_px is None:
+            return None
+        w_px, h_px = self.resolution_px
+        if self.sensor_mm is not None:
+            width = self.sensor_mm[0]
+        elif self.pixel_pitch_um is not None:
+            width = w_px * self.pixel_pitch_um / 1000.0
+        else:
+            return None
+        return width, width * h_px / w_px
+
+
+@dataclass(frozen=True)
+class Camera:
+    id: str
+    family: str
+    vendor: str
+    model: str
+    protocol: str                      # "workswell-mavlink" or "rededge-serial"
+    definition_version: int | None
+    camera_protocol: bool              # the manual states camera-protocol (CDF/PARAM_EXT) support
+    has_cdf: bool
+    component_ids: tuple[int, ...]
+    default_component_id: int
+    mavlink_version: int
+    baud: int
+    capabilities: tuple[str, ...]
+    settings: tuple[Setting, ...]
+    enums: tuple[Enumerator, ...]
+    imagers: tuple[Imager, ...]
+    commands: tuple[tuple[str, dict], ...] = ()
+    assumed: tuple[str, ...] = ()
+    notes: tuple[str, ...] = ()
+    source: str = ""
+    table: str = ""
+    extra: tuple[tuple[str, Any], ...] = field(default=(), compare=False)
+
+    def setting(self, key: str) -> Setting | None:
+        return next((s for s in self.settings if s.key == key), None)
+
+    def setting_by_param(self, param: str) -> Setting | None:
+        return next((s for s in self.settings if s.param == param), None)
+
+    def imager(self, imager_id: str) -> Imager | None:
+        return next((i for i in self.imagers if i.id == imager_id), None)
+
+    def enum(self, enum_id: str) -> Enumerator | None:
+        return next((e for e in self.enums if e.id == enum_id), None)
+
+    @property
+    def cdf_settings(self) -> tuple[Setting, ...]:
+        return tuple(s for s in self.settings if s.in_cdf)
+
+    def command_info(self, name: str) -> dict | None:
+        return dict(self.commands).get(name)
+
+
+@dataclass(frozen=True)
+class Catalogue:
+    cameras: tuple[Camera, ...]
+
+    def get(self, camera_id: str) -> Camera:
+        for cam in self.cameras:
+            if cam.id == camera_id:
+                return cam
+        import difflib
+
+        close = difflib.get_close_matches(camera_id, [c.id for c in self.cameras], n=1)
+        hint = f"did you mean {close[0]!r}?" if close else "see `wiris cdf models`"
+        raise CdfError(f"unknown camera {camera_id!r}", hint=hint)
+
+    @property
+    def ids(self) -> tuple[str, ...]:
+        return tuple(c.id for c in self.cameras)
+
+    def find_model(self, vendor: str, model: str) -> Camera | None:
+        """The catalogue camera a CAMERA_INFORMATION's vendor and model strings name."""
+        for cam in self.cameras:
+            if cam.vendor.lower() == vendor.strip().lower() and cam.model.lower() == model.strip().lower():
+                return cam
+        return None
+
+
+def _fmt(v: float | None) -> str:
+    if v is None:
+        return "?"
+    return str(int(v)) if float(v).is_integer() else f"{v:g}"
+
+
+def _read_yaml(path: Path) -> dict:
+    import yaml
+
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except yaml.YAMLError as err:
+        raise CdfError(f"cannot parse catalogue table: {err}", where=str(path)) from None
+    if not isinstance(data, dict):
+        raise CdfError("a catalogue table must be a mapping", where=str(path))
+    return data
+
+
+def _enums(raw: dict, where: str) -> dict[str, Enumerator]:
+    out = {}
+    for eid, e in (raw or {}).items():
+        opts = tuple(Option(value=int(o["value"]), key=str(o["key"]), name=str(o["name"])) for o in e["options"])
+        if len({o.value for o in opts}) != len(opts) or len({o.key for o in opts}) != len(opts):
+            raise CdfError(f"enumerator {eid}: duplicate value or key", where=where)
+        out[eid] = Enumerator(id=eid, title=e.get("title", eid), options=opts, flags=bool(e.get("flags")),
+                              exclusive=tuple(tuple(x) for x in e.get("exclusive", ())),
+                              source=e.get("source", ""), note=e.get("note", ""))
+    return out
+
+
+def _setting(raw: dict, enums: dict[str, Enumerator], where: str) -> Setting:
+    raw = dict(raw)
+    without = raw.pop("without", ())
+    key = raw["key"]
+    enum = None
+    options: tuple[Option, ...] = ()
+    flags = False
+    if "enum" in raw:
+        enum = enums.get(raw["enum"])
+        if enum is None:
+            raise CdfError(f"setting {key}: unknown enumerator {raw['enum']!r}", where=where)
+        options = tuple(o for o in enum.options if o.key not in set(without))
+    elif "flags" in raw:
+        enum = enums.get(raw["flags"])
+        if enum is None or not enum.flags:
+            raise CdfError(f"setting {key}: {raw['flags']!r} is not a flag enumerator", where=where)
+        flags = True
+        options = enum.combinations(without)
+    cmd = raw.get("command")
+    slot = None
+    if cmd:
+        slot = CommandSlot(cmd=cmd.get("cmd"), param=cmd.get("param"), offset=int(cmd.get("offset", 0)),
+                           when=tuple((k, int(v)) for k, v in (cmd.get("when") or {}).items()),
+                           keep=tuple(str(k) for k in cmd.get("keep", ["nan"])),
+                           message=cmd.get("message"), field=cmd.get("field"))
+    hides = tuple((int(v), tuple(names)) for v, names in (raw.get("hides") or {}).items())
+    return Setting(
+        key=key, param=raw["param"], type=raw["type"], label=raw["label"], default=raw.get("default"),
+        enum=enum, flags=flags, options=options, min=raw.get("min"), max=raw.get("max"), step=raw.get("step"),
+        unit=raw.get("unit"), decimals=raw.get("decimals"), command=slot, hides=hides,
+        updates=tuple(raw.get("updates", ())), in_cdf=bool(raw.get("cdf", True)) and raw.get("default") is not None,
+        source=raw.get("source", ""), note=raw.get("note", ""),
+    )
+
+
+def _imagers(raw: dict) -> tuple[Imager, ...]:
+    out = []
+    for iid, im in (raw or {}).items():
+        known = im.get("status") != "unknown"
+        assumed = tuple(k.removesuffix("_status") for k, v in im.items() if k.endswith("_status") and v == "assumed")
+        sources = tuple((k.removesuffix("_source"), v) for k, v in im.items() if k.endswith("_source"))
+        res = im.get("resolution_px")
+        sensor = im.get("sensor_mm")
+        out.append(Imager(
+            id=iid, known=known, resolution_px=tuple(res) if res else None,
+            pixel_pitch_um=im.get("pixel_pitch_um"), sensor_mm=tuple(sensor) if sensor else None,
+            lenses_mm=tuple(float(x) for x in im.get("lenses_mm", ())), min_interval_s=im.get("min_interval_s"),
+            bands=im.get("bands"), assumed=assumed, sources=sources,
+            note=" ".join(str(im[k]) for k in im if k == "note" or k.endswith("_note")),
+        ))
+    return tuple(out)
+
+
+def _check_setting(s: Setting, where: str) -> None:
+    if not (1 <= len(s.param) <= PARAM_NAME_MAX) or not s.param.isascii():
+        raise CdfError(f"setting {s.key}: PARAM_EXT name {s.param!r} must be 1–{PARAM_NAME_MAX} ASCII characters",
+                       where=where)
+    if s.type not in CDF_TYPES:
+        raise CdfError(f"setting {s.key}: type {s.type!r} is not a definition type", where=where)
+    if s.default is None:
+        return
+    if s.options:
+        if not any(o.value == s.default for o in s.options):
+            raise CdfError(f"setting {s.key}: default {s.default} is not among its options", where=where)
+    else:
+        if s.min is None or s.max is None:
+            raise CdfError(f"setting {s.key}: needs options or min and max (MAVSDK drops it otherwise)", where=where)
+        if not (s.min <= s.default <= s.max):
+            raise CdfError(f"setting {s.key}: default {s.default} outside {s.min}..{s.max}", where=where)
+    if s.is_integer:
+        lo, hi = INTEGER_RANGES[s.type]
+        values = [o.value for o in s.options] + [v for v in (s.min, s.max, s.default) if v is not None]
+        if any(int(v) != v or not lo <= v <= hi for v in values):
+            raise CdfError(f"setting {s.key}: a value does not fit {s.type}", where=where)
+
+
+def _load_table(path: Path) -> list[Camera]:
+    raw = _read_yaml(path)
+    where = path.name
+    base: dict = {}
+    if "extends" in raw:
+        base = _read_yaml(path.parent / f"{raw['extends']}.yaml")
+    merged = {**base, **{k: v for k, v in raw.items() if k != "extends"}}
+    enums = _enums({**(base.get("enums") or {}), **(raw.get("enums") or {})}, where)
+    overrides = merged.get("overrides") or {}
+    raw_settings: list[dict] = []
+    for group in merged.get("groups", []):
+        if group not in (base.get("groups") or {}):
+            raise CdfError(f"unknown setting group {group!r}", where=where)
+        raw_settings.extend(base["groups"][group])
+    raw_settings.extend(raw.get("settings", []))
+    settings = []
+    for s in raw_settings:
+        settings.append(_setting({**s, **overrides.get(s["key"], {})}, enums, where))
+    unknown_overrides = set(overrides) - {s.key for s in settings}
+    if unknown_overrides:
+        raise CdfError(f"overrides name unknown settings: {', '.join(sorted(unknown_overrides))}", where=where)
+    params = [s.param for s in settings]
+    keys = [s.key for s in settings]
+    for names, what in ((params, "PARAM_EXT name"), (keys, "setting key")):
+        dupes = {n for n in names if names.count(n) > 1}
+        if dupes:
+            raise CdfError(f"duplicate {what}: {', '.join(sorted(dupes))}", where=where)
+    commands = merged.get("commands") or {}
+    for s in settings:
+        _check_setting(s, where)
+        for _, hidden in s.hides:
+            missing = [h for h in hidden if h not in params]
+            if missing:
+                raise CdfError(f"setting {s.key}: hides unknown {', '.join(missing)}", where=where)
+        if s.command and s.command.cmd and s.command.cmd not in commands:
+            raise CdfError(f"setting {s.key}: command {s.command.cmd} is not in the commands table", where=where)
+        if s.command:
+            for k, _ in s.command.when:
+                if k not in keys:
+                    raise CdfError(f"setting {s.key}: 'when' names unknown setting {k}", where=where)
+    notes = tuple(str(v) for k, v in merged.items() if k.endswith("_note") and isinstance(v, str))
+    cameras = []
+    for m in merged["models"]:
+        protocol = merged.get("protocol", "workswell-mavlink")
+        has_cdf = bool(m.get("cdf", True)) and protocol == "workswell-mavlink"
+        link = merged.get("link") or {}
+        cameras.append(Camera(
+            id=m["id"], family=merged.get("family", m["id"]), vendor=merged["vendor"], model=m["model"],
+            protocol=protocol, definition_version=m.get("definition_version"),
+            camera_protocol=bool(m.get("camera_protocol", False)), has_cdf=has_cdf,
+            component_ids=tuple(merged["component_ids"]), default_component_id=int(merged["default_component_id"]),
+            mavlink_version=int(link.get("mavlink", 2)), baud=int(link.get("baud", 57600)),
+            capabilities=tuple(merged.get("capabilities", ())), settings=tuple(settings),
+            enums=tuple(enums.values()), imagers=_imagers(merged.get("imagers")),
+            commands=tuple(commands.items()),
+            assumed=tuple(k.removesuffix("_status") for k, v in m.items() if k.endswith("_status") and v == "assumed"),
+            notes=notes + tuple(str(v) for k, v in m.items() if k.endswith("_note")),
+            source=merged.get("source", ""), table=path.name,
+            extra=tuple((k, merged[k]) for k in ("heartbeat", "adopts_sender_system_id", "capabilities_note")
+                        if k in merged),
+        ))
+    return cameras
+
+
+def load_catalogue(tables_dir: Path | None = None) -> Catalogue:
+    """Read and check every family table in `tables_dir` (vendor base tables are those without `models`)."""
+    directory = tables_dir or TABLES_DIR
+    cameras: list[Camera] = []
+    for path in sorted(directory.glob("*.yaml")):
+        if "models" not in _read_yaml(path):
+            continue
+        cameras.extend(_load_table(path))
+    ids = [c.id for c in cameras]
+    dupes = {i for i in ids if ids.count(i) > 1}
+    if dupes:
+        raise CdfError(f"camera id used twice: {', '.join(sorted(dupes))}", where=str(directory))
+    return Catalogue(cameras=tuple(cameras))
+
+
+@functools.lru_cache(maxsize=1)
+def catalogue() -> Catalogue:
+    """The bundled catalogue, loaded once per process (the tables are immutable data)."""
+    return load_catalogue()
