@@ -1,0 +1,104 @@
+"""What the compiler hands to the outputs and the report: the emitted mission and everything needed to
+check it, as frozen values.
+
+The report re-derives photo positions from `items` (it never trusts the planner's intent); `areas` and
+`payloads` give it what to measure against. `intent` keeps the planner's own geometry for previews only.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from missions.items import MissionItem
+
+
+@dataclass(frozen=True)
+class PayloadInfo:
+    """A payload as the compiler resolved it from the plan and the catalogue."""
+
+    name: str                       # the plan's payload name, e.g. "thermal"
+    camera_id: str                  # catalogue id, e.g. "wiris-pro"
+    imager: str                     # catalogue imager id, e.g. "thermal"
+    component_id: int
+    focal_mm: float
+    sensor_mm: tuple[float, float]  # width, height of the image as flown (landscape unless portrait)
+    resolution_px: tuple[int, int]
+    landscape: bool = True          # long image side across track
+    min_interval_s: float | None = None
+
+    def footprint_m(self, altitude_m: float) -> tuple[float, float]:
+        """Ground footprint (across track, along track) in metres at `altitude_m` above ground, nadir."""
+        w, h = self.sensor_mm
+        across, along = (w, h) if self.landscape else (h, w)
+        return across * altitude_m / self.focal_mm, along * altitude_m / self.focal_mm
+
+    def gsd_cm(self, altitude_m: float) -> float:
+        """Ground sample distance in cm/pixel at `altitude_m` (across-track pixels)."""
+        w_px, h_px = self.resolution_px
+        across_px = w_px if self.landscape else h_px
+        return 100.0 * self.footprint_m(altitude_m)[0] / across_px
+
+
+@dataclass(frozen=True)
+class AreaInfo:
+    """One survey or corridor step: what it must cover."""
+
+    step: int                       # index of the step in the plan's mission list
+    kind: str                       # "survey" | "corridor"
+    payloads: tuple[str, ...]       # payload names; the first sets the lines
+    area: Any                       # missions.area.Area (projected shapely geometry + projection)
+    altitude_m: float               # above home
+    front_overlap: float            # fraction 0..1 requested
+    side_overlap: float
+    trigger: str                    # "distance" | "interval" | "hover"
+    trigger_distance_m: float | None = None
+
+
+@dataclass(frozen=True)
+class SetupStep:
+    """One step of the pre-flight command sequence (NAME.setup.json)."""
+
+    description: str
+    target_component: int
+    kind: str                                   # "command_long" | "param_ext_set" | "param_set"
+    command: str | None = None                  # MAV_CMD name for command_long
+    params: tuple[float | None, ...] = ()       # 7 values; None = NaN ("keep")
+    param_id: str | None = None                 # for param_ext_set / param_set
+    value: float | int | None = None
+    type: str | None = None                     # CDF / MAV_PARAM_TYPE name of the value
+    expect: str = "MAV_RESULT_ACCEPTED"         # or PARAM_ACK_ACCEPTED / PARAM_VALUE echo
+    payload: str = ""
+
+    def to_json(self) -> dict:
+        out: dict[str, Any] = {"description": self.description, "payload": self.payload,
+                               "target_component": self.target_component, "kind": self.kind}
+        if self.kind == "command_long":
+            out["command"] = self.command
+            out["params"] = list(self.params)
+        else:
+            out.update(param_id=self.param_id, value=self.value, type=self.type)
+        out["expect"] = {"result": self.expect}
+        return out
+
+
+@dataclass(frozen=True)
+class Compiled:
+    name: str
+    firmware: str                               # "ardupilot" | "px4"
+    frame: str                                  # "copter" | "plane" | "vtol"
+    home: tuple[float, float, float]            # lat, lon, alt AMSL m
+    speed_mps: float
+    items: tuple[MissionItem, ...]              # the whole mission, no home row
+    parts: tuple[tuple[MissionItem, ...], ...]  # `items` split at the item limit; (items,) when it fits
+    item_limit: int
+    payloads: tuple[PayloadInfo, ...]
+    areas: tuple[AreaInfo, ...]
+    setup: tuple[SetupStep, ...]
+    lua: str | None = None                      # the ArduPilot bridge script, when in-flight changes need it
+    params: tuple[tuple[str, float, str], ...] = ()   # autopilot parameters: name, value, why
+    warnings: tuple[str, ...] = ()
+    intent: tuple[Any, ...] = field(default=(), compare=False)   # planner geometry, for previews only
+
+    def payload(self, name: str) -> PayloadInfo:
+        return next(p for p in self.payloads if p.name == name)
