@@ -1,0 +1,462 @@
+"""Mission, fence and rally transfer over the MAVLink mission protocol (ground-station side).
+
+    client = MissionClient(link, target_system=1, target_component=1)
+    result = client.upload(items, mission_type=MISSION_TYPE_MISSION, progress=lambda done, total: ...)
+    items, result = client.download(mission_type=MISSION_TYPE_MISSION)
+    result = client.upload_verified(items)          # upload + read-back, field by field
+
+Only MISSION_ITEM_INT is sent. Requests may come as MISSION_REQUEST_INT or the legacy
+MISSION_REQUEST (ArduPilot's own request path still sends the legacy one); both get the INT item.
+
+Timing (all in `Timeouts`; the defaults are the spec's or tighter):
+  * Waiting passively for the vehicle (first request after MISSION_COUNT, MISSION_COUNT after
+    MISSION_REQUEST_LIST, the final ack): at most `ack_s` = 1.5 s per try, starting at 0.5 s and
+    doubling, `retries` = 5 resends.
+  * Upload is driven by the vehicle's requests, so it resumes wherever the vehicle asks - never from
+    item 0 again. After sending item k we expect the request for k+1 within one round trip. When it
+    is overdue (RTO from a smoothed RTT measured on this link, RFC 6298 style, never above
+    `ack_s`, doubling on each resend) we resend item k at once instead of waiting for the
+    vehicle's own re-request timer (1 s on ArduPilot): that is the fast retransmit. Duplicated
+    requests within half an RTT of our last answer are not answered twice.
+  * Download requests one item at a time (PX4 insists on order) and re-requests after the RTO,
+    capped at `item_s` = 250 ms, `retries` times per item.
+  * Error NACKs: ArduPilot answers a duplicate or out-of-order item with MISSION_ACK
+    INVALID_SEQUENCE and keeps going (Cockpit PR #2067: it "sends fail ACKs even if it intends to
+    keep trying"). So a MISSION_ACK with an error is noted, not fatal: the upload fails with that
+    error only if no further request arrives within `nack_grace_s`.
+  * A final MISSION_ACK ACCEPTED counts only after the vehicle has requested the last item, so a
+    stale or duplicated ack from an earlier transfer cannot end this one early.
+
+Verification (`upload_verified`): download after upload and compare every item with
+MissionItem.same_on_wire; also compare ArduPilot's opaque_id from the upload's MISSION_ACK with the
+download's MISSION_COUNT when both carry one. Any difference raises LinkError naming the first
+differing item and field. ArduPilot replaces mission item 0 with its home position, so for an
+ArduPilot vehicle (from its HEARTBEAT) item 0 of a MISSION (not fence/rally) is compared by command only.
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from missions.items import MISSION_TYPE_MISSION, MissionItem
+from wiris_tools.errors import LinkError
+from wiris_tools.link import Link
+
+Progress = Callable[[int, int], None]
+
+TYPE_NAMES = {mavlink2.MAV_MISSION_TYPE_MISSION: "mission", mavlink2.MAV_MISSION_TYPE_FENCE: "fence",
+              mavlink2.MAV_MISSION_TYPE_RALLY: "rally"}
+
+
+def mission_result_name(result: int) -> str:
+    entry = mavlink2.enums["MAV_MISSION_RESULT"].get(result)
+    return entry.name if entry is not None else f"MAV_MISSION_RESULT {result}"
+
+
+_NACK_HINTS = {
+    mavlink2.MAV_MISSION_NO_SPACE: "the vehicle holds fewer items (PX4: 500 by default, ArduPilot: about 700 on "
+                                   "common boards); split the plan or use fewer items",
+    mavlink2.MAV_MISSION_UNSUPPORTED: "the vehicle's firmware does not accept this command in a mission; "
+                                      "compile the plan for this firmware",
+    mavlink2.MAV_MISSION_UNSUPPORTED_FRAME: "the vehicle does not accept this frame; compile for this firmware",
+    mavlink2.MAV_MISSION_DENIED: "the vehicle refused the transfer (another ground station busy? wrong sysid?)",
+}
+
+
+@dataclass(frozen=True)
+class Timeouts:
+    ack_s: float = 1.5          # spec: waiting for the other side to start/finish
+    item_s: float = 0.25        # spec: actively re-requesting a missing item
+    retries: int = 5            # spec: resends before giving up
+    nack_grace_s: float = 2.5   # ArduPilot re-requests 1 s (+ link slowdown) after a transient NACK
+    min_rto_s: float = 0.02
+    first_s: float = 0.5        # first resend of MISSION_COUNT / MISSION_REQUEST_LIST
+
+
+@dataclass(frozen=True)
+class TransferResult:
+    mission_type: int
+    count: int
+    seconds: float
+    opaque_id: int = 0          # 0: the vehicle did not report one
+    resent: int = 0             # messages we sent again (lost items, counts, requests)
+    nacks_tolerated: int = 0    # error MISSION_ACKs followed by further requests
+    notes: tuple[str, ...] = ()
+
+
+class RttEstimator:
+    """Smoothed round-trip time (RFC 6298): srtt, rttvar; samples only from first transmissions."""
+
+    def __init__(self) -> None:
+        self.srtt: float | None = None
+        self.rttvar = 0.0
+
+    def sample(self, rtt: float) -> None:
+        if rtt <= 0:
+            return
+        if self.srtt is None:
+            self.srtt, self.rttvar = rtt, rtt / 2
+        else:
+            self.rttvar = 0.75 * self.rttvar + 0.25 * abs(self.srtt - rtt)
+            self.srtt = 0.875 * self.srtt + 0.125 * rtt
+
+    def rto(self, floor: float, cap: float, initial: float) -> float:
+        if self.srtt is None:
+            return min(initial, cap)
+        return min(max(self.srtt + 4 * self.rttvar, 1.5 * self.srtt, floor), cap)
+
+
+class _Extended:
+    """A message packed with MAVLink 2 extension bytes that the installed dialect does not define.
+
+    pymavlink 2.4.50's common.xml predates `opaque_id` (MISSION_COUNT/MISSION_ACK extensions), but
+    an extension is just bytes after the known payload, covered by the same CRC_EXTRA.
+    """
+
+    def __init__(self, msg, extra: bytes) -> None:
+        self._msg = msg
+        self._extra = extra
+
+    def get_type(self) -> str:
+        return self._msg.get_type()
+
+    def pack(self, mav, force_mavlink1: bool = False) -> bytes:
+        m = self._msg
+        base = m.unpacker.pack(*(getattr(m, n) for n in m.ordered_fieldnames))
+        return m._pack(mav, m.crc_extra, base if force_mavlink1 else base + self._extra, force_mavlink1)
+
+
+def with_opaque_id(msg, opaque: int):
+    """MISSION_COUNT or MISSION_ACK carrying `opaque_id` (sent as MAVLink 2 extension bytes)."""
+    return _Extended(msg, struct.pack("<I", opaque)) if opaque else msg
+
+
+# Byte offset of opaque_id in the MAVLink 2 payload: after the base fields and the mission_type extension.
+_OPAQUE_OFFSET = {"MISSION_ACK": 4, "MISSION_COUNT": 5}
+
+
+def opaque_id_of(msg) -> int:
+    """The opaque_id of a received MISSION_ACK/MISSION_COUNT; 0 when absent (or MAVLink 1)."""
+    off = _OPAQUE_OFFSET.get(msg.get_type())
+    buf = msg.get_msgbuf()
+    if off is None or not buf or buf[0] != 0xFD:
+        return 0
+    payload = bytes(buf[10:10 + buf[1]]) + bytes(8)  # MAVLink 2 trims trailing zero bytes
+    return struct.unpack_from("<I", payload, off)[0]
+
+
+def item_from_msg(msg) -> MissionItem:
+    return MissionItem(command=msg.command, frame=msg.frame, param1=msg.param1, param2=msg.param2,
+                       param3=msg.param3, param4=msg.param4, x=msg.x, y=msg.y, z=msg.z,
+                       autocontinue=msg.autocontinue, current=msg.current,
+                       mission_type=getattr(msg, "mission_type", 0))
+
+
+class MissionClient:
+    """Upload/download/verify against one vehicle over a Link; keeps an RTT estimate across calls."""
+
+    def __init__(self, link: Link, target_system: int = 1, target_component: int = 1, *,
+                 timeouts: Timeouts = Timeouts()) -> None:
+        self.link = link
+        self.target_system = target_system
+        self.target_component = target_component
+        self.timeouts = timeouts
+        self.rtt = RttEstimator()
+
+    # -- helpers -------------------------------------------------------------------------------
+    def _where(self, mission_type: int) -> str:
+        return f"{TYPE_NAMES.get(mission_type, mission_type)} on system {self.target_system}"
+
+    def _from_vehicle(self, msg) -> bool:
+        if msg.get_srcSystem() != self.target_system:
+            return False
+        return not self.target_component or msg.get_srcComponent() == self.target_component
+
+    def _inbox(self, types: list[str], mission_type: int):
+        def ok(msg) -> bool:
+            return self._from_vehicle(msg) and getattr(msg, "mission_type", 0) == mission_type
+        return self.link.inbox(types, to_me=True, predicate=ok)
+
+    def _encode_item(self, seq: int, item: MissionItem, mission_type: int):
+        return self.link.mav.mission_item_int_encode(
+            self.target_system, self.target_component, seq, item.frame, item.command, item.current,
+            item.autocontinue, item.param1, item.param2, item.param3, item.param4, int(item.x), int(item.y),
+            float(item.z), mission_type)
+
+    def is_ardupilot(self) -> bool:
+        hb = self.link.heartbeats().get((self.target_system, self.target_component)) or next(
+            (h for (s, _c), h in self.link.heartbeats().items() if s == self.target_system
+             and h.autopilot != mavlink2.MAV_AUTOPILOT_INVALID), None)
+        return hb is not None and hb.autopilot == mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA
+
+    # -- upload --------------------------------------------------------------------------------
+    def upload(self, items: Sequence[MissionItem], *, mission_type: int = MISSION_TYPE_MISSION,
+               progress: Progress | None = None) -> TransferResult:
+        """Send `items` to the vehicle; returns when it acknowledged them (LinkError otherwise)."""
+        t = self.timeouts
+        count = len(items)
+        where = self._where(mission_type)
+        if count == 0:
+            raise LinkError("nothing to upload: the list is empty", where=where,
+                            hint="an empty upload would clear the vehicle's list; clear it from the ground station")
+        if count > 65535:
+            raise LinkError(f"{count} items do not fit the protocol's 16-bit count", where=where)
+        start = time.monotonic()
+        resent = nacks = 0
+        last_nack: tuple[int, int] | None = None      # (result, item seq sent last)
+        nack_at: float | None = None
+        sent_at: dict[int, float] = {}                # last transmission time per seq
+        first_sent_at: dict[int, float] = {}          # only first transmissions give RTT samples (Karn)
+        retransmitted: set[int] = set()
+        requested_max = -1
+        last_item: int | None = None                  # the item we answered last
+        tries = 0
+        stage_deadline = 0.0
+        count_wait = t.first_s
+        # A vehicle that keeps asking for the same item forever must not keep us here forever.
+        stall_s = (t.retries + 1) * t.ack_s + t.nack_grace_s
+        last_progress = start
+
+        def send_count() -> None:
+            self.link.send(self.link.mav.mission_count_encode(self.target_system, self.target_component, count,
+                                                              mission_type))
+
+        def send_item(seq: int) -> None:
+            now = time.monotonic()
+            if seq in sent_at:
+                retransmitted.add(seq)
+            else:
+                first_sent_at[seq] = now
+            sent_at[seq] = now
+            self.link.send(self._encode_item(seq, items[seq], mission_type))
+
+        with self._inbox(["MISSION_REQUEST_INT", "MISSION_REQUEST", "MISSION_ACK"], mission_type) as box:
+            send_count()
+            stage_deadline = time.monotonic() + count_wait
+            while True:
+                now = time.monotonic()
+                msg = box.get(max(0.0, stage_deadline - now))
+                now = time.monotonic()
+                if now - last_progress > stall_s:
+                    raise LinkError(f"no progress for {stall_s:g} s: the vehicle keeps asking for item "
+                                    f"{requested_max} of {count}", where=where,
+                                    hint="the uplink is losing our items; retry the upload or improve the link")
+                if msg is None:
+                    if nack_at is not None and now - nack_at >= t.nack_grace_s:
+                        result, seq = last_nack  # type: ignore[misc]
+                        raise LinkError(
+                            f"the vehicle answered {mission_result_name(result)}"
+                            + (f" after item {seq}" if seq is not None and seq >= 0 else " to MISSION_COUNT")
+                            + f" and asked for nothing more within {t.nack_grace_s:g} s", where=where,
+                            hint=_NACK_HINTS.get(result, "retry; if it persists check the item the error names"))
+                    if tries >= t.retries:
+                        if last_item is None:
+                            raise LinkError(f"no request after MISSION_COUNT ({count} items), "
+                                            f"{t.retries + 1} tries", where=where,
+                                            hint="check the connection, the target system/component, and that "
+                                                 "the vehicle supports this mission type")
+                        if requested_max >= count - 1:
+                            raise LinkError(f"all {count} items were sent but the vehicle never acknowledged "
+                                            "the upload", where=where,
+                                            hint="the vehicle may hold the mission anyway: download it or use "
+                                                 "--verify to check")
+                        raise LinkError(f"the vehicle stopped requesting after item {last_item} of {count}",
+                                        where=where, hint="the link is too lossy or was lost; retry the upload")
+                    tries += 1
+                    resent += 1
+                    if last_item is None:
+                        send_count()
+                        count_wait = min(count_wait * 2, t.ack_s)
+                        stage_deadline = now + count_wait
+                    else:
+                        send_item(last_item)
+                        rto = self.rtt.rto(t.min_rto_s, t.ack_s, t.item_s)
+                        stage_deadline = now + min(rto * (2 ** tries), t.ack_s)
+                    if nack_at is not None:
+                        stage_deadline = min(stage_deadline, nack_at + t.nack_grace_s)
+                    continue
+                mtype = msg.get_type()
+                if mtype == "MISSION_ACK":
+                    if msg.type == mavlink2.MAV_MISSION_ACCEPTED:
+                        if requested_max >= count - 1:
+                            if progress:
+                                progress(count, count)
+                            return TransferResult(mission_type, count, time.monotonic() - start,
+                                                  opaque_id_of(msg), resent, nacks)
+                        continue  # stale: an ack from an earlier transfer
+                    nacks += 1
+                    last_nack = (msg.type, last_item if last_item is not None else -1)
+                    if nack_at is None:
+                        nack_at = now
+                        stage_deadline = min(stage_deadline, now + t.nack_grace_s)
+                    continue
+                seq = msg.seq
+                if seq >= count:
+                    continue  # not ours to answer (another transfer, or a broken vehicle)
+                # Progress from the vehicle: it has everything before `seq`.
+                if seq > requested_max:
+                    prev = seq - 1
+                    if prev >= 0 and prev in first_sent_at and prev not in retransmitted:
+                        self.rtt.sample(now - first_sent_at[prev])
+                    requested_max = seq
+                    last_progress = now
+                    if progress:
+                        progress(seq, count)
+                if nack_at is not None:
+                    nack_at = None
+                    last_nack = None
+                srtt = self.rtt.srtt or 0.0
+                if seq == last_item and now - sent_at.get(seq, 0.0) < 0.5 * srtt:
+                    continue  # a duplicated request: the answer is already on its way
+                if seq == last_item:
+                    resent += 1
+                else:
+                    tries = 0
+                last_item = seq
+                send_item(seq)
+                stage_deadline = now + self.rtt.rto(t.min_rto_s, t.ack_s, t.item_s)
+
+    # -- download ------------------------------------------------------------------------------
+    def download(self, *, mission_type: int = MISSION_TYPE_MISSION,
+                 progress: Progress | None = None) -> tuple[list[MissionItem], TransferResult]:
+        """Read the vehicle's list of `mission_type`; returns (items, result)."""
+        t = self.timeouts
+        where = self._where(mission_type)
+        start = time.monotonic()
+        resent = 0
+        with self._inbox(["MISSION_COUNT", "MISSION_ITEM_INT", "MISSION_ACK"], mission_type) as box:
+            # 1. the count
+            wait = t.first_s
+            count_msg = None
+            for attempt in range(t.retries + 1):
+                self.link.send(self.link.mav.mission_request_list_encode(self.target_system, self.target_component,
+                                                                         mission_type))
+                sent = time.monotonic()
+                deadline = sent + wait
+                while True:
+                    msg = box.get(max(0.0, deadline - time.monotonic()))
+                    if msg is None:
+                        break
+                    if msg.get_type() == "MISSION_COUNT":
+                        count_msg = msg
+                        if attempt == 0:
+                            self.rtt.sample(time.monotonic() - sent)
+                        break
+                    if msg.get_type() == "MISSION_ACK" and msg.type != mavlink2.MAV_MISSION_ACCEPTED:
+                        raise LinkError(f"the vehicle answered {mission_result_name(msg.type)} to the list request",
+                                        where=where, hint=_NACK_HINTS.get(msg.type))
+                if count_msg is not None:
+                    break
+                resent += 1
+                wait = min(wait * 2, t.ack_s)
+            if count_msg is None:
+                raise LinkError(f"no MISSION_COUNT after {t.retries + 1} list requests", where=where,
+                                hint="check the connection and the target system/component")
+            count = count_msg.count
+            opaque = opaque_id_of(count_msg)
+            got: dict[int, MissionItem] = {}
+            # 2. the items, in order (PX4 refuses out-of-order requests)
+            for seq in range(count):
+                tries = 0
+                while seq not in got:
+                    self.link.send(self.link.mav.mission_request_int_encode(self.target_system,
+                                                                            self.target_component, seq, mission_type))
+                    sent = time.monotonic()
+                    rto = self.rtt.rto(t.min_rto_s, max(t.item_s, t.min_rto_s), t.item_s)
+                    deadline = sent + min(rto * (2 ** tries), t.ack_s)
+                    while seq not in got:
+                        msg = box.get(max(0.0, deadline - time.monotonic()))
+                        if msg is None:
+                            break
+                        if msg.get_type() == "MISSION_ITEM_INT":
+                            # Only the item asked for: a late duplicate of an older item (or of
+                            # an earlier transfer) must never fill another slot.
+                            if msg.seq == seq:
+                                got[seq] = item_from_msg(msg)
+                                if tries == 0:
+                                    self.rtt.sample(time.monotonic() - sent)
+                        elif msg.get_type() == "MISSION_ACK" and msg.type not in (
+                                mavlink2.MAV_MISSION_ACCEPTED, mavlink2.MAV_MISSION_INVALID_SEQUENCE):
+                            raise LinkError(f"the vehicle answered {mission_result_name(msg.type)} "
+                                            f"to the request for item {seq}", where=where,
+                                            hint=_NACK_HINTS.get(msg.type))
+                    if seq in got:
+                        break
+                    tries += 1
+                    resent += 1
+                    if tries > t.retries:
+                        raise LinkError(f"item {seq} of {count} never arrived after {t.retries + 1} requests",
+                                        where=where, hint="the link is too lossy or was lost; retry the download")
+                if progress:
+                    progress(seq + 1, count)
+            self.link.send(self.link.mav.mission_ack_encode(self.target_system, self.target_component,
+                                                            mavlink2.MAV_MISSION_ACCEPTED, mission_type))
+        items = [got[i] for i in range(count)]
+        return items, TransferResult(mission_type, count, time.monotonic() - start, opaque, resent)
+
+    # -- upload + read-back --------------------------------------------------------------------
+    def upload_verified(self, items: Sequence[MissionItem], *, mission_type: int = MISSION_TYPE_MISSION,
+                        progress: Progress | None = None) -> TransferResult:
+        """Upload, download again and compare; LinkError naming the first difference otherwise.
+
+        If the upload itself failed only at the final acknowledgement (every item was sent), the
+        read-back decides: a vehicle that holds exactly our items counts as success.
+        """
+        note: tuple[str, ...] = ()
+        try:
+            up = self.upload(items, mission_type=mission_type, progress=progress)
+        except LinkError as err:
+            if "never acknowledged" not in err.message:
+                raise
+            up = TransferResult(mission_type, len(items), 0.0)
+            note = ("the vehicle's final MISSION_ACK never arrived; the read-back below proves the upload",)
+        got, down = self.download(mission_type=mission_type)
+        compare_items(items, got, where=self._where(mission_type),
+                      home_replaced=self.is_ardupilot() and mission_type == MISSION_TYPE_MISSION)
+        if up.opaque_id and down.opaque_id and up.opaque_id != down.opaque_id:
+            raise LinkError(f"the vehicle's mission id changed between upload ({up.opaque_id:#010x}) and "
+                            f"read-back ({down.opaque_id:#010x})", where=self._where(mission_type),
+                            hint="someone else changed the mission meanwhile; upload again")
+        return TransferResult(mission_type, len(items), up.seconds + down.seconds, up.opaque_id or down.opaque_id,
+                              up.resent + down.resent, up.nacks_tolerated, up.notes + note + ("verified",))
+
+
+_COMPARED = ("command", "frame", "param1", "param2", "param3", "param4", "x", "y", "z", "autocontinue",
+             "mission_type")
+
+
+def _f32(v: float) -> float:
+    return struct.unpack("<f", struct.pack("<f", v))[0]
+
+
+def _same_field(a, b) -> bool:
+    if isinstance(a, float) or isinstance(b, float):
+        fa, fb = _f32(float(a)), _f32(float(b))
+        return fa == fb or (math.isnan(fa) and math.isnan(fb))
+    return a == b
+
+
+def compare_items(sent: Sequence[MissionItem], got: Sequence[MissionItem], *, where: str = "read-back",
+                  home_replaced: bool = False) -> None:
+    """Raise LinkError naming the first item and field where `got` differs from `sent` on the wire
+    (floats as float32, NaN equal to NaN - what MissionItem.same_on_wire compares)."""
+    if len(sent) != len(got):
+        raise LinkError(f"the vehicle holds {len(got)} items, {len(sent)} were sent", where=where,
+                        hint="upload again; if it repeats, the vehicle is dropping items")
+    for i, (a, b) in enumerate(zip(sent, got)):
+        if a.same_on_wire(b):
+            continue
+        for name in _COMPARED:
+            if home_replaced and i == 0 and name != "command":
+                continue  # ArduPilot keeps its home position in item 0
+            va, vb = getattr(a, name), getattr(b, name)
+            if not _same_field(va, vb):
+                raise LinkError(f"item {i} differs in {name}: sent {va!r}, vehicle holds {vb!r}",
+                                where=f"{where}, item {i}",
+                                hint="the vehicle changed or lost the item; do not fly this mission - upload again")
