@@ -1,0 +1,208 @@
+"""Measured quality of a set of photos over an area — computed from footprints, never from the plan's intent.
+
+Footprint of a photo: a rectangle centred on the photo position, `along_m` in the direction of travel
+(heading, degrees clockwise from north) and `across_m` perpendicular to it, at the real altitude (flat
+ground at the altitude's datum).
+
+Definitions (fractions in [0, 1]; multiply by 100 for percent):
+  coverage        area(area ∩ ⋃ footprints) / area(area).
+  front overlap   for each pair of consecutive photos of the same span (a camera-on leg):
+                  area(F_i ∩ F_i+1) / area(F); the minimum over all such pairs is reported.
+  side overlap    photos of a span that lie on one straight line with one heading form a run (its
+                  segment from first to last photo). For two runs with parallel headings (within 2°)
+                  whose along-track ranges overlap, side overlap = 1 − lateral distance / across_m.
+                  Each run takes its nearest such neighbour on each side; the minimum over all runs and
+                  sides is reported. Runs with no neighbour on a side (the outermost lines) contribute
+                  nothing on that side, and a neighbour farther than across_m is no overlap but a gap,
+                  which shows in coverage instead.
+  outside_m       length of the flown path outside the area (turnarounds included).
+  path_lower_bound_m   area / spacing: a path that sweeps the area with lines `spacing` apart can be
+                  no shorter (every metre covers at most `spacing` metres of width).
+  photo_lower_bound    area / (spacing · trigger distance): each photo "owns" at most that much new ground.
+
+Speed: consecutive photos of a run are merged into one rectangle (exact: same heading, on the line, gaps
+≤ along_m), so coverage is one union of O(lines) strips rather than O(photos) rectangles; overlaps are
+vectorised. A 100 km² survey (~10^6 photos) measures in seconds.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+from typing import Any, Sequence
+
+import numpy as np
+
+from missions.footprint import Footprint
+from missions.triggers import PhotoPoint
+
+_PARALLEL_SIN = math.sin(math.radians(2.0))
+
+
+@dataclass(frozen=True)
+class Coverage:
+    area_m2: float
+    covered_m2: float
+    coverage: float                    # fraction of the area under at least one footprint
+    min_front_overlap: float | None    # fraction; None when no span has two photos
+    min_side_overlap: float | None     # fraction; None when no two runs lie side by side
+    photo_count: int
+    path_length_m: float
+    outside_m: float
+    path_lower_bound_m: float | None
+    photo_lower_bound: float | None
+
+    @property
+    def path_ratio(self) -> float | None:
+        return self.path_length_m / self.path_lower_bound_m if self.path_lower_bound_m else None
+
+    @property
+    def photo_ratio(self) -> float | None:
+        return self.photo_count / self.photo_lower_bound if self.photo_lower_bound else None
+
+
+def _arrays(photos: Sequence[PhotoPoint]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    xy = np.array([(p.x, p.y) for p in photos], dtype=float).reshape(-1, 2)
+    h = np.radians(np.array([p.heading_deg for p in photos], dtype=float))
+    span = np.array([p.span for p in photos], dtype=int)
+    return xy, h, span
+
+
+def footprint_polygons(xy: np.ndarray, heading_rad: np.ndarray, fp: Footprint) -> np.ndarray:
+    """Rotated footprint rectangles (shapely array), one per photo."""
+    return _rects(xy, xy, heading_rad, fp)
+
+
+def _rects(start: np.ndarray, end: np.ndarray, heading_rad: np.ndarray, fp: Footprint) -> np.ndarray:
+    import shapely
+    d = np.column_stack([np.sin(heading_rad), np.cos(heading_rad)])
+    n = np.column_stack([np.cos(heading_rad), -np.sin(heading_rad)])
+    ha, hc = fp.along_m / 2.0, fp.across_m / 2.0
+    s0 = start - d * ha
+    e0 = end + d * ha
+    ring = np.stack([s0 - n * hc, e0 - n * hc, e0 + n * hc, s0 + n * hc, s0 - n * hc], axis=1)
+    return shapely.polygons(ring)
+
+
+def _runs(xy: np.ndarray, h: np.ndarray, span: np.ndarray, fp: Footprint) -> list[tuple[int, int]]:
+    """[start, end] index pairs of maximal runs: same span, same heading, collinear, gaps ≤ along."""
+    n = len(xy)
+    if n == 0:
+        return []
+    brk = np.ones(n, bool)
+    if n > 1:
+        dlt = xy[1:] - xy[:-1]
+        dvec = np.column_stack([np.sin(h[:-1]), np.cos(h[:-1])])
+        nvec = np.column_stack([np.cos(h[:-1]), -np.sin(h[:-1])])
+        along = (dlt * dvec).sum(1)
+        cross = (dlt * nvec).sum(1)
+        same = (span[1:] == span[:-1]) & (np.abs(np.sin(h[1:] - h[:-1])) < 1e-9) \
+            & (np.cos(h[1:] - h[:-1]) > 0) & (np.abs(cross) < 1e-6) & (along >= -1e-9) & (along <= fp.along_m + 1e-9)
+        brk[1:] = ~same
+    starts = np.nonzero(brk)[0]
+    ends = np.append(starts[1:] - 1, n - 1)
+    return list(zip(starts.tolist(), ends.tolist()))
+
+
+def coverage_fraction(area: Any, photos: Sequence[PhotoPoint], fp: Footprint) -> tuple[float, float]:
+    """(covered area m², coverage fraction)."""
+    import shapely
+    if not photos or area.area <= 0:
+        return 0.0, 0.0
+    xy, h, span = _arrays(photos)
+    runs = _runs(xy, h, span, fp)
+    s = np.array([r[0] for r in runs])
+    e = np.array([r[1] for r in runs])
+    strips = _rects(xy[s], xy[e], h[s], fp)
+    union = shapely.union_all(strips)
+    covered = float(shapely.intersection(area, union).area)
+    return covered, covered / float(area.area)
+
+
+def min_front_overlap(photos: Sequence[PhotoPoint], fp: Footprint) -> float | None:
+    import shapely
+    xy, h, span = _arrays(photos)
+    if len(xy) < 2:
+        return None
+    pair = span[1:] == span[:-1]
+    if not pair.any():
+        return None
+    i = np.nonzero(pair)[0]
+    dlt = xy[i + 1] - xy[i]
+    same_h = np.abs(np.sin(h[i + 1] - h[i])) < 1e-9
+    ov = np.empty(len(i))
+    # same heading: two congruent rectangles in one frame — the overlap is a product of 1-D overlaps
+    d = np.column_stack([np.sin(h[i]), np.cos(h[i])])
+    n = np.column_stack([np.cos(h[i]), -np.sin(h[i])])
+    fa = np.clip(1.0 - np.abs((dlt * d).sum(1)) / fp.along_m, 0.0, 1.0)
+    fc = np.clip(1.0 - np.abs((dlt * n).sum(1)) / fp.across_m, 0.0, 1.0)
+    ov[:] = fa * fc
+    turned = ~same_h
+    if turned.any():
+        a = footprint_polygons(xy[i[turned]], h[i[turned]], fp)
+        b = footprint_polygons(xy[i[turned] + 1], h[i[turned] + 1], fp)
+        ov[turned] = shapely.area(shapely.intersection(a, b)) / fp.area_m2
+    return float(ov.min())
+
+
+def min_side_overlap(photos: Sequence[PhotoPoint], fp: Footprint) -> float | None:
+    import shapely
+    xy, h, span = _arrays(photos)
+    runs = _runs(xy, h, span, fp)
+    if len(runs) < 2:
+        return None
+    s = np.array([r[0] for r in runs])
+    e = np.array([r[1] for r in runs])
+    S, E, H = xy[s], xy[e], h[s]
+    segs = shapely.linestrings(np.stack([S, E + 1e-9], axis=1))
+    tree = shapely.STRtree(segs)
+    a, b = tree.query(segs, predicate="dwithin", distance=fp.across_m)
+    keep = a != b
+    a, b = a[keep], b[keep]
+    if len(a) == 0:
+        return None
+    par = np.abs(np.sin(H[b] - H[a])) < _PARALLEL_SIN
+    a, b = a[par], b[par]
+    d = np.column_stack([np.sin(H[a]), np.cos(H[a])])
+    n = np.column_stack([np.cos(H[a]), -np.sin(H[a])])
+    lat = ((S[b] - S[a]) * n).sum(1)
+    p0 = ((S[b] - S[a]) * d).sum(1)
+    p1 = ((E[b] - S[a]) * d).sum(1)
+    la = ((E[a] - S[a]) * d).sum(1)
+    lo, hi = np.minimum(p0, p1), np.maximum(p0, p1)
+    # side by side: their footprints overlap along-track by at least half a footprint
+    beside = (np.minimum(hi, la) - np.maximum(lo, 0.0)) > -fp.along_m / 2.0
+    ok = beside & (np.abs(lat) > 1e-3) & (np.abs(lat) < fp.across_m)
+    if not ok.any():
+        return None
+    a, lat = a[ok], lat[ok]
+    best = np.full((len(runs), 2), np.inf)
+    side = (lat > 0).astype(int)
+    np.minimum.at(best, (a, side), np.abs(lat))
+    vals = best[np.isfinite(best)]
+    return float(1.0 - vals.max() / fp.across_m) if len(vals) else None
+
+
+def outside_length_m(path_xy: np.ndarray, area: Any) -> float:
+    from shapely.geometry import LineString
+    if len(path_xy) < 2:
+        return 0.0
+    return float(LineString(path_xy).difference(area).length)
+
+
+def measure(area: Any, photos: Sequence[PhotoPoint], fp: Footprint, path_xy: np.ndarray | None = None,
+            spacing_m: float | None = None, trigger_m: float | None = None) -> Coverage:
+    """All quality figures of `photos` (and the flown `path_xy`) over `area` (shapely geometry, metres)."""
+    covered, frac = coverage_fraction(area, photos, fp)
+    path = np.zeros((0, 2)) if path_xy is None else np.asarray(path_xy, float).reshape(-1, 2)
+    length = float(np.hypot(*np.diff(path, axis=0).T).sum()) if len(path) > 1 else 0.0
+    A = float(area.area)
+    return Coverage(
+        area_m2=A, covered_m2=covered, coverage=frac,
+        min_front_overlap=min_front_overlap(photos, fp),
+        min_side_overlap=min_side_overlap(photos, fp),
+        photo_count=len(photos), path_length_m=length,
+        outside_m=outside_length_m(path, area) if len(path) > 1 else 0.0,
+        path_lower_bound_m=A / spacing_m if spacing_m else None,
+        photo_lower_bound=A / (spacing_m * trigger_m) if spacing_m and trigger_m else None,
+    )

@@ -1,0 +1,326 @@
+"""Route: order legs into one flyable path with turnarounds and connections.
+
+1. Cells: legs of consecutive lines whose along-track ranges overlap one-to-one form a boustrophedon cell
+   (a monotone region). A concave area or a hole splits lines into several legs; where the pairing is not
+   one-to-one a new cell starts.
+2. Cell order: greedy nearest-next from every cell end as a start (cheap: O(cells²) per start, starts capped),
+   keeping the shortest total connection. Inside a cell the legs alternate direction (lawn-mower).
+3. Each leg is flown turnaround-in → entry → exit → turnaround-out; the turnaround extends `turnaround_m`
+   along the line beyond each end (QGC's TurnAroundDistance) so the vehicle is straight and at speed when
+   the camera starts. The exit point lies `exit_margin_m` past the last photo so that an autopilot which
+   accepts a waypoint early (ArduCopter's WPNAV_RADIUS, 2 m by default) still takes it.
+4. Connections between cells whose straight line would leave the area go along the shortest path inside
+   the polygon part (visibility graph over its vertices); those connections drop the turnaround stubs,
+   which would leave the area. Parts too complex for the graph (> MAX_GRAPH_VERTICES) fall back to the
+   straight line; the metres outside the area are measured by `coverage.outside_length_m` either way.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import heapq
+import math
+from typing import Any, Sequence
+
+import numpy as np
+
+from missions.swaths import Leg
+
+MAX_GRAPH_VERTICES = 400
+_INSIDE_TOL_M = 0.05
+
+KIND_TURN_IN = "turnaround"
+KIND_ENTRY = "entry"
+KIND_EXIT = "exit"
+KIND_VIA = "via"
+KIND_PHOTO = "photo"
+
+
+@dataclass(frozen=True)
+class RoutePoint:
+    x: float
+    y: float
+    kind: str              # turnaround | entry | exit | via | photo
+    leg: int = -1          # index into Route.legs, -1 for connections
+
+
+@dataclass(frozen=True)
+class Route:
+    points: tuple[RoutePoint, ...]
+    legs: tuple[Leg, ...]                 # in flying order
+    reversed_legs: tuple[bool, ...]       # flown from v1 to v0
+    spans: tuple[tuple[int, int], ...]    # (entry index, exit index) into points, one per leg
+
+    @property
+    def xy(self) -> np.ndarray:
+        return np.array([(p.x, p.y) for p in self.points], dtype=float).reshape(-1, 2)
+
+    @property
+    def length_m(self) -> float:
+        xy = self.xy
+        return float(np.hypot(*np.diff(xy, axis=0).T).sum()) if len(xy) > 1 else 0.0
+
+
+def build_cells(legs: Sequence[Leg]) -> list[list[int]]:
+    """Group leg indices into boustrophedon cells (lists ordered by line)."""
+    by_line: dict[tuple[int, int], list[int]] = {}
+    for i, l in enumerate(legs):
+        by_line.setdefault((l.part, l.line), []).append(i)
+    cells: list[list[int]] = []
+    cell_of: dict[int, int] = {}
+    for (part, line) in sorted(by_line):
+        cur = sorted(by_line[(part, line)], key=lambda i: legs[i].v0)
+        prev = sorted(by_line.get((part, line - 1), []), key=lambda i: legs[i].v0)
+
+        def overl(i: int, j: int) -> bool:
+            return min(legs[i].v1, legs[j].v1) - max(legs[i].v0, legs[j].v0) > 1e-6
+
+        for i in cur:
+            ps = [j for j in prev if overl(i, j)]
+            if len(ps) == 1 and [k for k in cur if overl(k, ps[0])] == [i] and ps[0] in cell_of \
+                    and cells[cell_of[ps[0]]][-1] == ps[0]:
+                c = cell_of[ps[0]]
+                cells[c].append(i)
+                cell_of[i] = c
+            else:
+                cell_of[i] = len(cells)
+                cells.append([i])
+    return cells
+
+
+def _cell_sequence(legs: Sequence[Leg], cell: list[int], from_start: bool, first_forward: bool) -> list[tuple[int, bool]]:
+    order = cell if from_start else cell[::-1]
+    out = []
+    fwd = first_forward
+    for i in order:
+        out.append((i, not fwd))
+        fwd = not fwd
+    return out
+
+
+def _ends(leg: Leg, rev: bool) -> tuple[tuple[float, float], tuple[float, float]]:
+    a, b = (leg.x0, leg.y0), (leg.x1, leg.y1)
+    return (b, a) if rev else (a, b)
+
+
+def order_legs(legs: Sequence[Leg], start_xy: tuple[float, float] | None = None,
+               max_starts: int = 24) -> list[tuple[int, bool]]:
+    """(leg index, reversed) in flying order."""
+    if not legs:
+        return []
+    cells = build_cells(legs)
+    options = []          # per cell: 4 (sequence, entry, exit)
+    for cell in cells:
+        opts = []
+        for fs in (True, False):
+            for ff in (True, False):
+                seq = _cell_sequence(legs, cell, fs, ff)
+                entry = _ends(legs[seq[0][0]], seq[0][1])[0]
+                exit_ = _ends(legs[seq[-1][0]], seq[-1][1])[1]
+                opts.append((seq, entry, exit_))
+        options.append(opts)
+    n = len(cells)
+    entries = np.array([[o[1] for o in opts] for opts in options])      # n×4×2
+    exits = np.array([[o[2] for o in opts] for opts in options])
+
+    def greedy(c0: int, o0: int) -> tuple[float, list[tuple[int, int]]]:
+        used = np.zeros(n, bool)
+        used[c0] = True
+        seq = [(c0, o0)]
+        pos = exits[c0, o0]
+        total = 0.0 if start_xy is None else float(math.dist(start_xy, entries[c0, o0]))
+        for _ in range(n - 1):
+            dd = np.hypot(entries[..., 0] - pos[0], entries[..., 1] - pos[1])
+            dd[used] = np.inf
+            k = int(np.argmin(dd))
+            c, o = divmod(k, 4)
+            total += float(dd[c, o])
+            used[c] = True
+            seq.append((c, o))
+            pos = exits[c, o]
+        return total, seq
+
+    starts = [(c, o) for c in range(n) for o in range(4)]
+    if start_xy is not None:
+        starts.sort(key=lambda co: math.dist(start_xy, entries[co[0], co[1]]))
+    else:
+        # cells at the extremes of the sweep are the natural starts
+        starts.sort(key=lambda co: (min(legs[i].line for i in cells[co[0]]), co[1]))
+    best = None
+    for c, o in starts[:max_starts]:
+        res = greedy(c, o)
+        if best is None or res[0] < best[0]:
+            best = res
+    assert best is not None
+    out: list[tuple[int, bool]] = []
+    for c, o in best[1]:
+        out.extend(options[c][o][0])
+    return out
+
+
+class _InsidePaths:
+    """Shortest paths inside one polygon (visibility graph over its vertices), built on first use."""
+
+    def __init__(self, poly: Any) -> None:
+        import shapely
+        self.poly = poly
+        self.region = poly.buffer(_INSIDE_TOL_M, join_style="mitre")
+        shapely.prepare(self.region)
+        # gaps = holes and notches: outside the area but inside its convex hull. A straight connection
+        # through them is what QGC flies over houses (#5215); beyond the hull it is just a turn.
+        self.gaps = poly.convex_hull.difference(poly).buffer(-_INSIDE_TOL_M)
+        shapely.prepare(self.gaps)
+        verts = [np.asarray(poly.exterior.coords)[:-1]] + [np.asarray(r.coords)[:-1] for r in poly.interiors]
+        self.v = np.concatenate(verts) if verts else np.zeros((0, 2))
+        self.ok = len(self.v) <= MAX_GRAPH_VERTICES
+        self._adj: list[list[tuple[int, float]]] | None = None
+
+    def crosses_gap(self, a: tuple[float, float], b: tuple[float, float]) -> bool:
+        from shapely.geometry import LineString
+        if self.gaps.is_empty or math.dist(a, b) < 1e-9:
+            return False
+        seg = LineString([a, b])
+        return seg.intersection(self.gaps).length > max(0.5, 0.02 * seg.length)
+
+    def _visible(self, a: np.ndarray, bs: np.ndarray) -> np.ndarray:
+        import shapely
+        if len(bs) == 0:
+            return np.zeros(0, bool)
+        segs = shapely.linestrings(np.stack([np.broadcast_to(a, bs.shape), bs], axis=1))
+        return shapely.covers(self.region, segs)
+
+    def _graph(self) -> list[list[tuple[int, float]]]:
+        import shapely
+        if self._adj is None:
+            n = len(self.v)
+            adj: list[list[tuple[int, float]]] = [[] for _ in range(n)]
+            ii, jj = np.triu_indices(n, 1)
+            if len(ii):
+                segs = shapely.linestrings(np.stack([self.v[ii], self.v[jj]], axis=1))
+                vis = shapely.covers(self.region, segs)
+                for i, j in zip(ii[vis].tolist(), jj[vis].tolist()):
+                    w = float(np.hypot(*(self.v[i] - self.v[j])))
+                    adj[i].append((j, w))
+                    adj[j].append((i, w))
+            self._adj = adj
+        return self._adj
+
+    def _anchor(self, p: tuple[float, float]) -> tuple[np.ndarray, list[tuple[float, float]]]:
+        from shapely.geometry import Point
+        from shapely.ops import nearest_points
+        P = Point(p)
+        if self.region.covers(P):
+            return np.asarray(p, float), []
+        q = nearest_points(self.poly, P)[0]
+        return np.asarray((q.x, q.y), float), [(q.x, q.y)]
+
+    def path(self, a: tuple[float, float], b: tuple[float, float]) -> list[tuple[float, float]] | None:
+        """Intermediate points of the shortest inside path a→b ([] if direct), None if not possible.
+        An end outside the area (an extended leg end) is first joined to its nearest boundary point."""
+        A, pre = self._anchor(a)
+        B, post = self._anchor(b)
+        if self._visible(A, B[None, :])[0]:
+            return pre + post
+        if not self.ok:
+            return None
+        adj = self._graph()
+        n = len(self.v)
+        va = self._visible(A, self.v)
+        vb = self._visible(B, self.v)
+        if not va.any() or not vb.any():
+            return None
+        dist = np.full(n, np.inf)
+        prev = np.full(n, -1)
+        heap: list[tuple[float, int]] = []
+        for i in np.nonzero(va)[0].tolist():
+            dist[i] = float(np.hypot(*(self.v[i] - A)))
+            heapq.heappush(heap, (dist[i], i))
+        db = np.hypot(self.v[:, 0] - B[0], self.v[:, 1] - B[1])
+        best, best_i = math.inf, -1
+        while heap:
+            dcur, i = heapq.heappop(heap)
+            if dcur > dist[i] or dcur >= best:
+                continue
+            if vb[i] and dcur + db[i] < best:
+                best, best_i = dcur + db[i], i
+            for j, w in adj[i]:
+                nd = dcur + w
+                if nd < dist[j]:
+                    dist[j] = nd
+                    prev[j] = i
+                    heapq.heappush(heap, (nd, j))
+        if best_i < 0:
+            return None
+        out = []
+        i = best_i
+        while i >= 0:
+            out.append((float(self.v[i][0]), float(self.v[i][1])))
+            i = int(prev[i])
+        return pre + out[::-1] + post
+
+
+def build_route(legs: Sequence[Leg], geometry: Any, turnaround_m: float, exit_margin_m: float = 0.0,
+                start_xy: tuple[float, float] | None = None, order: list[tuple[int, bool]] | None = None,
+                hover_points: dict[int, list[tuple[float, float]]] | None = None) -> Route:
+    """Waypoints for the legs in flying order (see module doc). `geometry` is the area (metres).
+
+    `hover_points`: leg index -> photo positions in the leg's +v order; when given, each photo becomes
+    a stop point (kind 'photo') and there are no turnaround stubs (the vehicle stops anyway).
+    """
+    from missions.swaths import frame
+
+    if order is None:
+        order = order_legs(legs, start_xy)
+    parts = list(geometry.geoms) if geometry.geom_type == "MultiPolygon" else [geometry]
+    paths: dict[int, _InsidePaths] = {}
+
+    def inside(part: int) -> _InsidePaths:
+        if part not in paths:
+            paths[part] = _InsidePaths(parts[part])
+        return paths[part]
+
+    hover = hover_points is not None
+    ta = 0.0 if hover else max(0.0, turnaround_m)
+    em = 0.0 if hover else max(0.0, exit_margin_m)
+    pts: list[RoutePoint] = []
+    spans: list[tuple[int, int]] = []
+    flown: list[Leg] = []
+    revs: list[bool] = []
+    prev_exit: tuple[float, float] | None = None
+    prev_part = -1
+    for li, rev in order:
+        leg = legs[li]
+        (ax, ay), (bx, by) = _ends(leg, rev)
+        d, _n = frame(leg.angle_deg)
+        dx, dy = (-d[0], -d[1]) if rev else (d[0], d[1])
+        ex, ey = bx + dx * em, by + dy * em
+        k = len(flown)
+        stubs = ta > 0
+        if prev_exit is not None and prev_part == leg.part:
+            ip = inside(leg.part)
+            if ip.crosses_gap(prev_exit, (ax, ay)):
+                via = ip.path(prev_exit, (ax, ay))
+                if via is not None:            # detour inside the area, without turnaround stubs
+                    if pts and pts[-1].kind == KIND_TURN_IN and pts[-1].leg == k - 1:
+                        pts.pop()
+                    pts.extend(RoutePoint(x, y, KIND_VIA) for x, y in via)
+                    stubs = False
+        if stubs:
+            pts.append(RoutePoint(ax - dx * ta, ay - dy * ta, KIND_TURN_IN, k))
+        entry = len(pts)
+        if hover:
+            hp = hover_points.get(li, [])  # type: ignore[union-attr]
+            seq = hp[::-1] if rev else hp
+            for x, y in (seq or [(ax, ay)]):
+                pts.append(RoutePoint(x, y, KIND_PHOTO, k))
+        else:
+            pts.append(RoutePoint(ax, ay, KIND_ENTRY, k))
+            pts.append(RoutePoint(ex, ey, KIND_EXIT, k))
+        spans.append((entry, len(pts) - 1))
+        if ta > em:
+            pts.append(RoutePoint(bx + dx * ta, by + dy * ta, KIND_TURN_IN, k))
+        flown.append(leg)
+        revs.append(rev)
+        prev_exit = (ex, ey) if not hover else (bx, by)
+        prev_part = leg.part
+    return Route(tuple(pts), tuple(flown), tuple(revs), tuple(spans))

@@ -1,0 +1,285 @@
+"""Swath generation: parallel flight lines over an area at a given angle, split into inside segments (legs).
+
+Frame: the line azimuth θ (degrees clockwise from north; 0 = north–south lines) defines
+    d = (sin θ, cos θ)   along-track unit vector (x east, y north)
+    n = (cos θ, −sin θ)  across-track unit vector
+and every point has (u, v) = (p·n, p·d). Lines are u = const.
+
+Line placement (per polygon part): the fewest lines whose footprints, `spacing_m` apart, span the part's
+width plus `edge_margin_m` on each side, centred on the part. So the outer footprint edges reach past
+the boundary on both sides (QGroundControl starts its grid at an arbitrary offset from the edge, QGC #5193).
+
+Legs: each line is cut into the segments that lie inside the area (concave parts and holes give several
+legs per line; QGroundControl keeps one segment from the first to the last crossing and flies over the gap).
+A leg's outer ends (where the line leaves the area for good) are extended along-track to cover every part
+of the area in the line's band (u within half a spacing of the line, to the boundary for the outermost
+lines) — the slanted-edge corners QGC leaves uncovered. Ends facing a gap (hole, exclusion, notch) are not
+extended into it. Band pieces the line misses entirely (a sharp tip between lines) get a short leg of their
+own. So a leg never leaves the area and re-enters it: any part of a leg outside the area touches its end.
+
+With `trigger_m`, leg ends are snapped to a grid of photo positions v = k·trigger_m shared by all lines
+(photos line up across lines and the first photo is at the leg start): outward at outer ends; at gap
+ends inward when half a footprint still reaches the boundary (front overlap ≥ 50 %), else outward.
+
+Cost: one vectorised shapely intersection per line and band — O(lines · vertices).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+from typing import Any, Sequence
+
+import numpy as np
+
+# Aircraft cross-track error of a GNSS multirotor is ~0.5–1 m; the outermost footprints reach this far
+# past the boundary so that the edge stays covered when the line is flown slightly inside.
+DEFAULT_EDGE_MARGIN_M = 0.5
+_EPS = 1e-6
+
+
+@dataclass(frozen=True)
+class Leg:
+    """One straight flight segment with the camera on, in the order the swath generator produced it (+v)."""
+
+    part: int          # index of the polygon part of the area
+    line: int          # line index within the part (increasing u)
+    u: float           # across-track coordinate of the line
+    v0: float          # along-track start (v0 <= v1)
+    v1: float
+    x0: float
+    y0: float
+    x1: float
+    y1: float
+    outer0: bool       # the v0 end faces the outside of the area (True) or a gap inside it (False)
+    outer1: bool
+    angle_deg: float = 0.0   # line azimuth of the pass; +v points along (sin, cos) of it
+
+    @property
+    def length_m(self) -> float:
+        return self.v1 - self.v0
+
+
+@dataclass(frozen=True)
+class SwathSet:
+    """All legs of one pass at one angle."""
+
+    angle_deg: float
+    spacing_m: float
+    legs: tuple[Leg, ...]
+    lines: int
+
+    @property
+    def leg_length_m(self) -> float:
+        return float(sum(l.length_m for l in self.legs))
+
+
+def frame(angle_deg: float) -> tuple[np.ndarray, np.ndarray]:
+    """(d, n): along-track and across-track unit vectors for a line azimuth in degrees."""
+    t = math.radians(angle_deg)
+    return np.array([math.sin(t), math.cos(t)]), np.array([math.cos(t), -math.sin(t)])
+
+
+def to_uv(geom: Any, angle_deg: float) -> Any:
+    from shapely import affinity
+    t = math.radians(angle_deg)
+    c, s = math.cos(t), math.sin(t)
+    return affinity.affine_transform(geom, [c, -s, s, c, 0.0, 0.0])
+
+
+def uv_to_xy(u: np.ndarray | float, v: np.ndarray | float, angle_deg: float) -> tuple[Any, Any]:
+    d, n = frame(angle_deg)
+    return u * n[0] + v * d[0], u * n[1] + v * d[1]
+
+
+def normalise_angle(angle_deg: float) -> float:
+    """Line azimuth in [−90, 90): a line flown either way is the same line."""
+    a = (float(angle_deg) + 90.0) % 180.0 - 90.0
+    return 0.0 if abs(a) < 1e-12 else a
+
+
+def line_offsets(width_m: float, across_m: float, spacing_m: float, edge_margin_m: float) -> np.ndarray:
+    """Across-track offsets of the lines from the low edge, centred so both edges get the same margin."""
+    need = width_m + 2.0 * edge_margin_m
+    if need <= across_m + _EPS:
+        return np.array([width_m / 2.0])
+    n = int(math.ceil((need - across_m) / spacing_m - 1e-9)) + 1
+    span = (n - 1) * spacing_m
+    return width_m / 2.0 - span / 2.0 + spacing_m * np.arange(n)
+
+
+def _intervals(g: Any) -> list[tuple[float, float]]:
+    """v-intervals of the line pieces of a (rotated) intersection result."""
+    out = []
+    stack = [g]
+    while stack:
+        h = stack.pop()
+        if h.is_empty:
+            continue
+        if h.geom_type == "LineString":
+            ys = [c[1] for c in h.coords]
+            a, b = min(ys), max(ys)
+            if b - a > _EPS:
+                out.append((a, b))
+        elif hasattr(h, "geoms"):
+            stack.extend(h.geoms)
+    out.sort()
+    merged: list[list[float]] = []
+    for a, b in out:
+        if merged and a <= merged[-1][1] + _EPS:
+            merged[-1][1] = max(merged[-1][1], b)
+        else:
+            merged.append([a, b])
+    return [(a, b) for a, b in merged]
+
+
+def _polys(g: Any) -> list[Any]:
+    out = []
+    stack = [g]
+    while stack:
+        h = stack.pop()
+        if h.is_empty:
+            continue
+        if h.geom_type == "Polygon":
+            if h.area > _EPS:
+                out.append(h)
+        elif hasattr(h, "geoms"):
+            stack.extend(h.geoms)
+    return out
+
+
+def _snap(a: float, b: float, outer_a: bool, outer_b: bool, trigger_m: float, inward_ok: bool) -> tuple[float, float]:
+    lo = math.floor(a / trigger_m + 1e-9) * trigger_m
+    hi = math.ceil(b / trigger_m - 1e-9) * trigger_m
+    if not outer_a and inward_ok:
+        lo = math.ceil(a / trigger_m - 1e-9) * trigger_m
+    if not outer_b and inward_ok:
+        hi = math.floor(b / trigger_m + 1e-9) * trigger_m
+    if hi < lo:          # a gap-bounded leg shorter than one trigger step: keep one photo in its middle
+        mid = round((a + b) / 2.0 / trigger_m) * trigger_m
+        lo = hi = mid
+    return lo, hi
+
+
+def part_legs(poly_uv: Any, part: int, across_m: float, spacing_m: float, trigger_m: float | None,
+              along_m: float | None, edge_margin_m: float) -> list[tuple[int, float, float, float, bool, bool]]:
+    """(line, u, v0, v1, outer0, outer1) for one polygon part already rotated to the (u, v) frame."""
+    import shapely
+
+    umin, vmin, umax, vmax = poly_uv.bounds
+    if along_m is not None and umax - umin + 2 * edge_margin_m <= across_m \
+            and vmax - vmin + 2 * edge_margin_m <= along_m:
+        # the whole part fits in one footprint: one photo at its centre
+        vc = (vmin + vmax) / 2.0
+        return [(0, (umin + umax) / 2.0, vc, vc, True, True)]
+    offs = line_offsets(umax - umin, across_m, spacing_m, edge_margin_m)
+    us = umin + offs
+    nl = len(us)
+    lo_v, hi_v = vmin - 1.0, vmax + 1.0
+    lines = shapely.linestrings(np.stack([np.column_stack([us, np.full(nl, lo_v)]),
+                                          np.column_stack([us, np.full(nl, hi_v)])], axis=1))
+    half = spacing_m / 2.0
+    band_lo = us - half
+    band_hi = us + half
+    band_lo[0] = umin - 1.0
+    band_hi[-1] = umax + 1.0
+    bands = shapely.box(band_lo, lo_v, band_hi, hi_v)
+    shapely.prepare(poly_uv)
+    cores = shapely.intersection(lines, poly_uv)
+    bandparts = shapely.intersection(bands, poly_uv)
+    inward_ok = along_m is not None and trigger_m is not None and along_m / 2.0 >= trigger_m - _EPS
+    out = []
+    for k in range(nl):
+        u = float(us[k])
+        ivs = _intervals(cores[k])
+        comps = _polys(bandparts[k])
+        comp_ranges = [(c.bounds[1], c.bounds[3], c) for c in comps]
+        legs: list[list[Any]] = []
+        for i, (a, b) in enumerate(ivs):
+            first, last = i == 0, i == len(ivs) - 1
+            na, nb = a, b
+            if first or last:
+                mid = shapely.Point(u, (a + b) / 2.0)
+                for cv0, cv1, c in comp_ranges:
+                    if c.distance(mid) < 1e-6:
+                        if first:
+                            na = min(na, cv0)
+                        if last:
+                            nb = max(nb, cv1)
+                        break
+            legs.append([na, nb, first, last])
+        # band pieces the line never crosses (tips between lines): a short leg of their own, but only
+        # beyond the outermost legs — pieces beside a gap are left to the neighbouring lines.
+        covered_lo = legs[0][0] if legs else math.inf
+        covered_hi = legs[-1][1] if legs else -math.inf
+        extra = []
+        for cv0, cv1, c in comp_ranges:
+            if any(c.distance(shapely.Point(u, (a + b) / 2.0)) < 1e-6 for a, b in ivs):
+                continue
+            if not legs:
+                extra.append([cv0, cv1, True, True])
+            elif cv1 <= covered_lo + _EPS or cv0 >= covered_hi - _EPS:
+                extra.append([cv0, cv1, True, True])
+            elif cv0 < covered_lo:
+                extra.append([cv0, covered_lo, True, True])
+            elif cv1 > covered_hi:
+                extra.append([covered_hi, cv1, True, True])
+        allv = sorted(legs + extra, key=lambda t: t[0])
+        merged: list[list[Any]] = []
+        for leg in allv:
+            if merged and leg[0] <= merged[-1][1] + _EPS:
+                merged[-1][1] = max(merged[-1][1], leg[1])
+                merged[-1][3] = leg[3]
+            else:
+                merged.append(list(leg))
+        for a, b, oa, ob in merged:
+            if trigger_m:
+                a, b = _snap(a, b, oa, ob, trigger_m, inward_ok)
+            out.append((k, u, a, b, bool(oa), bool(ob)))
+    # snapping inward can make neighbouring legs on one line overlap; they never cross a gap, so keep them
+    return out
+
+
+def generate_swaths(geometry: Any, angle_deg: float, footprint_across_m: float, spacing_m: float,
+                    trigger_m: float | None = None, footprint_along_m: float | None = None,
+                    edge_margin_m: float = DEFAULT_EDGE_MARGIN_M) -> SwathSet:
+    """Legs covering `geometry` (shapely Polygon/MultiPolygon in metres) with lines at azimuth `angle_deg`."""
+    angle = normalise_angle(angle_deg)
+    rotated = to_uv(geometry, angle)
+    parts: Sequence[Any] = list(rotated.geoms) if rotated.geom_type == "MultiPolygon" else [rotated]
+    legs: list[Leg] = []
+    nlines = 0
+    for p, poly in enumerate(parts):
+        raw = part_legs(poly, p, footprint_across_m, spacing_m, trigger_m, footprint_along_m, edge_margin_m)
+        if raw:
+            nlines += max(r[0] for r in raw) + 1
+        for k, u, a, b, oa, ob in raw:
+            x0, y0 = uv_to_xy(u, a, angle)
+            x1, y1 = uv_to_xy(u, b, angle)
+            legs.append(Leg(p, k, u, a, b, float(x0), float(y0), float(x1), float(y1), oa, ob, angle))
+    return SwathSet(angle, spacing_m, tuple(legs), nlines)
+
+
+def candidate_angles(geometry: Any, coarse_step_deg: float = 10.0, max_edges: int = 64) -> list[float]:
+    """Angles worth trying: directions of the convex hull's edges (optimal for convex areas: the sweep
+    is then perpendicular to the minimum width), of the longest polygon edges, and a coarse sweep."""
+    cands: set[float] = set()
+    hull = geometry.convex_hull
+    rings = [hull.exterior] if hull.geom_type == "Polygon" else []
+    parts = list(geometry.geoms) if geometry.geom_type == "MultiPolygon" else [geometry]
+    edges: list[tuple[float, float]] = []
+    for ring in rings + [p.exterior for p in parts]:
+        xy = np.asarray(ring.coords)
+        dx, dy = np.diff(xy[:, 0]), np.diff(xy[:, 1])
+        for ex, ey in zip(dx, dy):
+            ln = math.hypot(ex, ey)
+            if ln > 1e-6:
+                edges.append((ln, math.degrees(math.atan2(ex, ey))))
+    edges.sort(reverse=True)
+    for _ln, az in edges[:max_edges]:
+        cands.add(round(normalise_angle(az), 6))
+    a = -90.0
+    while a < 90.0:
+        cands.add(round(a, 6))
+        a += coarse_step_deg
+    return sorted(cands)
