@@ -1,0 +1,112 @@
+"""Apply cdf/schema/mavlinkcamera.xsd with xmlschema and turn its errors into findings with rule ids.
+
+Division of labour with semantic.py (so one problem yields one finding): the Python checks own
+everything that must also work when the document is not a <mavlinkcamera> (QGC reads such files):
+root, sections, required elements and attributes, empty texts, types, <option> outside <options>.
+The XSD owns the lexical types of parameter attributes (default/min/max/step typed by @type, flags,
+decimalPlaces), the placement of exclusions/updates/parameterranges, and anything else that deviates
+from the documented shape (CDF100). Errors in the first group are dropped here.
+"""
+
+from __future__ import annotations
+
+import functools
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+XSD_PATH = Path(__file__).resolve().parents[1] / "schema" / "mavlinkcamera.xsd"
+
+_ATTR_VALUE = re.compile(r"attribute ([\w:.-]+)=")
+_MISSING_ATTR = re.compile(r"missing required attribute '([\w:.-]+)'")
+_UNEXPECTED = re.compile(r"Unexpected child with tag '([^']+)'")
+PLACEMENT_TAGS = {"exclusions", "exclude", "updates", "update", "parameterranges", "parameterrange", "roption"}
+# owned by semantic.py (see module docstring)
+PY_OWNED_ELEMENTS = {"mavlinkcamera", "definition", "model", "vendor"}
+
+
+@dataclass(frozen=True)
+class Hit:
+    """A finding before the profile gives it a severity."""
+
+    rule: str
+    line: int | None
+    parameter: str | None
+    message: str
+
+
+@functools.lru_cache(maxsize=1)
+def compiled_schema():
+    """The compiled XSD (about 0.3 s to build; built once per process)."""
+    import xmlschema
+
+    return xmlschema.XMLSchema11(str(XSD_PATH))
+
+
+def _param_of(elem) -> str | None:
+    while elem is not None:
+        if elem.tag == "parameter":
+            return elem.get("name")
+        elem = elem.getparent()
+    return None
+
+
+def _map(err) -> tuple[str, str] | None:
+    """(rule id, message) for one xmlschema error, or None when a Python rule owns it."""
+    elem = err.elem
+    tag = elem.tag if elem is not None and isinstance(elem.tag, str) else ""
+    reason = (err.reason or err.message or "").strip()
+    if tag in PY_OWNED_ELEMENTS:
+        return None
+    m = _UNEXPECTED.search(reason)
+    if m:
+        child = m.group(1)
+        if child == "option":
+            return None  # CDF122, semantic.py
+        if child in PLACEMENT_TAGS:
+            return "CDF200", f"<{child}> is not allowed inside <{tag}> (MAVSDK reads it only where the spec puts it)"
+        if child == "localization":
+            return "CDF210", "more than one <localization>"
+        if child == "description":
+            return "CDF100", "more than one <description>"
+        return "CDF100", f"<{child}> is not allowed inside <{tag}>"
+    if "is not complete" in reason:
+        return None  # missing required children: CDF103/104/114, semantic.py
+    if "character data between child elements" in reason:
+        return "CDF211", f"stray text inside <{tag}> (ignored by all parsers)"
+    m = _MISSING_ATTR.search(reason)
+    if m:
+        return None  # CDF109/123/210, semantic.py
+    m = _ATTR_VALUE.search(reason)
+    if m:
+        attr = m.group(1)
+        detail = reason.split(":", 1)[1].strip() if ":" in reason else reason
+        if tag == "parameter":
+            if attr in ("name", "type"):
+                return None  # CDF110/111/116, semantic.py
+            if attr in ("default", "min", "max", "step"):
+                return "CDF120", f"{attr}={elem.get(attr)!r} is not a valid {elem.get('type')}: {detail}"
+            if attr in ("control", "readonly", "writeonly"):
+                return "CDF130", f'{attr}="{elem.get(attr)}" must be "0" or "1"'
+            if attr == "decimalPlaces":
+                return "CDF207", f'decimalPlaces="{elem.get(attr)}" must be a non-negative integer'
+        return "CDF100", f"<{tag}> {reason}"
+    if "length cannot be lesser than 1" in reason:
+        return None  # CDF105, semantic.py
+    return "CDF100", f"<{tag}>: {reason}"
+
+
+def schema_hits(root) -> list[Hit]:
+    """XSD findings for a document whose root is <mavlinkcamera> (other roots: CDF101, semantic.py)."""
+    if root.tag != "mavlinkcamera":
+        return []
+    hits = []
+    for err in compiled_schema().iter_errors(root):
+        mapped = _map(err)
+        if mapped is None:
+            continue
+        rule_id, message = mapped
+        elem = err.elem
+        line = getattr(elem, "sourceline", None) if elem is not None else None
+        hits.append(Hit(rule_id, line, _param_of(elem) if elem is not None else None, message))
+    return hits

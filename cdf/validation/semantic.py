@@ -1,0 +1,533 @@
+"""Checks beyond the XSD: structure as each parser finds it, typed values, cross-references, semantics.
+
+Each check names the rule it implements (cdf/validation/rules.py); severities come from the profile later.
+Parser behaviour cited in the messages is from ../shared/reference/camera-definition-files.md and was
+measured with MAVSDK 4.1.0 and MAVProxy 1.8.75 where §D says so.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from typing import Iterator, Mapping
+
+from cdf.validation.schema import Hit
+from cdf.validation.values import (INT_RANGES, KNOWN_TYPES, NUMERIC_TYPES, STOI_MAX, STOI_TYPES,
+                                   canonical_int, parse_typed)
+
+# camera_def.md §Common Parameters (devguide PR #395)
+RESERVED = frozenset("""CAM_APERTURE CAM_EV CAM_VIDEV CAM_PHOTOEV CAM_EXPMODE CAM_ISO CAM_VIDISO CAM_PHOTOISO
+CAM_METERING CAM_SHUTTERSPD CAM_VIDSHUTSPD CAM_PHOTOSHUTSPD CAM_VIDRES CAM_WBMODE CAM_VIDSTREAM CAM_VIDFPS
+CAM_VIDFOV CAM_VIDFMT CAM_PHOTORATIO CAM_PHOTOFMT CAM_PHOTOSIZE CAM_PHOTOQUAL CAM_MODE""".split())
+
+# The CDF vocabulary: element -> (known child elements, known attributes). QGC's constant list
+# (VehicleCameraControl.h) plus the spec; anything else is ignored by every parser (rule CDF211).
+VOCABULARY: dict[str, tuple[frozenset[str], frozenset[str]]] = {
+    "mavlinkcamera": (frozenset({"definition", "parameters", "localization"}), frozenset()),
+    "definition": (frozenset({"model", "vendor"}), frozenset({"version"})),
+    "model": (frozenset(), frozenset()),
+    "vendor": (frozenset(), frozenset()),
+    "parameters": (frozenset({"parameter"}), frozenset()),
+    "parameter": (frozenset({"description", "updates", "options"}),
+                  frozenset({"name", "type", "default", "control", "readonly", "writeonly", "min", "max", "step",
+                             "decimalPlaces", "unit"})),
+    "description": (frozenset(), frozenset()),
+    "updates": (frozenset({"update"}), frozenset()),
+    "update": (frozenset(), frozenset()),
+    "options": (frozenset({"option"}), frozenset()),
+    "option": (frozenset({"exclusions", "parameterranges"}), frozenset({"name", "value"})),
+    "exclusions": (frozenset({"exclude"}), frozenset()),
+    "exclude": (frozenset(), frozenset()),
+    "parameterranges": (frozenset({"parameterrange"}), frozenset()),
+    "parameterrange": (frozenset({"roption"}), frozenset({"parameter", "condition"})),
+    "roption": (frozenset(), frozenset({"name", "value"})),
+    "localization": (frozenset({"locale"}), frozenset()),
+    "locale": (frozenset({"strings"}), frozenset({"name"})),
+    "strings": (frozenset(), frozenset({"original", "translated"})),
+}
+CDF_TAGS = frozenset(VOCABULARY)
+
+_NAME_OK = re.compile(r"[ -~]{1,16}")
+_NAME_STYLE = re.compile(r"[A-Z0-9_]+")
+_COND_TEST = re.compile(r"([A-Za-z0-9_\-]+)(!=|=|>|<)(\S+)")
+_LOCALE = re.compile(r"[a-z]{2}_[A-Z]{2}")
+_ENCODING = re.compile(rb"<\?xml[^>]*encoding\s*=\s*[\"']([A-Za-z0-9._-]+)[\"']")
+
+
+@dataclass(frozen=True)
+class CameraInfo:
+    """What the camera reports, for the CDF3xx checks (all optional).
+
+    param_types: parameter name -> CDF type name of the PARAM_EXT type the camera answers with
+    (bool/uint8 travel as UINT8; string/custom as CUSTOM). answered: names the camera answers.
+    """
+
+    vendor_name: str | None = None
+    model_name: str | None = None
+    cam_definition_version: int | None = None
+    cam_definition_uri: str | None = None
+    param_types: Mapping[str, str] | None = None
+    answered: frozenset[str] | None = None
+
+
+def _text_empty(el) -> bool:
+    return el.text is None or el.text == ""
+
+
+def _line(el) -> int | None:
+    return getattr(el, "sourceline", None)
+
+
+class _Params:
+    """The parameters as MAVSDK sees them: direct children of <parameters>, by name."""
+
+    def __init__(self, elements) -> None:
+        self.elements = elements
+        self.by_name: dict[str, object] = {}
+        for p in elements:
+            n = p.get("name")
+            if n is not None and n not in self.by_name:
+                self.by_name[n] = p
+
+    def type_of(self, name: str) -> str | None:
+        p = self.by_name.get(name)
+        return (p.get("type") or "").lower() if p is not None else None
+
+    def option_values(self, name: str) -> list[str] | None:
+        p = self.by_name.get(name)
+        if p is None:
+            return None
+        opts = p.find("options")
+        if opts is None:
+            return None
+        return [o.get("value") for o in opts.findall("option") if o.get("value") is not None]
+
+
+def check_document(root, data: bytes) -> Iterator[Hit]:
+    yield from _check_encoding(data)
+    if root.tag != "mavlinkcamera":
+        yield Hit("CDF101", _line(root), None,
+                  f"root element is <{root.tag}>, not <mavlinkcamera> (MAVSDK and MAVProxy reject the file)")
+    definition = yield from _section(root, "definition")
+    parameters = yield from _section(root, "parameters")
+    if definition is not None:
+        yield from _check_definition(definition)
+    if parameters is None:
+        return
+    elements = parameters.findall("parameter")
+    if not elements:
+        yield Hit("CDF108", _line(parameters), None, "no <parameter> (QGC rejects a file where none loads)")
+    if len(elements) > 65535:
+        yield Hit("CDF212", _line(parameters), None, f"{len(elements)} parameters; PARAM_EXT counts are uint16")
+    params = _Params(elements)
+    seen: dict[str, int | None] = {}
+    for p in elements:
+        yield from _check_parameter(p, params, seen)
+    yield from _check_localization(root, params, definition)
+    yield from _check_vocabulary(root)
+
+
+def _check_encoding(data: bytes) -> Iterator[Hit]:
+    head = data[:200].lstrip(b"\xef\xbb\xbf")
+    if not head.lstrip().startswith(b"<?xml"):
+        yield Hit("CDF007", 1, None, 'no XML declaration; start with <?xml version="1.0" encoding="UTF-8"?>')
+        return
+    m = _ENCODING.search(head)
+    if m is None:
+        yield Hit("CDF007", 1, None, 'the XML declaration names no encoding; declare encoding="UTF-8"')
+    elif m.group(1).decode().upper().replace("_", "-") not in ("UTF-8", "UTF8"):
+        yield Hit("CDF007", 1, None, f"encoding {m.group(1).decode()} declared; use UTF-8")
+
+
+def _section(root, tag: str):
+    direct = root.find(tag)
+    if direct is not None:
+        return direct
+    nested = next(root.iter(tag), None) if root.tag != tag else None
+    if nested is None:
+        yield Hit("CDF103", _line(root), None, f"no <{tag}> element (QGC and MAVSDK reject the file)")
+        return None
+    yield Hit("CDF102", _line(nested), None,
+              f"<{tag}> is not a direct child of the root (MAVSDK and MAVProxy do not find it; QGC does)")
+    return nested
+
+
+def _check_definition(d) -> Iterator[Hit]:
+    version = d.get("version")
+    if version is None:
+        yield Hit("CDF106", _line(d), None, "<definition> has no version attribute (QGC rejects the file)")
+    elif not (re.fullmatch(r"[0-9]+", version.strip()) and int(version) <= 65535):
+        yield Hit("CDF107", _line(d), None,
+                  f"version={version!r} is not an integer 0-65535 (cam_definition_version is uint16)")
+    for tag in ("model", "vendor"):
+        el = d.find(tag)
+        if el is None:
+            yield Hit("CDF104", _line(d), None, f"<definition> has no <{tag}> child (QGC and MAVSDK reject the file)")
+        elif _text_empty(el):
+            yield Hit("CDF105", _line(el), None, f"<{tag}> is empty (MAVSDK crashes on empty text)")
+        else:
+            text = el.text.strip()
+            if len(text.encode()) > 31:
+                yield Hit("CDF214", _line(el), None,
+                          f"<{tag}> is {len(text.encode())} bytes; CAMERA_INFORMATION holds 31 + NUL")
+            if "/" in text or "\\" in text:
+                yield Hit("CDF214", _line(el), None, f"<{tag}> {text!r} contains a path separator "
+                                                     "(GCSs build cache file names from it)")
+
+
+def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
+    name, ptype_raw = p.get("name"), p.get("type")
+    line = _line(p)
+    if name is None or ptype_raw is None:
+        missing = " and ".join(a for a, v in (("name", name), ("type", ptype_raw)) if v is None)
+        yield Hit("CDF109", line, name, f"<parameter> has no {missing} (QGC and MAVSDK reject the file)")
+    if name is not None:
+        if not _NAME_OK.fullmatch(name):
+            yield Hit("CDF116", line, name, f"name {name!r} is not 1-16 printable ASCII characters "
+                                            "(PARAM_EXT param_id is char[16])")
+        elif not _NAME_STYLE.fullmatch(name):
+            yield Hit("CDF118", line, name, f"name {name!r} uses characters outside [A-Z0-9_]")
+        if name in seen:
+            yield Hit("CDF117", line, name, f"duplicate parameter name (first at line {seen[name]})")
+        else:
+            seen[name] = line
+    ptype = (ptype_raw or "").lower()
+    if ptype_raw is not None:
+        if ptype not in KNOWN_TYPES:
+            yield Hit("CDF110", line, name, f"unknown type {ptype_raw!r} (QGC and MAVSDK reject the file)")
+        elif ptype_raw != ptype:
+            yield Hit("CDF111", line, name, f"type {ptype_raw!r} is not lower case (MAVSDK rejects the file)")
+        if ptype == "string":
+            yield Hit("CDF112", line, name, "type string is not in the spec (MAVSDK skips it, MAVProxy rejects the file)")
+        elif ptype == "custom":
+            yield Hit("CDF113", line, name, "type custom is silently skipped by MAVSDK")
+        elif ptype == "uint16":
+            yield Hit("CDF115", line, name, "uint16 is broken in MAVSDK's camera plugin; use uint32 or int32")
+    desc = p.find("description")
+    if desc is None:
+        yield Hit("CDF114", line, name, "no <description> child (QGC and MAVSDK reject the file)")
+    elif _text_empty(desc):
+        yield Hit("CDF105", _line(desc), name, "<description> is empty (MAVSDK crashes on empty text)")
+
+    flags = {a: p.get(a) for a in ("control", "readonly", "writeonly")}
+    if flags["readonly"] == "1" and flags["writeonly"] == "1":
+        yield Hit("CDF131", line, name, 'readonly="1" and writeonly="1" together (MAVSDK rejects the file)')
+    if ptype in ("custom", "string") and flags["control"] != "0":
+        yield Hit("CDF132", line, name, f'{ptype} parameter without control="0"')
+    if any(k.lower() == "decimalplaces" and k != "decimalPlaces" for k in p.attrib):
+        yield Hit("CDF207", line, name, "attribute must be spelled decimalPlaces (QGC ignores other spellings)")
+
+    numeric = ptype in NUMERIC_TYPES and ptype_raw == ptype
+    default_text = p.get("default")
+    if default_text is None and ptype in NUMERIC_TYPES:
+        yield Hit("CDF119", line, name, "no default (MAVSDK silently skips the parameter: 'Default missing')")
+    default = parse_typed(default_text, ptype)[0] if numeric and default_text is not None else None
+    if numeric and ptype in STOI_TYPES:
+        for attr in ("default", "min", "max", "step"):
+            v = parse_typed(p.get(attr), ptype)[0] if p.get(attr) is not None else None
+            if isinstance(v, int) and v > STOI_MAX:
+                yield Hit("CDF121", line, name, f"{attr}={v} exceeds 2147483647 (MAVSDK's std::stoi throws: crash)")
+
+    stray = p.findall("option")
+    if stray:
+        yield Hit("CDF122", _line(stray[0]), name, f"{len(stray)} <option> element(s) directly under <parameter>, "
+                                                    "not inside <options> (MAVSDK does not see them)")
+    options_el = p.find("options")
+    options = options_el.findall("option") if options_el is not None else []
+    typed_options: list[tuple[object, object]] = []  # (element, typed value or None)
+    for o in options:
+        oname, oval = o.get("name"), o.get("value")
+        if oname is None or oval is None:
+            what = " and ".join(a for a, v in (("name", oname), ("value", oval)) if v is None)
+            yield Hit("CDF123", _line(o), name, f"<option> without {what} (QGC rejects the file, MAVSDK skips the parameter)")
+        v = None
+        if oval is not None and numeric:
+            v, why = parse_typed(oval, ptype)
+            if why:
+                yield Hit("CDF120", _line(o), name, f"option value: {why}")
+            elif ptype in STOI_TYPES and v > STOI_MAX:
+                yield Hit("CDF121", _line(o), name, f"option value {v} exceeds 2147483647 (MAVSDK's std::stoi throws: crash)")
+        typed_options.append((o, v))
+
+    values = [v for _o, v in typed_options if v is not None]
+    dups = sorted({repr(v) for v in values if values.count(v) > 1})
+    if dups:
+        yield Hit("CDF124", _line(options_el), name, f"option value(s) {', '.join(dups)} appear more than once")
+    if numeric and default is not None and options_el is not None:
+        hits = values.count(default)
+        if hits != 1:
+            listed = ", ".join(o.get("value") or "?" for o in options)
+            yield Hit("CDF125", line, name,
+                      f"default {default_text!r} matches {'no' if hits == 0 else hits} option value(s) [{listed}] "
+                      "(MAVSDK rejects the whole file: 'No default found')")
+    if ptype == "bool":
+        for o, _v in typed_options:
+            if o.find(".//exclude") is not None or o.find(".//parameterrange") is not None:
+                yield Hit("CDF126", _line(o), name, "exclusions/ranges keyed on a bool option never fire in QGC "
+                                                    "(it renders bools as true/false); use uint8 with options")
+                break
+
+    # ranges (min/max/step) for parameters without options
+    if numeric and ptype != "bool":
+        lo_t, hi_t, st_t = p.get("min"), p.get("max"), p.get("step")
+        if options_el is None and (lo_t is None or hi_t is None):
+            yield Hit("CDF127", line, name, "no options and no min/max range "
+                                            "(MAVSDK silently skips the parameter: 'Range not found')")
+        lo = parse_typed(lo_t, ptype)[0] if lo_t is not None else None
+        hi = parse_typed(hi_t, ptype)[0] if hi_t is not None else None
+        st = parse_typed(st_t, ptype)[0] if st_t is not None else None
+        if lo is not None and hi is not None and lo > hi:
+            yield Hit("CDF128", line, name, f"min {lo_t} > max {hi_t} (MAVProxy rejects the file)")
+        if st is not None and st <= 0:
+            yield Hit("CDF128", line, name, f"step {st_t} is not positive (MAVProxy rejects the file)")
+        if options_el is not None and (lo_t is not None or hi_t is not None):
+            yield Hit("CDF129", line, name, "min/max combined with <options> (MAVSDK ignores the range, the spec "
+                                            "forbids combining a range with exclusions or option ranges)")
+        if default is not None and options_el is None:
+            if (lo is not None and default < lo) or (hi is not None and default > hi):
+                yield Hit("CDF129", line, name, f"default {default_text} outside [{lo_t}, {hi_t}]")
+            elif lo is not None and st and st > 0 and ptype in INT_RANGES and (default - lo) % st:
+                yield Hit("CDF129", line, name, f"default {default_text} is not on the step grid {lo_t} + n*{st_t}")
+
+    if flags["readonly"] == "1" and options and flags["control"] not in ("0",):
+        yield Hit("CDF213", line, name, 'readonly="1" with options but not control="0": a control that never sends')
+    if name == "CAM_MODE":
+        vals = sorted(o.get("value") or "" for o in options)
+        if flags["control"] != "0" or vals != ["0", "1"]:
+            yield Hit("CDF208", line, name, 'CAM_MODE should be control="0" with options 0 (photo) and 1 (video); '
+                                            "QGC then sets modes via PARAM_EXT_SET, so the camera must serve it")
+    elif name in RESERVED and ptype in ("bool", "custom", "string"):
+        yield Hit("CDF209", line, name, f"reserved name {name} used with type {ptype}")
+
+    yield from _check_updates(p, name, params)
+    for o, _v in typed_options:
+        yield from _check_option_refs(o, p, name, ptype, params)
+
+
+def _check_updates(p, name, params: _Params) -> Iterator[Hit]:
+    updates = p.find("updates")
+    if updates is None:
+        return
+    for u in updates.findall("update"):
+        if _text_empty(u):
+            yield Hit("CDF105", _line(u), name, "<update> is empty (MAVSDK crashes on empty text)")
+            continue
+        target = u.text.strip()
+        if target == name:
+            yield Hit("CDF202", _line(u), name, "<update> names the parameter itself")
+        elif target not in params.by_name:
+            yield Hit("CDF202", _line(u), name, f"<update> names unknown parameter {target!r} "
+                                                "(QGC dereferences a null pointer for it)")
+
+
+def _check_option_refs(o, p, name, ptype, params: _Params) -> Iterator[Hit]:
+    is_trigger = False
+    for ex in o.iter("exclude"):  # recursive like QGC; nesting itself is CDF200 (XSD)
+        is_trigger = True
+        if _text_empty(ex):
+            yield Hit("CDF105", _line(ex), name, "<exclude> is empty (MAVSDK crashes on empty text)")
+        elif ex.text.strip() not in params.by_name:
+            yield Hit("CDF201", _line(ex), name, f"<exclude> names unknown parameter {ex.text.strip()!r}")
+    for pr in o.iter("parameterrange"):
+        is_trigger = True
+        target = pr.get("parameter")
+        if target is None:
+            yield Hit("CDF123", _line(pr), name, "<parameterrange> without parameter "
+                                                 "(QGC rejects the file, MAVSDK skips the parameter)")
+            continue
+        if target == name or target not in params.by_name:
+            why = "its own parameter" if target == name else f"unknown parameter {target!r}"
+            yield Hit("CDF203", _line(pr), name, f"<parameterrange> targets {why} "
+                                                 "(MAVSDK skips the parameter: 'Unknown roption type')")
+            continue
+        ttype = params.type_of(target)
+        tvalues = params.option_values(target)
+        if tvalues is None:
+            yield Hit("CDF204", _line(pr), name, f"range target {target} has no <options> to restrict")
+        typed_targets = {parse_typed(v, ttype)[0] for v in tvalues or []} if ttype in NUMERIC_TYPES else set()
+        for r in pr.findall("roption"):
+            rname, rval = r.get("name"), r.get("value")
+            if rname is None or rval is None:
+                what = " and ".join(a for a, v in (("name", rname), ("value", rval)) if v is None)
+                yield Hit("CDF123", _line(r), name, f"<roption> without {what} "
+                                                    "(QGC rejects the file, MAVSDK skips the parameter)")
+                continue
+            if ttype in NUMERIC_TYPES:
+                v, why = parse_typed(rval, ttype)
+                if why:
+                    yield Hit("CDF120", _line(r), name, f"roption value for {target} ({ttype}): {why}")
+                elif tvalues is not None and v not in typed_targets:
+                    yield Hit("CDF204", _line(r), name, f"roption value {rval} is not an option of {target}")
+        cond = pr.get("condition")
+        if cond is not None:
+            yield from _check_condition(cond, pr, name, params)
+    if is_trigger:
+        val = o.get("value")
+        if val is not None and ptype in INT_RANGES and ptype != "bool" and not canonical_int(val):
+            yield Hit("CDF206", _line(o), name, f"trigger option value {val!r} is not a canonical integer "
+                                                "(QGC compares it as text with the current value)")
+        elif val is not None and ptype in ("float", "double"):
+            yield Hit("CDF206", _line(o), name, f"{ptype} option {val!r} triggers exclusions/ranges; QGC matches it "
+                                                "only if written exactly as it renders the value")
+
+
+def _check_condition(cond: str, pr, name, params: _Params) -> Iterator[Hit]:
+    tokens = cond.split(" ")
+    problems = []
+    if len(tokens) % 2 == 0:
+        problems.append("expected TEST (AND|OR TEST)...")
+    for i, tok in enumerate(tokens):
+        if i % 2:
+            if tok not in ("AND", "OR"):
+                problems.append(f"{tok!r} where AND/OR is expected")
+            continue
+        m = _COND_TEST.fullmatch(tok)
+        if not m:
+            problems.append(f"{tok!r} is not NAME=VALUE (no spaces around the operator)")
+            continue
+        pname, op, val = m.groups()
+        if pname not in params.by_name:
+            problems.append(f"unknown parameter {pname}")
+        if op in (">", "<"):
+            problems.append(f"{op} compares text in QGC (lexicographic)")
+        if not canonical_int(val):
+            problems.append(f"value {val!r} is not a canonical integer")
+    if problems:
+        yield Hit("CDF205", _line(pr), name, f"condition {cond!r}: " + "; ".join(problems))
+
+
+def _check_localization(root, params: _Params, definition) -> Iterator[Hit]:
+    locs = root.findall("localization")
+    if not locs:
+        return
+    if len(locs) > 1:
+        yield Hit("CDF210", _line(locs[1]), None, "more than one <localization> (QGC uses the first)")
+    texts = set()
+    structural = set()
+    for p in params.elements:
+        d = p.find("description")
+        if d is not None and d.text:
+            texts.add(d.text)
+        for o in p.iter("option", "roption"):
+            if o.get("name"):
+                texts.add(o.get("name"))
+            if o.get("value"):
+                structural.add(o.get("value"))
+        for a in ("name", "type", "default"):
+            if p.get(a):
+                structural.add(p.get(a))
+        for e in p.iter("exclude", "update"):
+            if e.text:
+                structural.add(e.text.strip())
+    if definition is not None:
+        for tag in ("model", "vendor"):
+            el = definition.find(tag)
+            if el is not None and el.text:
+                structural.add(el.text.strip())
+    for loc in locs[0].findall("locale"):
+        lname = loc.get("name")
+        if lname is None:
+            yield Hit("CDF210", _line(loc), None, "<locale> without name")
+        elif not _LOCALE.fullmatch(lname):
+            yield Hit("CDF210", _line(loc), None, f"locale name {lname!r} is not ll_CC (e.g. de_DE): "
+                                                  "QGC matches the full name or its first 3 characters")
+        for s in loc.findall("strings"):
+            orig, trans = s.get("original"), s.get("translated")
+            if orig is None or trans is None:
+                yield Hit("CDF210", _line(s), None, "<strings> needs original and translated")
+                continue
+            if orig in structural:
+                yield Hit("CDF210", _line(s), None, f"original {orig!r} also occurs as a name/value/model text: QGC's "
+                                                    "byte replacement on the whole file would change it too")
+            elif orig not in texts:
+                yield Hit("CDF210", _line(s), None, f"original {orig!r} matches no description or option name")
+            if any(c in orig + trans for c in "&<>\""):
+                yield Hit("CDF210", _line(s), None, "original/translated contain &, <, > or \" "
+                                                    "(QGC replaces raw bytes: such strings never match or break XML)")
+
+
+def _check_vocabulary(root) -> Iterator[Hit]:
+    """Unknown elements (reported once, at the top of the unknown subtree) and unknown attributes."""
+    reported_attrs: set[tuple[str, str]] = set()
+    stack = [root]
+    while stack:
+        el = stack.pop()
+        children, attrs = VOCABULARY.get(el.tag, (None, None))
+        if children is None:
+            continue
+        for a in el.attrib:
+            if a not in attrs and a.lower() != "decimalplaces" and (el.tag, a) not in reported_attrs:
+                reported_attrs.add((el.tag, a))
+                yield Hit("CDF211", _line(el), _param_name(el), f"attribute {el.tag}@{a} is not part of the format "
+                                                                "(ignored by QGC and MAVSDK)")
+        for c in el:
+            if not isinstance(c.tag, str):
+                continue  # comments, processing instructions
+            if c.tag in CDF_TAGS:
+                stack.append(c)
+            else:
+                yield Hit("CDF211", _line(c), _param_name(c), f"element <{c.tag}> inside <{el.tag}> is not part of "
+                                                              "the format (ignored by QGC and MAVSDK)")
+
+
+def _param_name(el) -> str | None:
+    while el is not None:
+        if el.tag == "parameter":
+            return el.get("name")
+        el = el.getparent()
+    return None
+
+
+# ---- against what the camera reports (CDF3xx) ---------------------------------------------------------
+
+_EXT_EQUIV = {"bool": "uint8", "string": "custom"}
+
+
+def check_camera(root, info: CameraInfo) -> Iterator[Hit]:
+    definition = root.find("definition") if root.find("definition") is not None else next(root.iter("definition"), None)
+    if definition is not None:
+        version = definition.get("version")
+        if info.cam_definition_version is not None:
+            if info.cam_definition_version == 0:
+                yield Hit("CDF300", _line(definition), None, "cam_definition_version is 0: GCSs never refresh "
+                                                             "their cached copy")
+            elif version is None or version.strip() != str(info.cam_definition_version):
+                yield Hit("CDF300", _line(definition), None, f"file version {version!r} differs from "
+                                                             f"cam_definition_version {info.cam_definition_version}")
+        for tag, reported in (("model", info.model_name), ("vendor", info.vendor_name)):
+            el = definition.find(tag)
+            if reported is not None and el is not None and (el.text or "").strip() != reported:
+                yield Hit("CDF301", _line(el), None, f"<{tag}> {el.text!r} differs from CAMERA_INFORMATION "
+                                                     f"{tag}_name {reported!r}")
+    if info.cam_definition_uri is not None:
+        for msg in uri_problems(info.cam_definition_uri):
+            yield Hit("CDF302", None, None, msg)
+    params = next(root.iter("parameters"), None)
+    elements = params.findall("parameter") if params is not None else []
+    if info.param_types is not None:
+        for p in elements:
+            n, t = p.get("name"), (p.get("type") or "").lower()
+            if n in info.param_types:
+                got = info.param_types[n].lower()
+                if _EXT_EQUIV.get(t, t) != _EXT_EQUIV.get(got, got):
+                    yield Hit("CDF303", _line(p), n, f"file says {t}, the camera answers {got}")
+    if info.answered is not None:
+        for p in elements:
+            n = p.get("name")
+            if n is not None and p.get("writeonly") != "1" and n not in info.answered:
+                yield Hit("CDF304", _line(p), n, "the camera does not answer this parameter")
+
+
+def uri_problems(uri: str) -> list[str]:
+    """Why a cam_definition_uri would trouble a GCS (rule CDF302); empty when fine."""
+    out = []
+    if len(uri.encode()) > 139:
+        out.append(f"URI is {len(uri.encode())} bytes; cam_definition_uri holds 139 + NUL")
+    scheme = uri.split("://", 1)[0].lower() if "://" in uri else ""
+    if scheme not in ("http", "https", "mftp"):
+        out.append(f"scheme {scheme or '(none)'}:// is not http, https or mftp (QGC knows only mftp for MAVLink FTP)")
+    if "comp=" in uri:
+        out.append("comp= part: QGC and MAVSDK parse it differently; host the file on the camera component")
+    if scheme in ("http", "https") and uri.lower().split("?")[0].endswith(".xz"):
+        out.append(".xml.xz over HTTP is not inflated by QGC or MAVSDK 4.1.0; serve plain XML over HTTP")
+    return out

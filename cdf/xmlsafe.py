@@ -1,0 +1,205 @@
+"""Safe loading of untrusted camera definition files: files, `.xml.xz`, and http(s) URLs.
+
+Camera definitions come from cameras and web servers nobody here controls, so every step has a limit:
+- size: 4 MiB on the wire and 4 MiB after xz inflation (MAVProxy's MAX_DEFINITION_SIZE; the largest
+  public CDF, the Yuneec E90, is 64 KB);
+- xz: detected by its magic number, not by the file name (a `.xml` URL may serve xz and vice versa),
+  inflated with a memory limit and a bounded output, and must be one complete stream;
+- XML: lxml with no DTD loading, no entity expansion, no network, no huge-tree mode; any DTD is
+  reported (MAVProxy refuses them) and nesting deeper than MAX_DEPTH is refused (real files nest 8 deep);
+- HTTP: a total timeout, redirects only to http/https (a redirect to file:// would read local files).
+
+Content problems (too big, broken xz, not XML) become `LoadProblem`s that the validator reports as
+findings; a source that cannot be read at all (no file, HTTP error, timeout, refused redirect) raises
+CdfError.
+"""
+
+from __future__ import annotations
+
+import lzma
+import socket
+import time
+import urllib.error
+import urllib.parse
+import urllib.request
+from dataclasses import dataclass
+from pathlib import Path
+
+from cdf.errors import CdfError
+
+MAX_BYTES = 4 * 1024 * 1024
+MAX_INFLATED_BYTES = 4 * 1024 * 1024
+# liblzma memory for the decoder: xz presets up to -9 need 65 MiB for the dictionary.
+XZ_MEMLIMIT = 96 * 1024 * 1024
+MAX_DEPTH = 64
+HTTP_TIMEOUT_S = 15.0
+XZ_MAGIC = b"\xfd7zXZ\x00"
+
+
+@dataclass(frozen=True)
+class LoadProblem:
+    """A content problem found while loading; `rule` is a rule id of cdf.validation.rules."""
+
+    rule: str
+    message: str
+    line: int | None = None
+
+
+@dataclass(frozen=True)
+class Loaded:
+    """Bytes of one definition after the size check and xz inflation."""
+
+    name: str
+    raw_size: int
+    data: bytes | None  # None when a problem stops loading
+    compressed: bool
+    problems: tuple[LoadProblem, ...] = ()
+
+
+def inflate(raw: bytes, name: str) -> Loaded:
+    """Check the size and inflate xz (by magic number) with bounded memory and output."""
+    if len(raw) > MAX_BYTES:
+        return Loaded(name, len(raw), None, False, (LoadProblem(
+            "CDF002", f"file is {len(raw)} bytes; the limit is {MAX_BYTES} (MAVProxy's 4 MiB cap)"),))
+    if not raw.startswith(XZ_MAGIC):
+        return Loaded(name, len(raw), raw, False)
+    dec = lzma.LZMADecompressor(format=lzma.FORMAT_XZ, memlimit=XZ_MEMLIMIT)
+    try:
+        out = dec.decompress(raw, max_length=MAX_INFLATED_BYTES + 1)
+    except lzma.LZMAError as err:
+        return Loaded(name, len(raw), None, True, (LoadProblem("CDF003", f"broken xz stream: {err}"),))
+    if len(out) > MAX_INFLATED_BYTES:
+        return Loaded(name, len(raw), None, True, (LoadProblem(
+            "CDF002", f"xz content inflates beyond {MAX_INFLATED_BYTES} bytes"),))
+    if not dec.eof:
+        return Loaded(name, len(raw), None, True, (LoadProblem(
+            "CDF003", "xz stream is truncated (no end-of-stream marker)"),))
+    if dec.unused_data.strip(b"\0"):
+        # GCS inflaters (MAVSDK InflateLZMA, QGC QGCCompression) read one stream; more is ignored or fails.
+        return Loaded(name, len(raw), out, True, (LoadProblem(
+            "CDF003", "data after the end of the xz stream (concatenated streams are not read by GCSs)"),))
+    return Loaded(name, len(raw), out, True)
+
+
+def read_file(path: str | Path) -> bytes:
+    """Read at most MAX_BYTES + 1 bytes of a local file (the size check then reports the excess)."""
+    p = Path(path)
+    try:
+        with p.open("rb") as fh:
+            return fh.read(MAX_BYTES + 1)
+    except FileNotFoundError:
+        raise CdfError("no such file", where=str(path), hint="check the path") from None
+    except IsADirectoryError:
+        raise CdfError("is a directory, not a camera definition file", where=str(path)) from None
+    except OSError as err:
+        raise CdfError(f"cannot read: {err.strerror or err}", where=str(path)) from None
+
+
+class _HttpOnlyRedirects(urllib.request.HTTPRedirectHandler):
+    max_redirections = 5
+
+    def redirect_request(self, req, fp, code, msg, headers, newurl):
+        scheme = urllib.parse.urlsplit(newurl).scheme.lower()
+        if scheme not in ("http", "https"):
+            raise CdfError(f"redirect to a {scheme or 'relative'}:// URL refused ({newurl})",
+                           where=req.full_url, hint="camera definitions may only redirect to http(s) URLs")
+        return super().redirect_request(req, fp, code, msg, headers, newurl)
+
+
+def fetch_url(url: str, *, timeout_s: float = HTTP_TIMEOUT_S) -> bytes:
+    """GET an http(s) URL with a per-operation timeout, at most MAX_BYTES + 1 bytes, http(s)-only redirects."""
+    scheme = urllib.parse.urlsplit(url).scheme.lower()
+    if scheme not in ("http", "https"):
+        raise CdfError(f"unsupported URL scheme {scheme!r}", where=url,
+                       hint="use http:// or https:// (mftp:// needs a MAVLink link: download it first)")
+    opener = urllib.request.build_opener(_HttpOnlyRedirects())
+    req = urllib.request.Request(url, headers={"User-Agent": "wiris-tools-cdf-validate"})
+    try:
+        deadline = time.monotonic() + 2 * timeout_s
+        with opener.open(req, timeout=timeout_s) as resp:
+            return _read_bounded(resp, url, deadline)
+    except CdfError:
+        raise
+    except urllib.error.HTTPError as err:
+        raise CdfError(f"HTTP {err.code} {err.reason}", where=url,
+                       hint="a GCS would cache this error page as the definition; serve the XML with status 200") from None
+    except (socket.timeout, TimeoutError):
+        raise CdfError(f"no answer within {timeout_s:g} s", where=url, hint="is the server up and reachable?") from None
+    except urllib.error.URLError as err:
+        reason = err.reason
+        if isinstance(reason, (socket.timeout, TimeoutError)):
+            raise CdfError(f"no answer within {timeout_s:g} s", where=url,
+                           hint="is the server up and reachable?") from None
+        raise CdfError(f"cannot fetch: {reason}", where=url, hint="check the URL and the network") from None
+    except (OSError, ValueError) as err:
+        raise CdfError(f"cannot fetch: {err}", where=url) from None
+
+
+def _read_bounded(resp, url: str, deadline: float) -> bytes:
+    # The socket timeout bounds each read; the deadline bounds a server that trickles bytes forever.
+    chunks, total = [], 0
+    while total <= MAX_BYTES:
+        if time.monotonic() > deadline:
+            raise CdfError("download took too long (server sends too slowly)", where=url)
+        chunk = resp.read(min(65536, MAX_BYTES + 1 - total))
+        if not chunk:
+            break
+        chunks.append(chunk)
+        total += len(chunk)
+    return b"".join(chunks)
+
+
+def is_url(source: str) -> bool:
+    return "://" in source and urllib.parse.urlsplit(source).scheme.lower() in ("http", "https", "file", "ftp",
+                                                                                "mftp", "mavlinkftp")
+
+
+def read_source(source: str | Path, *, timeout_s: float = HTTP_TIMEOUT_S) -> bytes:
+    """Bytes of a path or an http(s) URL (bounded); raises CdfError when the source cannot be read."""
+    s = str(source)
+    if is_url(s):
+        return fetch_url(s, timeout_s=timeout_s)
+    return read_file(s)
+
+
+def parse_xml(data: bytes, name: str):
+    """Parse with lxml, hardened. Returns (root element or None, problems)."""
+    from lxml import etree
+
+    parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False, huge_tree=False,
+                             dtd_validation=False, remove_comments=False, collect_ids=False)
+    problems: list[LoadProblem] = []
+    try:
+        root = etree.fromstring(data, parser)
+    except etree.XMLSyntaxError as err:
+        msg = str(err.msg or err)
+        line = err.lineno if isinstance(err.lineno, int) and err.lineno > 0 else None
+        if "depth" in msg.lower():
+            return None, (LoadProblem("CDF006", f"nesting too deep ({msg}); real definitions nest 8 deep",
+                                      line),)
+        if "entity" in msg.lower() and b"<!DOCTYPE" in data[:4096]:
+            return None, (LoadProblem("CDF005", f"DTD entities are not allowed ({msg})", line),)
+        return None, (LoadProblem("CDF004", f"not well-formed XML: {msg}", line),)
+    except ValueError as err:  # e.g. a str with an encoding declaration; bytes never get here
+        return None, (LoadProblem("CDF004", f"not parseable: {err}"),)
+    tree = root.getroottree()
+    if tree.docinfo.doctype or tree.docinfo.internalDTD is not None:
+        problems.append(LoadProblem("CDF005", "document has a DTD (<!DOCTYPE>); it was not loaded and no "
+                                              "entity was expanded", 1))
+    depth = _max_depth(root)
+    if depth > MAX_DEPTH:
+        return None, (*problems, LoadProblem("CDF006", f"elements nest {depth} deep; the limit is {MAX_DEPTH}"))
+    return root, tuple(problems)
+
+
+def _max_depth(root) -> int:
+    deepest = 0
+    stack = [(root, 1)]
+    while stack:
+        el, d = stack.pop()
+        if d > deepest:
+            deepest = d
+            if d > MAX_DEPTH:
+                return d
+        stack.extend((c, d + 1) for c in el)
+    return deepest
