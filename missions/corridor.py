@@ -1,0 +1,159 @@
+"""Corridor scan: parallel offset lines along a polyline (pipeline, road, river, power line).
+
+    plan = plan_corridor([[50.11, 14.50], [50.12, 14.52]], width_m=60, footprint=fp, front_pct=80,
+                         side_pct=60, turnaround_m=10, speed_mps=6)
+
+The corridor is the polyline buffered by width/2 with flat ends (`plan.area`, an `Area` in its own local
+projection — measure coverage against it). Lines: the fewest offset curves, `spacing` apart and centred
+on the polyline, whose footprints span the width plus the edge margin (QGC uses ceil(width/spacing),
+which leaves the outer half-footprints unused). Bends use round joins so the outer lines stay at their
+offset; each line is extended at its far end so its length is a whole number of trigger distances (the
+last photo sits on or beyond the corridor's end). Lines are flown alternately, each with turnaround stubs
+along its end tangents and distance triggering over its whole length.
+
+Returns a `CorridorPlan` with the same fields the compiler reads from a `SurveyPlan` (waypoints,
+camera_spans, photos, hover=False, stats, warnings) plus `area` and `lines_xy`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+from typing import Any, Sequence
+
+import numpy as np
+
+from missions.area import Area, LatLonPolygon, _inline_polygon
+from missions.errors import PlanError
+from missions.footprint import Footprint, transect_spacing_m, trigger_distance_m
+from missions.geo import LocalProjection
+from missions.route import KIND_ENTRY, KIND_EXIT, KIND_TURN_IN
+from missions.survey import (DEFAULT_EXIT_MARGIN_M, PlanWarning, SurveyStats, Waypoint, estimated_time_s)
+from missions.swaths import DEFAULT_EDGE_MARGIN_M, line_offsets
+from missions.triggers import PhotoPoint, TriggerSpan, simulate_distance_trigger
+
+
+@dataclass(frozen=True)
+class CorridorPlan:
+    waypoints: tuple[Waypoint, ...]
+    camera_spans: tuple[TriggerSpan, ...]
+    hover: bool
+    trigger_distance_m: float
+    spacing_m: float
+    photos: tuple[PhotoPoint, ...]
+    lines_xy: tuple[tuple[tuple[float, float], ...], ...]
+    area: Area
+    stats: SurveyStats
+    warnings: tuple[PlanWarning, ...]
+
+    @property
+    def path_xy(self) -> np.ndarray:
+        return np.array([(w.x, w.y) for w in self.waypoints], dtype=float).reshape(-1, 2)
+
+
+def _longest_line(g: Any) -> Any:
+    if g.geom_type == "LineString":
+        return g
+    parts = [h for h in getattr(g, "geoms", []) if h.geom_type == "LineString"]
+    return max(parts, key=lambda h: h.length) if parts else None
+
+
+def _extend_end(xy: np.ndarray, extra: float) -> np.ndarray:
+    if extra <= 1e-9:
+        return xy
+    d = xy[-1] - xy[-2]
+    d = d / np.hypot(*d)
+    return np.vstack([xy, xy[-1] + d * extra])
+
+
+def plan_corridor(line: Sequence[Sequence[float]], width_m: float, footprint: Footprint, front_pct: float,
+                  side_pct: float, turnaround_m: float = 10.0, speed_mps: float = 5.0,
+                  min_interval_s: float | None = None, where: str = "corridor.line",
+                  exit_margin_m: float = DEFAULT_EXIT_MARGIN_M) -> CorridorPlan:
+    from shapely.geometry import LineString, Polygon
+    from shapely.geometry.polygon import orient
+
+    poly_in: LatLonPolygon = _inline_polygon(line, where)      # reuses the [lat, lon] checks
+    pts = poly_in.outer
+    if len(pts) < 2:
+        raise PlanError("a corridor needs at least 2 points", where=where)
+    if not (isinstance(width_m, (int, float)) and math.isfinite(width_m) and width_m > 0):
+        raise PlanError(f"corridor width {width_m!r} m must be positive", where="corridor.width_m")
+    spacing = transect_spacing_m(footprint, side_pct)
+    trig = trigger_distance_m(footprint, front_pct)
+    interval = trig / speed_mps
+    if min_interval_s and interval < min_interval_s - 1e-9:
+        raise PlanError(f"photos would be {interval:.2f} s apart, faster than the camera's minimum of "
+                        f"{min_interval_s:g} s", where="overlap.front",
+                        hint=f"fly at most {trig / min_interval_s:.1f} m/s, lower the front overlap or fly higher")
+    proj = LocalProjection.centred_on([p[0] for p in pts], [p[1] for p in pts])
+    x, y = proj.to_xy([p[0] for p in pts], [p[1] for p in pts])
+    xy = np.column_stack([x, y])
+    keep = np.concatenate([[True], np.hypot(*np.diff(xy, axis=0).T) > 0.01])
+    xy = xy[keep]
+    if len(xy) < 2:
+        raise PlanError("the corridor line has no length (all points coincide)", where=where)
+    centre = LineString(xy)
+    if not centre.is_simple:
+        raise PlanError("the corridor line crosses itself", where=where,
+                        hint="split it into two corridors")
+    corridor = centre.buffer(width_m / 2.0, cap_style="flat", join_style="round")
+    corridor = orient(corridor, 1.0) if corridor.geom_type == "Polygon" else corridor
+    area = Area(corridor, proj, where)
+
+    offsets = line_offsets(width_m, footprint.across_m, spacing, DEFAULT_EDGE_MARGIN_M) - width_m / 2.0
+    lines: list[np.ndarray] = []
+    for o in offsets:
+        g = centre if abs(o) < 1e-9 else centre.offset_curve(float(o), quad_segs=4, join_style="round")
+        g = _longest_line(g)
+        if g is None or g.length < 1e-6:
+            continue
+        g = g.simplify(0.25)
+        lxy = np.asarray(g.coords, dtype=float)
+        # offset_curve keeps the direction of the input line for both signs in shapely 2
+        if np.dot(lxy[-1] - lxy[0], xy[-1] - xy[0]) < 0 and len(xy) == 2:
+            lxy = lxy[::-1]
+        L = float(np.hypot(*np.diff(lxy, axis=0).T).sum())
+        lxy = _extend_end(lxy, math.ceil(L / trig - 1e-9) * trig - L)
+        lines.append(lxy)
+    if not lines:
+        raise PlanError("the corridor produced no flight lines", where=where)
+
+    em = min(exit_margin_m, 0.45 * trig)
+    path: list[tuple[float, float, str, int]] = []
+    spans: list[TriggerSpan] = []
+    for k, lxy in enumerate(lines):
+        seq = lxy if k % 2 == 0 else lxy[::-1]
+        d0 = seq[1] - seq[0]
+        d0 = d0 / np.hypot(*d0)
+        d1 = seq[-1] - seq[-2]
+        d1 = d1 / np.hypot(*d1)
+        if turnaround_m > 0:
+            s = seq[0] - d0 * turnaround_m
+            path.append((float(s[0]), float(s[1]), KIND_TURN_IN, k))
+        a = len(path)
+        for i, p in enumerate(seq):
+            path.append((float(p[0]), float(p[1]), KIND_ENTRY if i == 0 else "line", k))
+        e = seq[-1] + d1 * em
+        path.append((float(e[0]), float(e[1]), KIND_EXIT, k))
+        spans.append(TriggerSpan(a, len(path) - 1, trig, True, False))
+        if turnaround_m > em:
+            t = seq[-1] + d1 * turnaround_m
+            path.append((float(t[0]), float(t[1]), KIND_TURN_IN, k))
+    pxy = np.array([(p[0], p[1]) for p in path])
+    lat, lon = proj.to_latlon(pxy[:, 0], pxy[:, 1])
+    wps = tuple(Waypoint(p[0], p[1], float(a), float(o), p[2], p[3]) for p, a, o in zip(path, lat, lon))
+    raw = simulate_distance_trigger(pxy, spans)
+    fxy = np.array([(p.x, p.y) for p in raw]).reshape(-1, 2)
+    flat, flon = proj.to_latlon(fxy[:, 0], fxy[:, 1]) if len(fxy) else (np.zeros(0), np.zeros(0))
+    photos = tuple(PhotoPoint(p.x, p.y, p.heading_deg, p.span, float(a), float(o)) for p, a, o in zip(raw, flat, flon))
+    length = float(np.hypot(*np.diff(pxy, axis=0).T).sum())
+    warnings: list[PlanWarning] = []
+    stats = SurveyStats(area_m2=float(corridor.area), angle_deg=math.nan, spacing_m=spacing,
+                        trigger_distance_m=trig, lines=len(lines), legs=len(lines), photo_count=len(photos),
+                        path_length_m=length,
+                        leg_length_m=float(sum(np.hypot(*np.diff(l, axis=0).T).sum() for l in lines)),
+                        est_time_s=estimated_time_s(length, 2 * len(lines), speed_mps),
+                        trigger_interval_s=interval)
+    return CorridorPlan(wps, tuple(spans), False, trig, spacing, photos,
+                        tuple(tuple(map(tuple, l.tolist())) for l in lines), area, stats, tuple(warnings))
