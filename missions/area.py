@@ -393,6 +393,10 @@ def build_area(polygons: Sequence[LatLonPolygon], exclusions: Sequence[LatLonPol
 
     if not polygons:
         raise PlanError("no polygon given for the area", where=source or None)
+    for p in [*polygons, *exclusions]:
+        if len(p.outer) < 3:
+            raise PlanError(f"polygon has fewer than 3 points ({len(p.outer)})", where=p.where,
+                            hint="a survey area needs at least 3 corners")
     if projection is None:
         lats = [pt[0] for p in polygons for pt in p.outer]
         lons = [pt[1] for p in polygons for pt in p.outer]
