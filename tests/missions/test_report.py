@@ -1,0 +1,164 @@
+"""The report measures the emitted items: coverage, overlap, photos, time — re-derived, never taken from intent."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from missions.area import LatLonPolygon, build_area
+from missions.compiled import AreaInfo, Compiled, PayloadInfo
+from missions.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem, deg_to_e7, mavlink
+from missions.report import report, simulate
+
+HOME = (50.1102, 14.5031, 262.0)
+THERMAL = PayloadInfo("thermal", "wiris-pro", "thermal", 100, 13.0, (10.88, 8.704), (640, 512), True, 1.0)
+
+
+def _wp(proj, x, y, alt, hold=0.0):
+    lat, lon = proj.point_to_latlon(x, y)
+    return MissionItem(mavlink.MAV_CMD_NAV_WAYPOINT, FRAME_GLOBAL_RELATIVE_ALT, hold, 0, 0, math.nan,
+                       deg_to_e7(lat), deg_to_e7(lon), alt)
+
+
+def _trig(d, once=1):
+    return MissionItem(mavlink.MAV_CMD_DO_SET_CAM_TRIGG_DIST, FRAME_MISSION, d, 0, once)
+
+
+def handmade(size_m=200.0, alt=40.0, front=0.8, side=0.7, hover=False, speed=6.0):
+    """A square survey flown as a lawn-mower written out item by item (no planner involved)."""
+    half = size_m / 2
+    # a square centred 150 m north-east of home
+    from missions.geo import LocalProjection
+    p0 = LocalProjection(HOME[0], HOME[1])
+    corners = [(150 - half, 150 - half), (150 + half, 150 - half), (150 + half, 150 + half), (150 - half, 150 + half)]
+    ll = [p0.point_to_latlon(x, y) for x, y in corners]
+    area = build_area([LatLonPolygon(tuple(ll), (), "square")])
+    proj = area.projection
+    hx, hy = proj.point_to_xy(HOME[0], HOME[1])
+    across, along = THERMAL.footprint_m(alt)
+    spacing = across * (1 - side)
+    trig = along * (1 - front)
+    n_lines = math.ceil((size_m - across) / spacing) + 1
+    x0 = -(n_lines - 1) * spacing / 2
+    y_lo, y_hi = -half, half
+    n_ph = math.ceil((y_hi - y_lo) / trig)
+    y_hi2 = y_lo + n_ph * trig
+    items = [MissionItem(mavlink.MAV_CMD_NAV_TAKEOFF, FRAME_GLOBAL_RELATIVE_ALT, z=alt)]
+    for k in range(n_lines):
+        x = x0 + k * spacing
+        ys = (y_lo, y_hi2) if k % 2 == 0 else (y_hi2, y_lo)
+        if hover:
+            pts = [y_lo + j * trig for j in range(n_ph + 1)]
+            if k % 2:
+                pts = pts[::-1]
+            for yy in pts:
+                items.append(_wp(proj, x, yy, alt, hold=2))
+                items.append(MissionItem(mavlink.MAV_CMD_IMAGE_START_CAPTURE, FRAME_MISSION, 0, 0, 1))
+        else:
+            sgn = 1 if k % 2 == 0 else -1
+            items.append(_wp(proj, x, ys[0] - sgn * 10, alt))
+            items.append(_wp(proj, x, ys[0], alt))
+            items.append(_trig(trig))
+            items.append(_wp(proj, x, ys[1], alt))
+            items.append(_trig(0))
+            items.append(_wp(proj, x, ys[1] + sgn * 10, alt))
+    items.append(MissionItem(mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH, FRAME_MISSION))
+    ainfo = AreaInfo(1, "survey", ("thermal",), area, alt, front, side, "hover" if hover else "distance", trig)
+    return Compiled("handmade", "ardupilot", "copter", HOME, speed, tuple(items), (tuple(items),), 700,
+                    (THERMAL,), (ainfo,), ())
+
+
+def test_report_has_the_binding_fields():
+    rep = report(handmade())
+    for key in ("plan", "firmware", "mission_items", "item_limit", "parts", "photos", "path_length_m",
+                "flight_time_s", "area_m2", "gsd_cm", "coverage", "overlap", "warnings", "errors"):
+        assert key in rep
+    assert rep["mission_items"] == len(handmade().items)
+    assert set(rep["overlap"]["thermal"]) == {"front_min", "side_min"}
+    lo, hi = rep["gsd_cm"]["thermal"]
+    assert lo == hi == pytest.approx(THERMAL.gsd_cm(40.0), rel=1e-3)
+
+
+def test_full_lawnmower_covers_and_meets_the_overlap():
+    rep = report(handmade())
+    assert rep["coverage"]["thermal"] >= 0.995
+    assert rep["overlap"]["thermal"]["front_min"] == pytest.approx(0.8, abs=0.005)
+    assert rep["overlap"]["thermal"]["side_min"] == pytest.approx(0.7, abs=0.005)
+    assert not rep["errors"]
+
+
+def _without_lines(c, lines):
+    """Drop the trigger-on items of some lines (the planner's intent is unchanged)."""
+    ons = [i for i, it in enumerate(c.items)
+           if it.command == mavlink.MAV_CMD_DO_SET_CAM_TRIGG_DIST and it.param1 > 0]
+    drop = {ons[k] for k in lines}
+    items = tuple(it for i, it in enumerate(c.items) if i not in drop)
+    return Compiled(c.name, c.firmware, c.frame, c.home, c.speed_mps, items, (items,), c.item_limit,
+                    c.payloads, c.areas, c.setup, intent=c.intent)
+
+
+def test_coverage_falls_when_trigger_items_are_deleted():
+    full = handmade()
+    before = report(full)
+    n_on = sum(1 for it in full.items if it.command == mavlink.MAV_CMD_DO_SET_CAM_TRIGG_DIST and it.param1 > 0)
+    # seven neighbouring lines (side overlap 70 %: fewer leave no gap a footprint does not close)
+    cut = _without_lines(full, range(n_on // 2 - 3, n_on // 2 + 4))
+    after = report(cut)
+    assert after["photos"]["thermal"] < before["photos"]["thermal"]
+    assert after["coverage"]["thermal"] < before["coverage"]["thermal"] - 0.05
+    assert any(w["code"] == "coverage_low" for w in after["warnings"])
+    # no trigger at all: nothing covered
+    bare = _without_lines(full, range(n_on))
+    none = report(bare)
+    assert none["photos"]["thermal"] == 0 and none["coverage"]["thermal"] == 0.0
+
+
+def test_photos_follow_the_distance_trigger():
+    c = handmade()
+    sim = simulate(c)
+    trig = c.areas[0].trigger_distance_m
+    # consecutive photos of one leg are exactly one trigger distance apart
+    by_span: dict[int, list] = {}
+    for p in sim.photos:
+        by_span.setdefault(p.span, []).append(p)
+    gaps = [math.hypot(b.x - a.x, b.y - a.y) for ps in by_span.values() for a, b in zip(ps, ps[1:])]
+    assert gaps and max(gaps) == pytest.approx(trig, rel=1e-6)
+    assert min(gaps) >= 0.0
+    assert all(p.alt_m == pytest.approx(40.0) for p in sim.photos)
+
+
+def test_hover_capture_photos_and_hold_time():
+    dist = report(handmade())
+    hov_c = handmade(hover=True)
+    hov = report(hov_c)
+    captures = sum(1 for it in hov_c.items if it.command == mavlink.MAV_CMD_IMAGE_START_CAPTURE)
+    assert hov["photos"]["thermal"] == captures
+    # every hover point holds 2 s and stops: a hover survey takes longer than flying through
+    assert hov["flight_time_s"] > dist["flight_time_s"] + 2 * captures
+    assert hov["flight_time_qgc_s"] >= 2 * captures
+
+
+def test_flight_time_model_is_not_shorter_than_qgc_statistic():
+    rep = report(handmade())
+    # QGC: horizontal distance / speed + holds; ours adds acceleration, corners and the climb
+    assert rep["flight_time_s"] > rep["flight_time_qgc_s"]
+    assert rep["flight_time_qgc_s"] == pytest.approx(rep["path_length_m"] / 6.0, rel=0.05)
+
+
+def test_altitude_and_interval_warnings():
+    high = report(handmade(alt=130.0))
+    assert any(w["code"] == "altitude_above_120m" for w in high["warnings"])
+    fast = report(handmade(speed=12.0))
+    assert any(w["code"] == "trigger_interval_short" for w in fast["warnings"])
+    slow = report(handmade(speed=4.0))
+    assert not any(w["code"] == "trigger_interval_short" for w in slow["warnings"])
+    assert any(w["code"] == "assumed_optics" for w in slow["warnings"])
+
+
+def test_item_limit_error_when_a_part_is_too_long():
+    c = handmade()
+    small = Compiled(c.name, c.firmware, c.frame, c.home, c.speed_mps, c.items, (c.items,), 50,
+                     c.payloads, c.areas, c.setup)
+    rep = report(small)
+    assert any(e["code"] == "item_limit" for e in rep["errors"])
