@@ -43,3 +43,63 @@ def models(as_json: bool) -> None:
         comps = ",".join(str(c) for c in r["component_ids"])
         click.echo(f"{r['id']:<18} {r['vendor']:<10} {r['model']:<17} {imagers:<44} {comps}")
     click.echo("* includes assumed optics (see the catalogue table's notes)")
+
+
+# --- build and serve (cdf.bundle, wiris_tools.serve) -------------------------------------------------------
+@cdf.command()
+@click.argument("model_ids", nargs=-1, metavar="[MODEL]...")
+@click.option("--all", "all_models", is_flag=True, help="Every model with a definition (others are skipped with a note).")
+@click.option("-o", "--output", "output", required=True, type=click.Path(file_okay=False, path_type=str),
+              help="Bundle directory (created if missing).")
+@click.option("--base-url", default=None, metavar="URL",
+              help="Where DIR will be hosted, e.g. http://192.168.1.10:8000/cdf; each model's URI is URL/FILE "
+                   "(at most 139 characters: CAMERA_INFORMATION.cam_definition_uri).")
+@click.option("--xz", is_flag=True, help="Also write .xml.xz twins (for MAVLink FTP; serve plain .xml over HTTP).")
+@click.option("--json", "as_json", is_flag=True, help="Print the written manifest entries as JSON.")
+def build(model_ids: tuple[str, ...], all_models: bool, output: str, base_url: str | None, xz: bool,
+          as_json: bool) -> None:
+    """Write the hosting bundle: one definition per model, optional .xml.xz twins, manifest.json.
+
+    Every file is validated (strict profile) before anything is written. Published versions are
+    immutable: changed content under an existing version is refused (raise definition_version).
+    """
+    import json
+    from dataclasses import asdict
+
+    from cdf.bundle import build_bundle
+
+    result = build_bundle(output, model_ids, all_models=all_models, base_url=base_url, xz=xz)
+    if as_json:
+        click.echo(json.dumps({"directory": str(result.directory), "models": [asdict(e) for e in result.entries],
+                               "written": list(result.written), "unchanged": list(result.unchanged),
+                               "skipped": [{"id": i, "reason": r} for i, r in result.skipped]}, indent=2))
+        return
+    for model_id, reason in result.skipped:
+        click.echo(f"note: {model_id} skipped: {reason}", err=True)
+    for e in result.entries:
+        state = "wrote" if e.file in result.written else "unchanged"
+        click.echo(f"{state:<9} {e.file}  {e.bytes} bytes  sha256 {e.sha256[:16]}  {e.uri}")
+        if xz:
+            twin = e.file + ".xz"
+            click.echo(f"{'wrote' if twin in result.written else 'unchanged':<9} {twin}")
+    click.echo(f"manifest  {result.directory / 'manifest.json'} ({len(result.manifest)} entries)")
+
+
+@cdf.command()
+@click.argument("directory", type=click.Path(file_okay=False, path_type=str), metavar="DIR")
+@click.option("--host", default="127.0.0.1", show_default=True, help="Address to listen on.")
+@click.option("--port", type=click.IntRange(0, 65535), default=8000, show_default=True, help="0 picks a free port.")
+@click.option("--prefix", default=None, metavar="PATH",
+              help="URL path DIR appears under [default: the path of manifest.json's URIs, else /].")
+def serve(directory: str, host: str, port: int, prefix: str | None) -> None:
+    """Serve a bundle over HTTP until Ctrl-C (read-only: GET and HEAD, no escape out of DIR)."""
+    from wiris_tools.serve import make_server, server_url
+
+    server = make_server(directory, host, port, prefix=prefix)
+    click.echo(f"serving {directory} at {server_url(server)} (Ctrl-C stops)", err=True)
+    try:
+        server.serve_forever()
+    except KeyboardInterrupt:
+        click.echo("stopped", err=True)
+    finally:
+        server.server_close()

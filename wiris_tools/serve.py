@@ -1,0 +1,235 @@
+"""A small read-only HTTP server for a camera definition bundle (`wiris cdf serve DIR`).
+
+QGroundControl and MAVSDK fetch the file named in CAMERA_INFORMATION.cam_definition_uri with a plain
+HTTP GET (QGC accepts only status 200; MAVSDK saves whatever body it gets, a 404 page included, and
+caches it — reference mavsdk-as-test-peer.md B), so the server answers exactly: 200 with the file, 404
+for anything it does not host, never a directory listing.
+
+Safety: only GET and HEAD (405 otherwise); the request path is percent-decoded once and every segment
+checked (no `..`, `.`, empty, hidden or backslash segments, no NUL); the resolved real path must stay
+inside the served directory, so a symlink pointing outside answers 403. Files are read, never written.
+
+Caching: ETag is the sha256 of the content (the manifest's value for definitions), Last-Modified the
+file's mtime; a matching If-None-Match (or, without it, an If-Modified-Since not older than the file)
+answers 304. Versioned definition files never change (cdf.bundle refuses to), so they are cacheable for
+a year; manifest.json must be revalidated on every use.
+"""
+
+from __future__ import annotations
+
+import email.utils
+import hashlib
+import http.server
+import json
+import os
+import re
+import sys
+import urllib.parse
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+CONTENT_TYPES = {".xml": "application/xml", ".xz": "application/x-xz", ".json": "application/json"}
+IMMUTABLE = re.compile(r"_v\d+\.xml(\.xz)?$")
+MAX_FILE_BYTES = 16 * 1024 * 1024   # a bundle holds 30 KB definitions; anything bigger is not ours to serve
+ALLOWED = "GET, HEAD"
+
+
+@dataclass(frozen=True)
+class ServeConfig:
+    root: Path                       # real path of the served directory
+    prefix: str = "/"                # URL path the directory appears under, e.g. "/cdf/"
+    log: Callable[[str], None] = lambda line: print(line, file=sys.stderr, flush=True)
+
+
+def prefix_from_manifest(directory: Path) -> str:
+    """The URL path of the bundle's http(s) URIs (e.g. "/cdf/" for http://host:8000/cdf/x.xml), so the
+    server answers at the URIs the manifest announces; "/" when there is none or they disagree."""
+    try:
+        rows = json.loads((directory / "manifest.json").read_text(encoding="utf-8"))["models"]
+        paths = {urllib.parse.urlsplit(r["uri"]).path.rsplit("/", 1)[0] + "/"
+                 for r in rows if str(r["uri"]).lower().startswith(("http://", "https://"))}
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return "/"
+    return paths.pop() if len(paths) == 1 else "/"
+
+
+def _normal_prefix(prefix: str) -> str:
+    p = "/" + prefix.strip("/")
+    return p if p == "/" else p + "/"
+
+
+class BundleHandler(http.server.BaseHTTPRequestHandler):
+    server_version = "wiris-cdf-serve"
+    sys_version = ""
+    protocol_version = "HTTP/1.1"
+    config: ServeConfig   # set per server by make_server (a subclass per server, no shared state)
+
+    # ------------------------------------------------------------------ plumbing
+    def version_string(self) -> str:
+        return self.server_version   # no Python version in the Server header
+
+    def log_message(self, format: str, *args) -> None:  # noqa: A002 (http.server API)
+        pass  # one line per request is written by _log instead
+
+    def _log(self, status: int, nbytes: int) -> None:
+        path = self.path if len(self.path) <= 200 else self.path[:200] + "…"
+        self.config.log(f"{self.command} {path} {status} {nbytes}")
+
+    def _plain(self, status: int, text: str, extra: dict[str, str] | None = None) -> None:
+        body = (text + "\n").encode("utf-8")
+        self.send_response(status)
+        self.send_header("Content-Type", "text/plain; charset=utf-8")
+        self.send_header("Content-Length", str(len(body)))
+        self.send_header("Cache-Control", "no-store")
+        for k, v in (extra or {}).items():
+            self.send_header(k, v)
+        self.end_headers()
+        sent = 0
+        if self.command != "HEAD":
+            self.wfile.write(body)
+            sent = len(body)
+        self._log(status, sent)
+
+    def send_error(self, code: int, message: str | None = None, explain: str | None = None) -> None:
+        # malformed request lines, over-long headers and the like (raised inside http.server)
+        self.close_connection = True
+        try:
+            self._plain(code, message or http.HTTPStatus(code).phrase)
+        except (OSError, ValueError):
+            pass
+
+    def __getattr__(self, name: str):
+        # every method other than GET and HEAD: 405 with Allow (http.server would answer 501)
+        if name.startswith("do_"):
+            return self._not_allowed
+        raise AttributeError(name)
+
+    def _not_allowed(self) -> None:
+        self.close_connection = True
+        self._plain(405, "method not allowed: this server is read-only", {"Allow": ALLOWED})
+
+    # ------------------------------------------------------------------ resolution
+    def _resolve(self) -> tuple[int, Path | None]:
+        """(status, file): 200 and a regular file inside the root, or an error status."""
+        raw_path = urllib.parse.urlsplit(self.path).path
+        prefix = self.config.prefix
+        if not raw_path.startswith(prefix):
+            return 404, None
+        rel = raw_path[len(prefix):]
+        try:
+            decoded = urllib.parse.unquote(rel, errors="strict")
+        except UnicodeDecodeError:
+            return 404, None
+        segments = decoded.split("/")
+        if not decoded or any(s in ("", ".", "..") or s.startswith(".") or "\\" in s or "\x00" in s
+                              for s in segments):
+            return 404, None
+        candidate = self.config.root.joinpath(*segments)
+        try:
+            real = Path(os.path.realpath(candidate))
+        except (OSError, ValueError):
+            return 404, None
+        if os.path.commonpath([str(real), str(self.config.root)]) != str(self.config.root):
+            return 403, None   # a symlink that leads out of the bundle
+        if not real.is_file():
+            return 404, None
+        return 200, real
+
+    # ------------------------------------------------------------------ methods
+    def do_HEAD(self) -> None:  # noqa: N802 (http.server API)
+        self._serve(body=False)
+
+    def do_GET(self) -> None:  # noqa: N802 (http.server API)
+        self._serve(body=True)
+
+    def _serve(self, body: bool) -> None:
+        status, path = self._resolve()
+        if path is None:
+            self._plain(status, "forbidden" if status == 403 else "not found")
+            return
+        try:
+            st = path.stat()
+            if st.st_size > MAX_FILE_BYTES:
+                self._plain(403, "forbidden")
+                return
+            data = path.read_bytes()
+        except OSError:
+            self._plain(404, "not found")
+            return
+        etag = f'"{hashlib.sha256(data).hexdigest()}"'
+        mtime = int(st.st_mtime)
+        headers = {
+            "Content-Type": CONTENT_TYPES.get(path.suffix.lower(), "application/octet-stream"),
+            "ETag": etag,
+            "Last-Modified": email.utils.formatdate(mtime, usegmt=True),
+            "Cache-Control": ("public, max-age=31536000, immutable" if IMMUTABLE.search(path.name)
+                              else "no-cache"),
+        }
+        if self._not_modified(etag, mtime):
+            self.send_response(304)
+            for k, v in headers.items():
+                if k != "Content-Type":
+                    self.send_header(k, v)
+            self.end_headers()
+            self._log(304, 0)
+            return
+        self.send_response(200)
+        for k, v in headers.items():
+            self.send_header(k, v)
+        self.send_header("Content-Length", str(len(data)))
+        self.end_headers()
+        if body:
+            self.wfile.write(data)
+        self._log(200, len(data) if body else 0)
+
+    def _not_modified(self, etag: str, mtime: int) -> bool:
+        inm = self.headers.get("If-None-Match")
+        if inm is not None:
+            tags = [t.strip().removeprefix("W/") for t in inm.split(",")]
+            return "*" in tags or etag in tags
+        ims = self.headers.get("If-Modified-Since")
+        if ims:
+            try:
+                since = email.utils.parsedate_to_datetime(ims)
+            except (TypeError, ValueError):
+                return False
+            if since is None:
+                return False
+            return mtime <= since.timestamp()
+        return False
+
+
+class BundleServer(http.server.ThreadingHTTPServer):
+    daemon_threads = True
+    block_on_close = False
+
+
+def make_server(directory: str | Path, host: str = "127.0.0.1", port: int = 8000, *, prefix: str | None = None,
+                log: Callable[[str], None] | None = None) -> BundleServer:
+    """A bound (not yet serving) threaded server for `directory`; port 0 picks a free port.
+    `prefix` None: the URL path of the manifest's http URIs (see prefix_from_manifest)."""
+    from wiris_tools.errors import LinkError
+
+    root = Path(directory)
+    if not root.is_dir():
+        raise LinkError("not a directory", where=str(directory),
+                        hint="build a bundle first: wiris cdf build --all -o DIR")
+    root = Path(os.path.realpath(root))
+    config = ServeConfig(root=root, prefix=_normal_prefix(prefix if prefix is not None else prefix_from_manifest(root)),
+                         **({"log": log} if log is not None else {}))
+    handler = type("BoundBundleHandler", (BundleHandler,), {"config": config})
+    try:
+        return BundleServer((host, port), handler)
+    except OSError as err:
+        raise LinkError(f"cannot listen on {host}:{port}: {err.strerror or err}",
+                        hint="choose another --port (or --port 0 for a free one), or stop what uses it") from None
+
+
+def server_url(server: BundleServer) -> str:
+    host, port = server.server_address[:2]
+    shown = f"[{host}]" if ":" in str(host) else host
+    return f"http://{shown}:{port}{server.RequestHandlerClass.config.prefix}"
+
+
+__all__ = ["BundleHandler", "BundleServer", "make_server", "prefix_from_manifest", "server_url"]
