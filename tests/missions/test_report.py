@@ -108,8 +108,13 @@ def test_coverage_falls_when_trigger_items_are_deleted():
     assert after["photos"]["thermal"] < before["photos"]["thermal"]
     assert after["coverage"]["thermal"] < before["coverage"]["thermal"] - 0.05
     assert any(w["code"] == "coverage_low" for w in after["warnings"])
-    # no trigger at all: nothing covered
-    bare = _without_lines(full, range(n_on))
+    # the stop items still shoot once each (param3 = 1): 18 photos, one per line end
+    ends = report(_without_lines(full, range(n_on)))
+    assert ends["photos"]["thermal"] == n_on
+    # no trigger item at all: nothing photographed, nothing covered
+    items = tuple(it for it in full.items if it.command != mavlink.MAV_CMD_DO_SET_CAM_TRIGG_DIST)
+    bare = Compiled(full.name, full.firmware, full.frame, full.home, full.speed_mps, items, (items,),
+                    full.item_limit, full.payloads, full.areas, full.setup)
     none = report(bare)
     assert none["photos"]["thermal"] == 0 and none["coverage"]["thermal"] == 0.0
 
