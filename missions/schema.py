@@ -1,0 +1,173 @@
+"""The JSON Schema of capture-plan format version 1 (`wiris mission schema` prints it for editors).
+
+The schema is the structural contract: names, types, units, ranges an editor can check while typing.
+What a schema cannot say well (a setting against the camera catalogue, a payload name defined elsewhere in
+the plan, altitude_m xor gsd_cm with a useful message) is checked by `missions.plan` after it, with the
+same file:line:col locations.
+
+Keys carry their unit (`altitude_m`, `speed_mps`, `gsd_cm`, `hold_s`, `angle_deg`); `x-hint` on a property
+is our extension: the loader prints it with a range error (JSON Schema ignores unknown keywords).
+"""
+
+from __future__ import annotations
+
+import copy
+import functools
+from typing import Any
+
+FORMAT_VERSION = 1
+SCHEMA_ID = "https://wiris-tools.invalid/schema/capture-plan-1.json"
+
+# A copter below 2 m is in ground effect and its barometer noise (~1 m) is half the altitude; above 500 m
+# no photogrammetry of a ground target makes sense and every civil drone rulebook is far exceeded (the
+# compiler warns from 120 m, the common regulatory ceiling, see missions.compile).
+MIN_ALTITUDE_M = 2.0
+MAX_ALTITUDE_M = 500.0
+MAX_SPEED_MPS = 50.0
+COMPONENT_IDS = (100, 101, 102, 103, 104, 105)   # MAV_COMP_ID_CAMERA..CAMERA6 (common.xml)
+
+_ALT_HINT = f"altitudes are metres above home, {MIN_ALTITUDE_M:g} to {MAX_ALTITUDE_M:g} m"
+
+
+def _num(minimum: float | None = None, maximum: float | None = None, *, exclusive_min: float | None = None,
+         exclusive_max: float | None = None, desc: str = "", hint: str = "", integer: bool = False) -> dict:
+    s: dict[str, Any] = {"type": "integer" if integer else "number"}
+    if minimum is not None:
+        s["minimum"] = minimum
+    if maximum is not None:
+        s["maximum"] = maximum
+    if exclusive_min is not None:
+        s["exclusiveMinimum"] = exclusive_min
+    if exclusive_max is not None:
+        s["exclusiveMaximum"] = exclusive_max
+    if desc:
+        s["description"] = desc
+    if hint:
+        s["x-hint"] = hint
+    return s
+
+
+def _obj(properties: dict, required: tuple[str, ...] = (), desc: str = "", nullable: bool = False) -> dict:
+    s: dict[str, Any] = {"type": ["object", "null"] if nullable else "object", "properties": properties,
+                         "additionalProperties": False}
+    if required:
+        s["required"] = list(required)
+    if desc:
+        s["description"] = desc
+    return s
+
+
+LATLON = {"type": "array", "minItems": 2, "maxItems": 2, "description": "[lat, lon] in WGS84 degrees",
+          "prefixItems": [_num(-90, 90, desc="latitude, degrees"), _num(-180, 180, desc="longitude, degrees")]}
+POLYGON = {"type": "array", "minItems": 3, "items": LATLON,
+           "description": "inline polygon: a list of [lat, lon] points (closing point optional)"}
+AREA = {"description": "a KML or GeoJSON file (relative to the plan) or an inline list of [lat, lon] points",
+        "anyOf": [{"type": "string", "minLength": 1}, POLYGON]}
+PAYLOAD_LIST = {"type": "array", "minItems": 1, "uniqueItems": True, "items": {"type": "string"},
+                "description": "payload names; the first one's footprint sets the lines, the others trigger alongside"}
+ALTITUDE = _num(MIN_ALTITUDE_M, MAX_ALTITUDE_M, desc="flight altitude above home, metres", hint=_ALT_HINT)
+GSD = _num(exclusive_min=0, maximum=1000, desc="ground sample distance of the first payload, cm/pixel",
+           hint="GSD in centimetres per pixel, e.g. 3.5")
+OVERLAP = _obj({
+    "front": _num(0, exclusive_max=100, desc="along-track overlap, percent",
+                  hint="overlap in percent below 100, e.g. front: 80"),
+    "side": _num(0, exclusive_max=100, desc="across-track overlap, percent",
+                 hint="overlap in percent below 100, e.g. side: 70"),
+}, required=("front", "side"), desc="photo overlap in percent")
+TRIGGER = {"enum": ["distance", "interval", "hover"], "default": "distance",
+           "description": "distance: DO_SET_CAM_TRIGG_DIST; interval: timed (PX4 only); hover: stop and shoot"}
+TURNAROUND = _num(0, 500, desc="straight run-in/out beyond each line end, metres (default 10 copter, 30 plane)")
+
+SETTINGS = {"type": "object", "minProperties": 1,
+            "description": "camera settings by the catalogue's names (`wiris cdf models`), checked against it",
+            "additionalProperties": {"type": ["string", "number", "array"], "items": {"type": "string"}}}
+
+STEPS: dict[str, dict] = {
+    "takeoff": _obj({"alt_m": ALTITUDE}, required=("alt_m",), desc="take off to alt_m above home"),
+    "survey": _obj({
+        "area": AREA,
+        "exclude": {"type": "array", "items": AREA, "description": "areas not to fly over or photograph"},
+        "payloads": PAYLOAD_LIST,
+        "altitude_m": ALTITUDE,
+        "gsd_cm": GSD,
+        "overlap": OVERLAP,
+        "angle_deg": {"anyOf": [{"const": "auto"}, _num(-360, 360)], "default": "auto",
+                      "description": "line direction, degrees clockwise from north (0 = north-south lines) or auto"},
+        "trigger": TRIGGER,
+        "turnaround_m": TURNAROUND,
+        "refly_90": {"type": "boolean", "default": False, "description": "fly a second pass at +90 degrees"},
+    }, required=("area", "payloads", "overlap"), desc="area survey (exactly one of altitude_m and gsd_cm)"),
+    "corridor": _obj({
+        "line": {"type": "array", "minItems": 2, "items": LATLON, "description": "centre line, [lat, lon] points"},
+        "width_m": _num(exclusive_min=0, maximum=5000, desc="corridor width, metres"),
+        "payloads": PAYLOAD_LIST,
+        "altitude_m": ALTITUDE,
+        "gsd_cm": GSD,
+        "overlap": OVERLAP,
+        "trigger": TRIGGER,
+        "turnaround_m": TURNAROUND,
+    }, required=("line", "width_m", "payloads", "overlap"), desc="corridor along a line"),
+    "waypoint": _obj({
+        "lat": _num(-90, 90), "lon": _num(-180, 180), "alt_m": ALTITUDE,
+        "hold_s": _num(0, 3600, desc="hold time at the waypoint, seconds"),
+        "capture": {"type": "string", "description": "payload that takes one photo here"},
+    }, required=("lat", "lon", "alt_m"), desc="fly to a point, optionally hold and take one photo"),
+    "camera": _obj({"payload": {"type": "string"}, "settings": SETTINGS},
+                   required=("payload", "settings"), desc="change camera settings in flight"),
+    "rtl": _obj({}, desc="return to launch", nullable=True),
+    "land": _obj({"lat": _num(-90, 90), "lon": _num(-180, 180)}, desc="land (here, or at lat/lon)", nullable=True),
+}
+
+PAYLOAD = _obj({
+    "camera": {"type": "string", "description": "catalogue id (`wiris cdf models`)"},
+    "imager": {"type": "string", "description": "which imager sets the footprint (default: the first with known optics)"},
+    "lens_mm": _num(exclusive_min=0, maximum=1000, desc="focal length of the fitted lens, mm"),
+    "component_id": {"type": "integer", "enum": list(COMPONENT_IDS),
+                     "description": "MAVLink component id 100..105 (RedEdge is fixed at 100)"},
+    "orientation": {"enum": ["landscape", "portrait"], "default": "landscape",
+                    "description": "landscape: the long image side across the flight line"},
+    "settings": SETTINGS,
+}, required=("camera",))
+
+
+def _build() -> dict:
+    return {
+        "$schema": "https://json-schema.org/draft/2020-12/schema",
+        "$id": SCHEMA_ID,
+        "title": "wiris-tools capture plan, format version 1",
+        "type": "object",
+        "additionalProperties": False,
+        "required": ["version", "vehicle", "home", "payloads", "mission"],
+        "properties": {
+            "version": {"const": FORMAT_VERSION, "description": "capture-plan format version"},
+            "name": {"type": "string", "pattern": "^[A-Za-z0-9][A-Za-z0-9._-]{0,63}$",
+                     "description": "output file names derive from it (default: the plan file's name)"},
+            "vehicle": _obj({
+                "firmware": {"enum": ["ardupilot", "px4"]},
+                "frame": {"enum": ["copter", "plane", "vtol"]},
+                "speed_mps": _num(exclusive_min=0, maximum=MAX_SPEED_MPS, desc="ground speed while surveying"),
+                "max_mission_items": _num(10, 65535, integer=True,
+                                          desc="item limit of the vehicle (default per firmware)"),
+            }, required=("firmware", "frame", "speed_mps")),
+            "home": _obj({"lat": _num(-90, 90), "lon": _num(-180, 180),
+                          "alt_amsl_m": _num(-500, 9000, desc="home altitude above mean sea level")},
+                         required=("lat", "lon", "alt_amsl_m")),
+            "payloads": {"type": "object", "minProperties": 1,
+                         "propertyNames": {"pattern": "^[A-Za-z_][A-Za-z0-9_-]{0,31}$"},
+                         "additionalProperties": PAYLOAD},
+            "mission": {"type": "array", "minItems": 1,
+                        "items": {"type": "object", "minProperties": 1, "maxProperties": 1,
+                                  "properties": STEPS, "additionalProperties": False,
+                                  "description": "one step: " + ", ".join(STEPS)}},
+        },
+    }
+
+
+@functools.lru_cache(maxsize=1)
+def _schema() -> dict:
+    return _build()
+
+
+def plan_schema() -> dict:
+    """The JSON Schema (draft 2020-12) of capture-plan format version 1, as a fresh dict."""
+    return copy.deepcopy(_schema())
