@@ -1,0 +1,188 @@
+"""The I/O shell around the pure camera states: a Link, a tick thread and (for WIRIS) the definition's HTTP server.
+
+    with start_emulator("wiris-pro", "udpin:127.0.0.1:0") as emu:    # or udpout:127.0.0.1:14550 to a GCS
+        port = emu.link.local_port
+        emu.definition_uri                                            # http://127.0.0.1:PORT/workswell_...xml
+        with emu.lock: emu.state.values["RANGE_MODE"]                 # the camera's state, for tests
+
+The HTTP server answers GET/HEAD of the definition's path only (404 for anything else) and binds to
+127.0.0.1 unless told otherwise.
+"""
+
+from __future__ import annotations
+
+import http.server
+import threading
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+from cdf.catalogue import Camera, catalogue
+from cdf.errors import CdfError
+from wiris_tools.errors import LinkError
+
+TICK_S = 0.02
+
+
+class _DefinitionServer:
+    def __init__(self, body: bytes, path: str, host: str, port: int) -> None:
+        served_path = "/" + path
+
+        class Handler(http.server.BaseHTTPRequestHandler):
+            server_version = "wiris-emulator"
+            sys_version = ""
+
+            def _answer(self, with_body: bool) -> None:
+                if self.path.split("?", 1)[0] != served_path:
+                    self.send_error(404, "only the camera definition is served here")
+                    return
+                self.send_response(200)
+                self.send_header("Content-Type", "application/xml")
+                self.send_header("Content-Length", str(len(body)))
+                self.end_headers()
+                if with_body:
+                    self.wfile.write(body)
+
+            def do_GET(self) -> None:  # noqa: N802 (http.server API)
+                self._answer(True)
+
+            def do_HEAD(self) -> None:  # noqa: N802
+                self._answer(False)
+
+            def log_message(self, *args: object) -> None:
+                pass
+
+        try:
+            self.httpd = http.server.ThreadingHTTPServer((host, port), Handler)
+        except OSError as err:
+            raise LinkError(f"cannot serve the camera definition on {host}:{port}: {err.strerror or err}",
+                            hint="choose another --http-port (0 picks a free one)") from None
+        self.httpd.daemon_threads = True
+        self.port = self.httpd.server_address[1]
+        self.uri = f"http://{host}:{self.port}{served_path}"
+        self._thread = threading.Thread(target=self.httpd.serve_forever, name="cdf-http", daemon=True)
+        self._thread.start()
+
+    def close(self) -> None:
+        self.httpd.shutdown()
+        self.httpd.server_close()
+
+
+@dataclass
+class Emulator:
+    camera: Camera
+    state: Any
+    link: Any
+    lock: threading.Lock
+    definition_uri: str = ""
+    definition: bytes = b""
+    _http: _DefinitionServer | None = None
+    _stop: threading.Event = field(default_factory=threading.Event)
+    _thread: threading.Thread | None = None
+    errors: int = 0
+
+    def _send_all(self, out: list) -> None:
+        system = getattr(self.state, "system_id", None)
+        if system is not None:
+            self.link.mav.srcSystem = system     # a RedEdge adopts its peer's system id
+        for msg in out:
+            try:
+                self.link.send(msg)
+            except LinkError:
+                self.errors += 1   # nobody to send to yet (udpin before the first packet)
+
+    def _on_message(self, msg: Any) -> None:
+        with self.lock:
+            try:
+                out = self.state.handle(msg, time.monotonic())
+            except Exception:  # an emulator bug must not take the link down; counted for tests
+                self.errors += 1
+                return
+            self._send_all(out)
+
+    def _tick_loop(self) -> None:
+        while not self._stop.is_set():
+            with self.lock:
+                try:
+                    out = self.state.tick(time.monotonic())
+                except Exception:
+                    self.errors += 1
+                    out = []
+                self._send_all(out)
+            self._stop.wait(TICK_S)
+
+    def wait(self, duration_s: float | None = None) -> None:
+        """Block until close() (or `duration_s` seconds; None = forever)."""
+        self._stop.wait(duration_s)
+
+    def close(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(2)
+        self.link.close()
+        if self._http is not None:
+            self._http.close()
+
+    def __enter__(self) -> "Emulator":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def start_emulator(model: str, url: str, *, component: int | None = None, system: int = 1,
+                   http_port: int = 0, http_host: str = "127.0.0.1", signing_key: bytes | None = None,
+                   storage_capacity_mib: tuple[float, float, float] | None = None, image_size_mib: float | None = None,
+                   ethernet_sdk: bool = False, licensed: bool = True, definition: bytes | None = None) -> Emulator:
+    """Start the emulator of catalogue camera `model` on connection `url` (see the module docstring)."""
+    from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+    from wiris_tools.link import Link
+
+    camera = catalogue().get(model)
+    now = time.monotonic()
+    utc_offset = time.time() - now
+    if camera.protocol == "rededge-serial":
+        from wiris_tools.emulate.rededge import RedEdgeState
+
+        if component is not None and component != camera.default_component_id:
+            raise CdfError(f"a {camera.model} always uses component {camera.default_component_id}",
+                           where=model, hint="drop --component")
+        state = RedEdgeState(camera, now=now, utc_offset_s=utc_offset)
+        link = Link(url, system=state.system_id, component=state.component, mav_type=mavlink2.MAV_TYPE_GENERIC,
+                    heartbeat_s=0, mavlink1=camera.mavlink_version == 1, signing_key=signing_key)
+        emu = Emulator(camera, state, link, threading.Lock())
+    else:
+        from cdf.generate import definition_file_name, definition_xml
+        from wiris_tools.emulate.definition import parse_definition
+        from wiris_tools.emulate.wiris import WirisConfig, WirisState
+
+        comp = camera.default_component_id if component is None else component
+        if comp not in camera.component_ids:
+            raise CdfError(f"component id {comp} is not one a {camera.model} can use",
+                           where=model, hint=f"choose one of {', '.join(map(str, camera.component_ids))} (§3.2)")
+        body = definition if definition is not None else definition_xml(camera)
+        parsed = parse_definition(body, model)
+        http = _DefinitionServer(body, definition_file_name(camera), http_host, http_port)
+        try:
+            if len(http.uri) > 139:
+                raise CdfError(f"definition URI is {len(http.uri)} characters; CAMERA_INFORMATION holds 139",
+                               where=http.uri, hint="use a shorter --http-host")
+            kw: dict[str, Any] = {}
+            if storage_capacity_mib is not None:
+                kw["storage_capacity_mib"] = tuple(storage_capacity_mib)
+            if image_size_mib is not None:
+                kw["image_size_mib"] = image_size_mib
+            config = WirisConfig(system=system, component=comp, definition_uri=http.uri, licensed=licensed,
+                                 ethernet_sdk=ethernet_sdk, stream_host=http_host, **kw)
+            state = WirisState(camera, parsed, config, now=now, utc_offset_s=utc_offset)
+            link = Link(url, system=system, component=comp, mav_type=mavlink2.MAV_TYPE_CAMERA, heartbeat_s=0,
+                        signing_key=signing_key)
+        except BaseException:
+            http.close()
+            raise
+        emu = Emulator(camera, state, link, threading.Lock(), http.uri, body, http)
+    link.subscribe(emu._on_message)
+    emu._thread = threading.Thread(target=emu._tick_loop, name=f"emulator {model}", daemon=True)
+    emu._thread.start()
+    return emu
