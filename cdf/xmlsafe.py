@@ -6,7 +6,8 @@ Camera definitions come from cameras and web servers nobody here controls, so ev
 - xz: detected by its magic number, not by the file name (a `.xml` URL may serve xz and vice versa),
   inflated with a memory limit and a bounded output, and must be one complete stream;
 - XML: lxml with no DTD loading, no entity expansion, no network, no huge-tree mode; any DTD is
-  reported (MAVProxy refuses them) and nesting deeper than MAX_DEPTH is refused (real files nest 8 deep);
+  reported (MAVProxy refuses them); nesting deeper than MAX_DEPTH or more than MAX_ELEMENTS nodes is
+  refused (real files nest 8 deep and have under 2000 nodes);
 - HTTP: a total timeout, redirects only to http/https (a redirect to file:// would read local files).
 
 Content problems (too big, broken xz, not XML) become `LoadProblem`s that the validator reports as
@@ -32,6 +33,8 @@ MAX_INFLATED_BYTES = 4 * 1024 * 1024
 # liblzma memory for the decoder: xz presets up to -9 need 65 MiB for the dictionary.
 XZ_MEMLIMIT = 96 * 1024 * 1024
 MAX_DEPTH = 64
+# Real files have under 2000 nodes (Yuneec E90: ~1500); xmlschema slows down badly on huge sibling lists.
+MAX_ELEMENTS = 20000
 HTTP_TIMEOUT_S = 15.0
 XZ_MAGIC = b"\xfd7zXZ\x00"
 
@@ -186,20 +189,27 @@ def parse_xml(data: bytes, name: str):
     if tree.docinfo.doctype or tree.docinfo.internalDTD is not None:
         problems.append(LoadProblem("CDF005", "document has a DTD (<!DOCTYPE>); it was not loaded and no "
                                               "entity was expanded", 1))
-    depth = _max_depth(root)
+    depth, count = _shape(root)
     if depth > MAX_DEPTH:
         return None, (*problems, LoadProblem("CDF006", f"elements nest {depth} deep; the limit is {MAX_DEPTH}"))
+    if count > MAX_ELEMENTS:
+        return None, (*problems, LoadProblem("CDF006", f"more than {MAX_ELEMENTS} elements; real definitions have "
+                                                       "under 2000 (schema validation time grows with the count)"))
     return root, tuple(problems)
 
 
-def _max_depth(root) -> int:
-    deepest = 0
+def _shape(root) -> tuple[int, int]:
+    """(deepest nesting, number of nodes), stopping early past the limits."""
+    deepest, count = 0, 0
     stack = [(root, 1)]
     while stack:
         el, d = stack.pop()
+        count += 1
+        if count > MAX_ELEMENTS:
+            return deepest, count
         if d > deepest:
             deepest = d
             if d > MAX_DEPTH:
-                return d
+                return d, count
         stack.extend((c, d + 1) for c in el)
-    return deepest
+    return deepest, count

@@ -431,6 +431,7 @@ def _check_localization(root, params: _Params, definition) -> Iterator[Hit]:
         elif not _LOCALE.fullmatch(lname):
             yield Hit("CDF210", _line(loc), None, f"locale name {lname!r} is not ll_CC (e.g. de_DE): "
                                                   "QGC matches the full name or its first 3 characters")
+        unmatched: list[tuple[int | None, str]] = []
         for s in loc.findall("strings"):
             orig, trans = s.get("original"), s.get("translated")
             if orig is None or trans is None:
@@ -440,10 +441,14 @@ def _check_localization(root, params: _Params, definition) -> Iterator[Hit]:
                 yield Hit("CDF210", _line(s), None, f"original {orig!r} also occurs as a name/value/model text: QGC's "
                                                     "byte replacement on the whole file would change it too")
             elif orig not in texts:
-                yield Hit("CDF210", _line(s), None, f"original {orig!r} matches no description or option name")
+                unmatched.append((_line(s), orig))
             if any(c in orig + trans for c in "&<>\""):
                 yield Hit("CDF210", _line(s), None, "original/translated contain &, <, > or \" "
                                                     "(QGC replaces raw bytes: such strings never match or break XML)")
+        if unmatched:
+            shown = ", ".join(repr(o) for _l, o in unmatched[:5]) + (", ..." if len(unmatched) > 5 else "")
+            yield Hit("CDF210", unmatched[0][0], None, f"locale {lname}: {len(unmatched)} original string(s) match "
+                                                       f"no description or option name: {shown}")
 
 
 def _check_vocabulary(root) -> Iterator[Hit]:

@@ -45,6 +45,54 @@ def models(as_json: bool) -> None:
     click.echo("* includes assumed optics (see the catalogue table's notes)")
 
 
+# --- validate (cdf.validation; rules documented in cdf/schema/RULES.md) ----------------------------------
+@cdf.command()
+@click.argument("sources", nargs=-1, required=True, metavar="FILE_OR_URL...")
+@click.option("--profile", type=click.Choice(["qgc", "mavsdk", "strict"]), default="strict", show_default=True,
+              help="qgc: what QGroundControl needs; mavsdk: what MAVSDK needs without dropping anything; "
+                   "strict: both plus interoperability warnings.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object per file (one per line).")
+@click.option("--timeout", "timeout_s", type=click.FloatRange(min=0.1), default=15.0, show_default=True,
+              help="Seconds to wait for an http(s) server.")
+def validate(sources: tuple[str, ...], profile: str, as_json: bool, timeout_s: float) -> None:
+    """Validate camera definition files (plain XML or .xml.xz, paths or http(s) URLs).
+
+    Exit status 1 when any file is invalid in the profile or cannot be read, else 0.
+    """
+    import json
+
+    from cdf.errors import CdfError
+    from cdf.validate import validate_source
+
+    failed = False
+    for source in sources:
+        try:
+            report = validate_source(source, profile, timeout_s=timeout_s)
+        except CdfError as err:
+            failed = True
+            message = err.message + (f" (hint: {err.hint})" if err.hint else "")
+            if as_json:
+                click.echo(json.dumps({"file": source, "valid": False, "profile": profile, "parameters": 0,
+                                       "findings": [{"rule": "CDF001", "severity": "error", "line": None,
+                                                     "parameter": None, "message": message}]}))
+            else:
+                click.echo(f"{source}: ERROR CDF001 {message}")
+                click.echo(f"{source}: INVALID ({profile}): cannot be read")
+            continue
+        failed |= not report.valid
+        if as_json:
+            click.echo(json.dumps(report.to_json()))
+            continue
+        for finding in report.findings:
+            click.echo(finding.format(report.file))
+        counts = {s: sum(f.severity == s for f in report.findings) for s in ("error", "warning", "info")}
+        verdict = "valid" if report.valid else "INVALID"
+        click.echo(f"{report.file}: {verdict} ({profile}): {report.parameters} parameters, "
+                   f"{counts['error']} errors, {counts['warning']} warnings, {counts['info']} info")
+    if failed:
+        raise SystemExit(1)
+
+
 # --- build and serve (cdf.bundle, wiris_tools.serve) -------------------------------------------------------
 @cdf.command()
 @click.argument("model_ids", nargs=-1, metavar="[MODEL]...")
