@@ -1,0 +1,107 @@
+"""Measured coverage and overlaps: analytic cases, the run-merging shortcut against a brute-force union."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import shapely
+from hypothesis import HealthCheck, given, settings, strategies as st
+from shapely.geometry import box
+
+from missions_geometry import WIRIS_60M, area_from_xy, convex_polygons
+from missions.coverage import coverage_fraction, footprint_polygons, measure, min_front_overlap, min_side_overlap
+from missions.footprint import Footprint, transect_spacing_m, trigger_distance_m
+from missions.survey import plan_survey
+from missions.triggers import PhotoPoint
+
+FP20 = Footprint(20.0, 10.0)        # 20 m across, 10 m along
+
+
+def P(x, y, h=0.0, span=0):
+    return PhotoPoint(x, y, h, span)
+
+
+def test_footprint_rectangle_orientation() -> None:
+    r = footprint_polygons(np.array([[0.0, 0.0]]), np.radians([0.0]), FP20)[0]
+    assert r.bounds == pytest.approx((-10, -5, 10, 5))           # heading north: across = east-west
+    r = footprint_polygons(np.array([[0.0, 0.0]]), np.radians([90.0]), FP20)[0]
+    assert r.bounds == pytest.approx((-5, -10, 5, 10))
+
+
+def test_analytic_front_and_side_overlap() -> None:
+    photos = [P(0, 0), P(0, 4), P(0, 8), P(15, 0, span=1), P(15, 4, span=1), P(15, 8, span=1)]
+    assert min_front_overlap(photos, FP20) == pytest.approx(1 - 4 / 10)
+    assert min_side_overlap(photos, FP20) == pytest.approx(1 - 15 / 20)
+    # a neighbour flown the other way is still a neighbour
+    rev = photos[:3] + [P(15, 8, 180.0, 1), P(15, 4, 180.0, 1), P(15, 0, 180.0, 1)]
+    assert min_side_overlap(rev, FP20) == pytest.approx(0.25)
+    # photos in different spans are not front pairs
+    assert min_front_overlap([P(0, 0, span=0), P(0, 9, span=1)], FP20) is None
+
+
+def test_coverage_fraction_analytic() -> None:
+    photos = [P(0, 0), P(0, 10)]          # union: x −10..10, y −5..15
+    covered, frac = coverage_fraction(box(-10, -5, 10, 25), photos, FP20)
+    assert covered == pytest.approx(400.0) and frac == pytest.approx(400 / 600)
+
+
+def test_turned_photos_use_true_rectangle_intersection() -> None:
+    photos = [P(0, 0, 0.0), P(0, 0, 90.0)]   # same centre, rotated 90°: overlap is a 10×10 square
+    assert min_front_overlap(photos, FP20) == pytest.approx(100 / 200)
+
+
+@given(st.lists(st.tuples(st.integers(0, 5), st.floats(0, 30), st.sampled_from([0.0, 90.0, 33.0])),
+                min_size=1, max_size=25))
+@settings(max_examples=60, deadline=None)
+def test_run_merging_equals_brute_force_union(spec) -> None:
+    # photos on a few lines, some with gaps larger than a footprint, in arbitrary headings
+    photos = []
+    for k, (line, start, h) in enumerate(spec):
+        d = np.array([math.sin(math.radians(h)), math.cos(math.radians(h))])
+        n = np.array([math.cos(math.radians(h)), -math.sin(math.radians(h))])
+        for j in range(3):
+            c = n * line * 12.0 + d * (start + j * 7.0)
+            photos.append(PhotoPoint(float(c[0]), float(c[1]), h, k))
+    area = box(-80, -80, 80, 80)
+    covered, _ = coverage_fraction(area, photos, FP20)
+    xy = np.array([(p.x, p.y) for p in photos])
+    brute = shapely.union_all(footprint_polygons(xy, np.radians([p.heading_deg for p in photos]), FP20))
+    assert covered == pytest.approx(area.intersection(brute).area, rel=1e-9, abs=1e-6)
+
+
+def test_lower_bounds_and_outside_length() -> None:
+    c = measure(box(0, 0, 100, 100), [P(50, 50)], FP20, path_xy=np.array([[-10, 50], [110, 50]]),
+                spacing_m=10.0, trigger_m=5.0)
+    assert c.path_lower_bound_m == pytest.approx(1000.0)
+    assert c.photo_lower_bound == pytest.approx(200.0)
+    assert c.outside_m == pytest.approx(20.0)
+    assert c.path_length_m == pytest.approx(120.0)
+
+
+@given(convex_polygons())
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+def test_random_convex_areas_are_covered_at_the_requested_overlap(poly) -> None:
+    fp = WIRIS_60M
+    plan = plan_survey(area_from_xy(poly), fp, 80, 70, angle_deg=23.0, turnaround_m=10, speed_mps=6)
+    c = measure(poly, plan.photos, fp, plan.path_xy, plan.spacing_m, plan.trigger_distance_m)
+    assert c.coverage >= 0.995
+    if c.min_front_overlap is not None:
+        assert c.min_front_overlap >= 0.79
+    if c.min_side_overlap is not None:
+        assert c.min_side_overlap >= 0.69
+
+
+@given(convex_polygons(max_size=1500))
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+def test_auto_angle_path_is_close_to_the_lower_bound_on_convex_areas(poly) -> None:
+    from hypothesis import assume
+    fp = WIRIS_60M
+    spacing = transect_spacing_m(fp, 70)
+    # the bound area/spacing is only meaningful when the area is many lines wide
+    assume(poly.area / poly.length > 4 * spacing)
+    plan = plan_survey(area_from_xy(poly), fp, 80, 70, angle_deg="auto", turnaround_m=10, speed_mps=6)
+    c = measure(poly, plan.photos, fp, plan.path_xy, plan.spacing_m, plan.trigger_distance_m)
+    assert c.coverage >= 0.995
+    assert c.path_ratio <= 1.25

@@ -1,0 +1,186 @@
+"""plan_survey / plan_corridor end to end: named places, modes, errors, and 'a plan or a PlanError'."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings, strategies as st
+from shapely.geometry import Point
+
+from missions_geometry import WIRIS_60M
+from missions.area import load_area
+from missions.corridor import plan_corridor
+from missions.coverage import measure
+from missions.errors import PlanError
+from missions.footprint import Footprint
+from missions.geo import unwrap_lons
+from missions.survey import plan_survey
+from missions.triggers import simulate_distance_trigger
+
+DATA = Path(__file__).parent / "data"
+FP = WIRIS_60M
+
+
+def _rect(lat: float, lon: float, dlat: float = 0.004, dlon: float = 0.006) -> list[list[float]]:
+    return [[lat, lon], [lat, lon + dlon], [lat + dlat, lon + dlon], [lat + dlat, lon]]
+
+
+def _check(area, plan) -> None:
+    c = measure(area.geometry, plan.photos, FP, plan.path_xy, plan.spacing_m, plan.trigger_distance_m)
+    assert c.coverage >= 0.995
+    assert c.min_front_overlap >= 0.79 and c.min_side_overlap >= 0.69
+    # lat/lon of waypoints agree with their x/y through the area's projection
+    for w in plan.waypoints[:: max(1, len(plan.waypoints) // 10)]:
+        x, y = area.projection.point_to_xy(w.lat, w.lon)
+        assert math.hypot(x - w.x, y - w.y) < 1e-4
+        assert -180 <= w.lon < 180
+
+
+@pytest.mark.parametrize("name,pts", [
+    ("prague", _rect(50.10, 14.50)),
+    ("southern hemisphere", _rect(-33.95, 151.15)),
+    ("high north 75", _rect(75.0, 16.0, 0.003, 0.02)),
+    ("high south -75", _rect(-75.003, -60.0, 0.003, 0.02)),
+    ("greenwich", _rect(51.477, -0.003)),
+    ("180 meridian", [[-16.50, 179.997], [-16.50, -179.996], [-16.495, -179.996], [-16.495, 179.997]]),
+])
+def test_named_places(name: str, pts) -> None:
+    area = load_area(pts)
+    plan = plan_survey(area, FP, 80, 70, angle_deg="auto", turnaround_m=10, speed_mps=6)
+    _check(area, plan)
+    if name == "180 meridian":
+        lons = np.array([w.lon for w in plan.waypoints])
+        assert (lons > 179).any() and (lons < -179).any()
+        # unwrapped, the path spans about the area's 0.007° (plus turnarounds), not 360°
+        u = unwrap_lons(lons, 180.0)
+        assert u.max() - u.min() < 0.02
+
+
+def test_angle_zero_is_north_south_on_the_globe() -> None:
+    area = load_area(_rect(-33.95, 151.15))
+    plan = plan_survey(area, FP, 80, 70, angle_deg=0, turnaround_m=10, speed_mps=6)
+    span = plan.camera_spans[0]
+    a, b = plan.waypoints[span.start_index], plan.waypoints[span.stop_index]
+    from pyproj import Geod
+    az, _, dist = Geod(ellps="WGS84").inv(a.lon, a.lat, b.lon, b.lat)
+    # true north within 0.01° (meridian convergence 250 m off the projection centre is ~0.002°)
+    assert min(abs(az), abs(abs(az) - 180)) < 0.01 and dist > 100
+
+
+def test_area_smaller_than_one_footprint_gets_one_photo_and_a_warning() -> None:
+    area = load_area([[50.1, 14.5], [50.1, 14.5003], [50.1002, 14.5003]])
+    plan = plan_survey(area, FP, 80, 70, turnaround_m=10, speed_mps=6)
+    assert [w.code for w in plan.warnings] == ["area_smaller_than_footprint"]
+    assert len(plan.photos) >= 1
+    c = measure(area.geometry, plan.photos, FP)
+    assert c.coverage >= 0.995
+
+
+def test_holes_and_multipolygons() -> None:
+    for name in ("holes.geojson", "multigeometry.kml"):
+        area = load_area(DATA / name)
+        plan = plan_survey(area, FP, 80, 70, angle_deg=0, turnaround_m=10, speed_mps=6)
+        c = measure(area.geometry, plan.photos, FP)
+        assert c.coverage >= 0.995
+    # no camera-on leg over the hole
+    area = load_area(DATA / "holes.geojson")
+    plan = plan_survey(area, FP, 80, 70, angle_deg=0, turnaround_m=10, speed_mps=6)
+    hole = area.geometry.interiors[0]
+    from shapely.geometry import Polygon
+    inner = Polygon(hole).buffer(-2.0)
+    assert not any(inner.contains(Point(p.x, p.y)) for p in plan.photos)
+
+
+def test_hover_mode_turns_photos_into_stops() -> None:
+    area = load_area(_rect(50.10, 14.50, 0.002, 0.003))
+    plan = plan_survey(area, FP, 80, 70, angle_deg=0, turnaround_m=10, speed_mps=6, hover=True)
+    stops = [w for w in plan.waypoints if w.kind == "photo"]
+    assert plan.hover and plan.camera_spans == ()
+    assert len(stops) == len(plan.photos) > 0
+    assert not [w for w in plan.waypoints if w.kind == "turnaround"]
+    c = measure(area.geometry, plan.photos, FP)
+    assert c.coverage >= 0.995
+
+
+def test_refly_90_adds_a_crossing_pass() -> None:
+    area = load_area(_rect(50.10, 14.50, 0.003, 0.004))
+    one = plan_survey(area, FP, 80, 70, angle_deg=0, turnaround_m=10, speed_mps=6)
+    two = plan_survey(area, FP, 80, 70, angle_deg=0, turnaround_m=10, speed_mps=6, refly_90=True)
+    angles = {round(l.angle_deg) for l in two.legs}
+    assert angles == {0, -90} or angles == {0, 90}
+    assert len(two.photos) > 1.6 * len(one.photos)
+
+
+def test_trigger_interval_faster_than_the_camera() -> None:
+    area = load_area(_rect(50.10, 14.50))
+    trig = FP.along_m * 0.2
+    with pytest.raises(PlanError, match="faster than the camera") as e:
+        plan_survey(area, FP, 80, 70, speed_mps=12, min_interval_s=1.0)
+    assert f"{trig / 1.0:.1f} m/s" in e.value.hint
+    plan_survey(area, FP, 80, 70, speed_mps=trig / 1.0 * 0.99, min_interval_s=1.0)   # just slow enough
+
+
+@pytest.mark.parametrize("kw,match", [
+    ({"front_pct": 100}, "front overlap"), ({"side_pct": -5}, "side overlap"),
+    ({"speed_mps": 0}, "speed"), ({"turnaround_m": -1}, "turnaround"), ({"angle_deg": "north"}, "angle"),
+])
+def test_bad_parameters(kw, match) -> None:
+    area = load_area(_rect(50.10, 14.50))
+    args = dict(front_pct=80, side_pct=70, speed_mps=5.0)
+    args.update(kw)
+    with pytest.raises(PlanError, match=match):
+        plan_survey(area, FP, **args)
+
+
+def test_report_can_rederive_photos_from_the_waypoints() -> None:
+    area = load_area(DATA / "holes.geojson")
+    plan = plan_survey(area, FP, 80, 70, angle_deg=20, turnaround_m=10, speed_mps=6)
+    # rebuild the path from lat/lon only (as from mission items) and simulate the trigger again
+    xy = np.array([area.projection.point_to_xy(w.lat, w.lon) for w in plan.waypoints])
+    again = simulate_distance_trigger(xy, plan.camera_spans)
+    assert len(again) == len(plan.photos)
+    assert max(math.hypot(a.x - b.x, a.y - b.y) for a, b in zip(again, plan.photos)) < 1e-3
+
+
+@given(st.lists(st.tuples(st.floats(50.0, 50.004), st.floats(14.0, 14.006)), min_size=0, max_size=9))
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+def test_any_point_list_gives_a_plan_or_a_plan_error(pts) -> None:
+    try:
+        area = load_area([list(p) for p in pts])
+        plan = plan_survey(area, FP, 80, 70, angle_deg="auto", turnaround_m=10, speed_mps=6)
+    except PlanError as e:
+        assert str(e)
+        return
+    assert plan.photos
+
+
+# ------------------------------------------------------------------------------------------- corridor
+
+def test_corridor_straight_and_bent() -> None:
+    for line, width in ([[50.11, 14.50], [50.12, 14.52]], 60.0), \
+                       ([[50.11, 14.50], [50.12, 14.50], [50.12, 14.52], [50.125, 14.51]], 120.0):
+        plan = plan_corridor(line, width, FP, 80, 60, turnaround_m=10, speed_mps=6)
+        c = measure(plan.area.geometry, plan.photos, FP, plan.path_xy, plan.spacing_m, plan.trigger_distance_m)
+        assert c.coverage >= 0.995
+        assert c.min_side_overlap is None or c.min_side_overlap >= 0.59
+        n = len(plan.lines_xy)
+        assert (n - 1) * plan.spacing_m + FP.across_m >= width
+
+
+def test_corridor_front_overlap_on_a_straight_line() -> None:
+    plan = plan_corridor([[50.11, 14.50], [50.12, 14.52]], 80.0, FP, 80, 60, turnaround_m=10, speed_mps=6)
+    c = measure(plan.area.geometry, plan.photos, FP)
+    assert c.min_front_overlap >= 0.79
+
+
+@pytest.mark.parametrize("line,width,match", [
+    ([[50.11, 14.50]], 60, "at least 2"), ([[50.11, 14.50], [50.11, 14.50]], 60, "no length"),
+    ([[50.11, 14.50], [50.12, 14.52]], 0, "width"),
+    ([[50.11, 14.50], [50.12, 14.52], [50.12, 14.50], [50.11, 14.52]], 30, "crosses itself"),
+])
+def test_corridor_errors(line, width, match) -> None:
+    with pytest.raises(PlanError, match=match):
+        plan_corridor(line, width, FP, 80, 60)
