@@ -256,11 +256,18 @@ def _write_atomically(directory: Path, files: dict[str, bytes], manifest: bytes)
             os.chmod(tmp, 0o755)
             os.rename(tmp, directory)
             return
-        for name in files:
-            os.replace(tmp / name, directory / name)
-        manifest_path = directory / MANIFEST
-        if not (manifest_path.is_file() and manifest_path.read_bytes() == manifest):
-            os.replace(tmp / MANIFEST, manifest_path)
+        moved: list[Path] = []
+        try:
+            for name in files:   # only names that did not exist: nothing published is replaced
+                os.replace(tmp / name, directory / name)
+                moved.append(directory / name)
+            manifest_path = directory / MANIFEST
+            if not (manifest_path.is_file() and manifest_path.read_bytes() == manifest):
+                os.replace(tmp / MANIFEST, manifest_path)
+        except BaseException:
+            for path in moved:   # roll back: the directory is as it was
+                path.unlink(missing_ok=True)
+            raise
     finally:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
