@@ -1,0 +1,571 @@
+"""A ground-station client for any MAVLink camera (camera protocol v2): identify, definition, settings,
+capture, and running a pre-flight command sequence.
+
+    from wiris_tools.link import Link
+    from wiris_tools.camera_client import CameraClient
+
+    with Link("udpin:127.0.0.1:14550") as link:
+        cam = CameraClient(link)                     # finds the camera by its HEARTBEAT
+        info = cam.information()                     # CAMERA_INFORMATION (REQUEST_MESSAGE, falls back to 521)
+        d = cam.definition(info)                     # download (http/https, bounded) + strict validation
+        values = cam.read_settings(d.definition)     # PARAM_EXT_REQUEST_LIST, then reads of what is missing
+        cam.set_setting(d.definition, "LAYOUT", "Blended")   # PARAM_EXT_SET, waits for PARAM_EXT_ACK
+        for shot in cam.capture(interval_s=2, count=3): ...   # IMAGE_START_CAPTURE, CAMERA_IMAGE_CAPTURED
+        cam.apply(load_setup("flight.setup.json"))   # each step acknowledged; stops at the first refusal
+
+Every wait is bounded; errors are LinkError naming the step, setting or command and saying what to do.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from cdf.errors import CdfError
+from wiris_tools.emulate import paramext
+from wiris_tools.emulate.definition import Definition, DefParam, parse_definition
+from wiris_tools.errors import LinkError
+from wiris_tools.link import Link, command_name, result_name
+
+CAMERA_COMPONENTS = range(mavlink2.MAV_COMP_ID_CAMERA, mavlink2.MAV_COMP_ID_CAMERA6 + 1)
+MAX_SETUP_BYTES = 1024 * 1024
+MAX_STEPS = 1000
+
+
+@dataclass(frozen=True)
+class CameraInfo:
+    system: int
+    component: int
+    vendor: str
+    model: str
+    firmware_version: int
+    focal_length_mm: float
+    sensor_size_mm: tuple[float, float]
+    resolution_px: tuple[int, int]
+    lens_id: int
+    flags: int
+    definition_version: int
+    definition_uri: str
+
+    @property
+    def flag_names(self) -> tuple[str, ...]:
+        names = []
+        for value, entry in sorted(mavlink2.enums["CAMERA_CAP_FLAGS"].items()):
+            if value and value != max(mavlink2.enums["CAMERA_CAP_FLAGS"]) and self.flags & value == value:
+                names.append(entry.name.removeprefix("CAMERA_CAP_FLAGS_"))
+        return tuple(names)
+
+    def to_json(self) -> dict:
+        return {"system": self.system, "component": self.component, "vendor": self.vendor, "model": self.model,
+                "firmware_version": self.firmware_version,
+                "focal_length_mm": None if math.isnan(self.focal_length_mm) else self.focal_length_mm,
+                "sensor_size_mm": list(self.sensor_size_mm), "resolution_px": list(self.resolution_px),
+                "lens_id": self.lens_id, "flags": self.flags, "flag_names": list(self.flag_names),
+                "definition_version": self.definition_version, "definition_uri": self.definition_uri}
+
+
+@dataclass(frozen=True)
+class LoadedDefinition:
+    uri: str
+    data: bytes
+    definition: Definition
+    report: Any            # cdf.validation.Report (strict profile)
+
+
+@dataclass(frozen=True)
+class Shot:
+    index: int
+    result: int
+    file: str
+    lat: int
+    lon: int
+    alt_mm: int
+    time_utc_us: int
+
+    def to_json(self) -> dict:
+        return {"index": self.index, "ok": self.result == 1, "file": self.file, "lat": self.lat / 1e7,
+                "lon": self.lon / 1e7, "alt_m": self.alt_mm / 1000.0, "time_utc_us": self.time_utc_us}
+
+
+@dataclass(frozen=True)
+class Step:
+    number: int
+    description: str
+    kind: str
+    target_component: int
+    command: int | None = None
+    params: tuple[float, ...] = ()
+    expect: str = "MAV_RESULT_ACCEPTED"
+    param_id: str = ""
+    value: float | int | None = None
+    type: str = ""
+
+    @property
+    def label(self) -> str:
+        return f"step {self.number} ({self.description})" if self.description else f"step {self.number}"
+
+
+@dataclass(frozen=True)
+class StepResult:
+    step: Step
+    outcome: str
+    detail: str = ""
+
+    def to_json(self) -> dict:
+        return {"step": self.step.number, "description": self.step.description, "kind": self.step.kind,
+                "outcome": self.outcome, "detail": self.detail}
+
+
+def _text(raw: Any) -> str:
+    if isinstance(raw, (bytes, bytearray)):
+        return bytes(raw).split(b"\0", 1)[0].decode("utf-8", errors="replace")
+    if isinstance(raw, (list, tuple)):
+        return bytes(int(b) & 0xFF for b in raw).split(b"\0", 1)[0].decode("utf-8", errors="replace")
+    return str(raw).split("\0", 1)[0]
+
+
+def _nan_params(values: list[float | None]) -> list[float]:
+    return [math.nan if v is None else float(v) for v in values]
+
+
+class CameraClient:
+    """The camera side of a Link (see the module docstring)."""
+
+    def __init__(self, link: Link, *, component: int | None = None, system: int | None = None,
+                 find_timeout_s: float = 5.0, timeout_s: float = 1.0, retries: int = 3) -> None:
+        self.link = link
+        self.timeout_s = timeout_s
+        self.retries = retries
+        self.system, self.component = self._find(component, system, find_timeout_s)
+
+    # -- discovery -----------------------------------------------------------------------------
+    def _find(self, component: int | None, system: int | None, timeout_s: float) -> tuple[int, int]:
+        deadline = time.monotonic() + timeout_s
+
+        def pick() -> tuple[int, int] | None:
+            for (s, c), hb in self.link.heartbeats().items():
+                if (s, c) == (self.link.system, self.link.component):
+                    continue
+                if system is not None and s != system:
+                    continue
+                if component is not None:
+                    if c == component:
+                        return s, c
+                elif hb.type == mavlink2.MAV_TYPE_CAMERA or c in CAMERA_COMPONENTS:
+                    return s, c
+            return None
+
+        while True:
+            found = pick()
+            if found is not None:
+                return found
+            if time.monotonic() >= deadline:
+                who = f"component {component}" if component is not None else "a camera (MAV_TYPE_CAMERA or component 100–105)"
+                raise LinkError(f"no HEARTBEAT from {who} within {timeout_s:g} s", where=self.link.url,
+                                hint="check the connection string and that the camera is powered; give --component "
+                                     "if the camera uses another id")
+            time.sleep(0.05)
+
+    # -- requests ------------------------------------------------------------------------------
+    def command(self, command: int, params: list[float | None], *, timeout_s: float | None = None) -> Any:
+        return self.link.command_long(self.system, self.component, command, _nan_params(params),
+                                      timeout=timeout_s or self.timeout_s, retries=self.retries)
+
+    def request(self, message: str, param2: float = math.nan, *, fallback: int | None = None,
+                fallback_param1: float = math.nan, count: int = 1, wait_s: float | None = None) -> list[Any]:
+        """Ask for `message` with REQUEST_MESSAGE (or the older dedicated command when that is UNSUPPORTED)
+        and return the copies that arrive (at least one, up to `count`)."""
+        msg_id = getattr(mavlink2, f"MAVLINK_MSG_ID_{message}")
+        wait = wait_s if wait_s is not None else self.timeout_s
+        with self.link.inbox(message, src_system=self.system, src_component=self.component) as box:
+            try:
+                self.command(mavlink2.MAV_CMD_REQUEST_MESSAGE, [msg_id, param2, None, None, None, None, None])
+            except LinkError as err:
+                if fallback is None or "UNSUPPORTED" not in str(err):
+                    raise
+                self.command(fallback, [fallback_param1, None, None, None, None, None, None])
+            got = []
+            first = box.get(wait)
+            if first is None:
+                raise LinkError(f"the camera acknowledged the request but sent no {message} within {wait:g} s",
+                                where=f"component {self.component}", hint="the link may be losing packets; retry")
+            got.append(first)
+            while len(got) < count:
+                more = box.get(wait)
+                if more is None:
+                    break
+                got.append(more)
+            return got
+
+    def information(self) -> CameraInfo:
+        m = self.request("CAMERA_INFORMATION", fallback=mavlink2.MAV_CMD_REQUEST_CAMERA_INFORMATION,
+                         fallback_param1=1)[0]
+        return CameraInfo(
+            system=self.system, component=self.component, vendor=_text(m.vendor_name), model=_text(m.model_name),
+            firmware_version=m.firmware_version, focal_length_mm=m.focal_length,
+            sensor_size_mm=(m.sensor_size_h, m.sensor_size_v), resolution_px=(m.resolution_h, m.resolution_v),
+            lens_id=m.lens_id, flags=m.flags, definition_version=m.cam_definition_version,
+            definition_uri=_text(m.cam_definition_uri))
+
+    def storage(self) -> list[dict]:
+        """STORAGE_INFORMATION of every storage: asks for the first, then for the others it announces."""
+        first = self.request("STORAGE_INFORMATION", 0, fallback=mavlink2.MAV_CMD_REQUEST_STORAGE_INFORMATION,
+                             fallback_param1=0, count=16, wait_s=0.3)
+        seen = {m.storage_id: m for m in first}
+        count = max((m.storage_count for m in first), default=0)
+        for sid in range(count):
+            if sid not in seen and len(seen) < count:
+                for m in self.request("STORAGE_INFORMATION", sid, count=1):
+                    seen[m.storage_id] = m
+        return [{"id": m.storage_id, "name": _text(m.name), "status": m.status, "type": m.type,
+                 "total_mib": m.total_capacity, "used_mib": m.used_capacity, "available_mib": m.available_capacity}
+                for _, m in sorted(seen.items())]
+
+    def capture_status(self) -> dict:
+        m = self.request("CAMERA_CAPTURE_STATUS", fallback=mavlink2.MAV_CMD_REQUEST_CAMERA_CAPTURE_STATUS,
+                         fallback_param1=1)[0]
+        return {"image_status": m.image_status, "video_status": m.video_status, "image_interval_s": m.image_interval,
+                "recording_time_ms": m.recording_time_ms, "available_mib": m.available_capacity,
+                "image_count": m.image_count}
+
+    # -- the definition ------------------------------------------------------------------------
+    def definition(self, info: CameraInfo, *, timeout_s: float = 10.0) -> LoadedDefinition:
+        """Download the definition the camera names and validate it (strict profile)."""
+        from cdf.validation import CameraInfo as ValidationInfo
+        from cdf.validation import validate_bytes
+        from cdf.xmlsafe import fetch_url
+
+        uri = info.definition_uri
+        if not uri:
+            raise LinkError("the camera names no camera definition (empty cam_definition_uri)",
+                            where=f"{info.vendor} {info.model}",
+                            hint="its settings cannot be read through PARAM_EXT without one")
+        scheme = uri.split("://", 1)[0].lower() if "://" in uri else ""
+        if scheme in ("mftp", "mavlinkftp"):
+            raise LinkError("MAVLink FTP download is not implemented in this client", where=uri,
+                            hint="serve the definition over http(s), or fetch it with a GCS and validate it "
+                                 "with `wiris cdf validate`")
+        if scheme not in ("http", "https"):
+            raise LinkError(f"unsupported definition URI scheme {scheme or uri!r}", where=uri,
+                            hint="cam_definition_uri must be http://, https:// or mftp://")
+        try:
+            data = fetch_url(uri, timeout_s=timeout_s)
+        except CdfError as err:
+            raise LinkError(f"cannot download the camera definition: {err.message}",
+                            where=uri, hint="is the camera's web server reachable from here?") from None
+        report = validate_bytes(data, uri, "strict", camera_info=ValidationInfo(
+            vendor_name=info.vendor, model_name=info.model, cam_definition_version=info.definition_version,
+            cam_definition_uri=uri))
+        try:
+            parsed = parse_definition(data, uri)
+        except CdfError as err:
+            raise LinkError(f"the camera's definition cannot be read: {err}", where=uri,
+                            hint="see the validation findings (`wiris cdf validate URL`)") from None
+        return LoadedDefinition(uri, data, parsed, report)
+
+    # -- settings over PARAM_EXT ---------------------------------------------------------------
+    def read_settings(self, definition: Definition, *, quiet_s: float | None = None) -> dict[str, float | int | None]:
+        """Current value of every definition parameter (None when the camera never answered for it)."""
+        values: dict[str, float | int | None] = {p.name: None for p in definition.params}
+        quiet = quiet_s if quiet_s is not None else max(0.3, self.timeout_s / 2)
+        with self.link.inbox("PARAM_EXT_VALUE", src_system=self.system, src_component=self.component) as box:
+            self.link.send(self.link.mav.param_ext_request_list_encode(self.system, self.component))
+            deadline = time.monotonic() + max(5.0, 4 * self.timeout_s)
+            while time.monotonic() < deadline:
+                m = box.get(quiet)
+                if m is None:
+                    break
+                self._store(definition, values, m)
+                if all(v is not None for v in values.values()):
+                    break
+            for p in definition.params:
+                for _ in range(self.retries + 1):
+                    if values[p.name] is not None:
+                        break
+                    self.link.send(self.link.mav.param_ext_request_read_encode(
+                        self.system, self.component, p.name.encode(), -1))
+                    end = time.monotonic() + self.timeout_s
+                    while time.monotonic() < end and values[p.name] is None:
+                        m = box.get(max(0.0, end - time.monotonic()))
+                        if m is not None:
+                            self._store(definition, values, m)
+        return values
+
+    @staticmethod
+    def _store(definition: Definition, values: dict, m: Any) -> None:
+        name = paramext.param_id(m)
+        p = definition.param(name)
+        if p is None:
+            return
+        v = paramext.decode_ext(paramext.raw_value(m), m.param_type)
+        if v is not None:
+            values[name] = v
+
+    @staticmethod
+    def parse_value(p: DefParam, text: str) -> float | int:
+        """An option label (any case) or a number, checked against the definition."""
+        option = next((o for o in p.options if o.label.lower() == text.strip().lower()), None)
+        if option is not None:
+            return option.value
+        try:
+            number = float(text)
+        except ValueError:
+            choices = ", ".join(f"{o.label} ({o.value})" for o in p.options)
+            raise LinkError(f"{text!r} is neither an option nor a number", where=p.name,
+                            hint=f"choose one of {choices}" if choices else "give a number") from None
+        value: float | int = int(number) if p.integer and number.is_integer() else number
+        problem = p.check(value)
+        if problem is not None:
+            raise LinkError(f"{text} is {problem}", where=p.name,
+                            hint="see `wiris camera settings` for the allowed values")
+        return value
+
+    def set_setting(self, definition: Definition, name: str, text: str) -> float | int:
+        """PARAM_EXT_SET with the definition's type; waits for PARAM_EXT_ACK (retries); the value now held."""
+        p = definition.param(name)
+        if p is None:
+            import difflib
+
+            close = difflib.get_close_matches(name, [q.name for q in definition.params], n=1)
+            raise LinkError(f"the camera's definition has no setting {name!r}",
+                            hint=f"did you mean {close[0]}?" if close else "see `wiris camera settings`")
+        value = self.parse_value(p, text)
+        return self.set_param_ext(name, value, p.type)
+
+    def set_param_ext(self, name: str, value: float | int, cdf_type: str, *, where: str | None = None) -> float | int:
+        try:
+            raw = paramext.encode(value, cdf_type)
+            ext = paramext.wire_type(cdf_type).ext_type
+        except paramext.WireValueError as err:
+            raise LinkError(f"{name}: {err}", where=where or name) from None
+        msg = self.link.mav.param_ext_set_encode(self.system, self.component, name.encode(), raw, ext)
+
+        def ours(m: Any) -> bool:
+            return paramext.param_id(m) == name
+
+        with self.link.inbox("PARAM_EXT_ACK", src_system=self.system, src_component=self.component,
+                             predicate=ours) as box:
+            for _attempt in range(self.retries + 1):
+                self.link.send(msg)
+                deadline = time.monotonic() + self.timeout_s
+                while True:
+                    ack = box.get(max(0.0, deadline - time.monotonic()))
+                    if ack is None:
+                        break
+                    if ack.param_result == mavlink2.PARAM_ACK_IN_PROGRESS:
+                        deadline = time.monotonic() + self.timeout_s
+                        continue
+                    held = paramext.decode_ext(paramext.raw_value(ack), ack.param_type)
+                    if ack.param_result == mavlink2.PARAM_ACK_ACCEPTED:
+                        return held if held is not None else value
+                    reason = mavlink2.enums["PARAM_ACK"][ack.param_result].name \
+                        if ack.param_result in mavlink2.enums["PARAM_ACK"] else str(ack.param_result)
+                    hint = {mavlink2.PARAM_ACK_VALUE_UNSUPPORTED: "the camera does not accept this value",
+                            mavlink2.PARAM_ACK_FAILED: "the camera does not know this parameter or its type"}
+                    raise LinkError(f"{name} = {value}: the camera answered {reason}"
+                                    + (f" (it keeps {held})" if held is not None else ""),
+                                    where=where or name, hint=hint.get(ack.param_result))
+        raise LinkError(f"{name}: no PARAM_EXT_ACK after {self.retries + 1} tries ({self.timeout_s:g} s each)",
+                        where=where or name, hint="is the camera still connected? does it speak PARAM_EXT?")
+
+    def set_param(self, name: str, value: float, *, where: str | None = None) -> float:
+        """Classic PARAM_SET (a RedEdge's parameters): the camera answers PARAM_VALUE with what it holds."""
+        def ours(m: Any) -> bool:
+            return m.param_id == name
+
+        msg = self.link.mav.param_set_encode(self.system, self.component, name.encode(), float(value),
+                                             mavlink2.MAV_PARAM_TYPE_REAL32)
+        with self.link.inbox("PARAM_VALUE", src_component=self.component, predicate=ours) as box:
+            for _attempt in range(self.retries + 1):
+                self.link.send(msg)
+                answer = box.get(self.timeout_s)
+                if answer is not None:
+                    if not math.isclose(answer.param_value, float(value), rel_tol=1e-6, abs_tol=1e-6):
+                        raise LinkError(f"{name} = {value}: the camera kept {answer.param_value:g}",
+                                        where=where or name, hint="the value is outside what the camera accepts")
+                    return answer.param_value
+        raise LinkError(f"{name}: no PARAM_VALUE after {self.retries + 1} tries ({self.timeout_s:g} s each)",
+                        where=where or name, hint="is the camera connected, and is the parameter name right?")
+
+    # -- capture -------------------------------------------------------------------------------
+    def capture(self, *, interval_s: float = 0.0, count: int = 1, duration_s: float | None = None,
+                image_timeout_s: float = 5.0) -> Iterator[Shot]:
+        """IMAGE_START_CAPTURE, then each CAMERA_IMAGE_CAPTURED as it arrives (count 0: until `duration_s`)."""
+        if count < 0 or interval_s < 0 or not math.isfinite(interval_s):
+            raise LinkError("count and interval must not be negative", hint="e.g. --interval 2 --count 5")
+        with self.link.inbox("CAMERA_IMAGE_CAPTURED", src_system=self.system, src_component=self.component) as box:
+            self.command(mavlink2.MAV_CMD_IMAGE_START_CAPTURE, [0, interval_s, count, 0, None, None, None])
+            got = 0
+            start = time.monotonic()
+            try:
+                while count == 0 or got < count:
+                    if duration_s is not None and time.monotonic() - start >= duration_s:
+                        break
+                    wait = interval_s + image_timeout_s
+                    if duration_s is not None:
+                        wait = min(wait, max(0.0, duration_s - (time.monotonic() - start)))
+                    m = box.get(wait)
+                    if m is None:
+                        if duration_s is not None and time.monotonic() - start >= duration_s:
+                            break
+                        raise LinkError(f"no CAMERA_IMAGE_CAPTURED within {wait:g} s ({got} of "
+                                        f"{count or 'unlimited'} images so far)", where=f"component {self.component}",
+                                        hint="is the camera still connected?")
+                    shot = Shot(m.image_index, m.capture_result, _text(m.file_url), m.lat, m.lon, m.alt, m.time_utc)
+                    yield shot
+                    got += 1
+                    if m.capture_result != 1:
+                        raise LinkError(f"the camera failed to capture image {m.image_index} (capture_result "
+                                        f"{m.capture_result})", where=f"component {self.component}",
+                                        hint="check its storage (`wiris camera info`)")
+            finally:
+                if count != 1:
+                    try:
+                        self.command(mavlink2.MAV_CMD_IMAGE_STOP_CAPTURE, [None] * 7)
+                    except LinkError:
+                        pass
+
+    # -- command sequences ---------------------------------------------------------------------
+    def apply(self, steps: list[Step], *, on_step: Callable[[StepResult], None] | None = None) -> list[StepResult]:
+        """Run `steps` in order; LinkError naming the first step that is refused or not answered."""
+        results = []
+        for step in steps:
+            result = self._run_step(step)
+            results.append(result)
+            if on_step is not None:
+                on_step(result)
+        return results
+
+    def _run_step(self, step: Step) -> StepResult:
+        where = step.label
+        target = step.target_component or self.component
+        if step.kind == "command_long":
+            assert step.command is not None
+            expect = getattr(mavlink2, step.expect, mavlink2.MAV_RESULT_ACCEPTED)
+            try:
+                self.link.command_long(self.system, target, step.command, list(step.params),
+                                       timeout=self.timeout_s, retries=self.retries)
+                got = mavlink2.MAV_RESULT_ACCEPTED
+            except LinkError as err:
+                text = str(err)
+                got = next((r for r, e in mavlink2.enums["MAV_RESULT"].items() if e.name in text), None)
+                if got is None or got != expect:
+                    raise LinkError(f"stopped the sequence: {err.message}",
+                                    where=where, hint=getattr(err, "hint", None)) from None
+            if got != expect:
+                raise LinkError(f"{where}: {command_name(step.command)} answered {result_name(got)}, expected "
+                                f"{step.expect}", where=where)
+            return StepResult(step, result_name(got))
+        if step.kind == "param_ext_set":
+            comp = self.component
+            self.component = target
+            try:
+                held = self.set_param_ext(step.param_id, step.value, step.type, where=where)
+            except LinkError as err:
+                raise LinkError(f"stopped the sequence: {err.message}",
+                                where=where, hint=getattr(err, "hint", None)) from None
+            finally:
+                self.component = comp
+            return StepResult(step, "PARAM_ACK_ACCEPTED", f"{step.param_id} = {held:.7g}")
+        comp = self.component
+        self.component = target
+        try:
+            held = self.set_param(step.param_id, float(step.value), where=where)
+        except LinkError as err:
+            raise LinkError(f"stopped the sequence: {err.message}",
+                            where=where, hint=getattr(err, "hint", None)) from None
+        finally:
+            self.component = comp
+        return StepResult(step, "PARAM_VALUE", f"{step.param_id} = {held:g}")
+
+
+# -- setup files ---------------------------------------------------------------------------------
+KINDS = ("command_long", "param_ext_set", "param_set")
+
+
+def parse_setup(data: Any, where: str = "setup") -> list[Step]:
+    """Steps of a NAME.setup.json document (missions' compiler output); unknown extra fields are ignored.
+
+    Everything is checked before anything is sent, so a bad file changes nothing on the camera."""
+    if not isinstance(data, dict) or not isinstance(data.get("steps"), list):
+        raise LinkError('a setup file is a JSON object with a "steps" list', where=where,
+                        hint="use the NAME.setup.json that `wiris mission compile` writes")
+    raw_steps = data["steps"]
+    if len(raw_steps) > MAX_STEPS:
+        raise LinkError(f"{len(raw_steps)} steps; at most {MAX_STEPS} are accepted", where=where)
+    steps = []
+    for i, s in enumerate(raw_steps, start=1):
+        loc = f"{where}: step {i}"
+        if not isinstance(s, dict):
+            raise LinkError("a step must be a JSON object", where=loc)
+        desc = str(s.get("description") or "")[:200]
+        if desc:
+            loc += f" ({desc})"
+        kind = s.get("kind")
+        if kind not in KINDS:
+            raise LinkError(f"unknown step kind {kind!r}", where=loc, hint=f"kinds: {', '.join(KINDS)}")
+        comp = s.get("target_component", 0)
+        if isinstance(comp, bool) or not isinstance(comp, int) or not 0 <= comp <= 255:
+            raise LinkError(f"target_component {comp!r} is not a component id (0–255)", where=loc)
+        if kind == "command_long":
+            cmd = s.get("command")
+            if isinstance(cmd, str):
+                number = getattr(mavlink2, cmd, None) if cmd.startswith("MAV_CMD_") else None
+                if not isinstance(number, int):
+                    raise LinkError(f"unknown command {cmd!r}", where=loc, hint="use a MAV_CMD_* name from common.xml")
+                cmd = number
+            if isinstance(cmd, bool) or not isinstance(cmd, int) or not 0 <= cmd <= 65535:
+                raise LinkError(f"command {s.get('command')!r} is not a MAV_CMD name or number", where=loc)
+            params = s.get("params", [])
+            if not isinstance(params, list) or len(params) > 7 or any(
+                    p is not None and (isinstance(p, bool) or not isinstance(p, (int, float))) for p in params):
+                raise LinkError("params must be a list of at most 7 numbers or null (NaN)", where=loc)
+            params = list(params) + [None] * (7 - len(params))
+            expect = (s.get("expect") or {}).get("result", "MAV_RESULT_ACCEPTED") \
+                if isinstance(s.get("expect") or {}, dict) else "MAV_RESULT_ACCEPTED"
+            if not isinstance(getattr(mavlink2, str(expect), None), int) or not str(expect).startswith("MAV_RESULT_"):
+                raise LinkError(f"unknown expected result {expect!r}", where=loc, hint="e.g. MAV_RESULT_ACCEPTED")
+            steps.append(Step(i, desc, kind, comp, cmd, tuple(_nan_params(params)), str(expect)))
+            continue
+        pid = s.get("param_id")
+        if not isinstance(pid, str) or not 1 <= len(pid) <= 16 or not pid.isascii():
+            raise LinkError(f"param_id {pid!r} must be 1–16 ASCII characters", where=loc)
+        value = s.get("value")
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise LinkError(f"value {value!r} is not a finite number", where=loc)
+        ptype = str(s.get("type") or ("float" if kind == "param_set" else ""))
+        if kind == "param_ext_set":
+            try:
+                paramext.encode(value, ptype)
+            except paramext.WireValueError as err:
+                raise LinkError(f"{pid}: {err}", where=loc, hint="type is a definition type: uint8…int64, float, double") from None
+        steps.append(Step(i, desc, kind, comp, None, (), "", pid, value, ptype))
+    return steps
+
+
+def load_setup(path: str | Path) -> list[Step]:
+    p = Path(path)
+    try:
+        with p.open("rb") as fh:
+            raw = fh.read(MAX_SETUP_BYTES + 1)
+    except OSError as err:
+        raise LinkError(f"cannot read: {err.strerror or err}", where=str(path)) from None
+    if len(raw) > MAX_SETUP_BYTES:
+        raise LinkError(f"file is larger than {MAX_SETUP_BYTES} bytes", where=str(path))
+    try:
+        data = json.loads(raw.decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as err:
+        line = getattr(err, "lineno", None)
+        raise LinkError(f"not valid JSON: {err}", where=f"{path}:{line}" if line else str(path)) from None
+    return parse_setup(data, str(path))
+
+
+__all__ = ["CameraClient", "CameraInfo", "LoadedDefinition", "Shot", "Step", "StepResult", "load_setup",
+           "parse_setup"]

@@ -1,0 +1,204 @@
+"""`wiris camera ...`: talk to a MAVLink camera (identify, settings, capture, apply a command sequence)."""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import json
+import math
+
+import click
+
+
+def _link_options(fn):
+    @click.option("--connect", "url", required=True, metavar="URL",
+                  help="pymavlink connection string: udpin:127.0.0.1:14550, udpout:HOST:PORT, tcp:HOST:PORT, "
+                       "/dev/ttyUSB0,57600.")
+    @click.option("--component", type=click.IntRange(0, 255), default=None,
+                  help="The camera's component id (default: the first camera heard, 100–105 or MAV_TYPE_CAMERA).")
+    @click.option("--system", type=click.IntRange(1, 255), default=None, help="The camera's system id.")
+    @click.option("--signing-key", type=click.Path(dir_okay=False), default=None,
+                  help="MAVLink 2 signing key file (64 hex characters or a passphrase).")
+    @click.option("--mavlink1", is_flag=True, help="Send MAVLink 1 frames (a RedEdge's serial API).")
+    @click.option("--timeout", type=click.FloatRange(0.05, 60), default=1.0, show_default=True,
+                  help="Seconds to wait for each answer (each request is retried 3 times).")
+    @click.option("--wait", "find_s", type=click.FloatRange(0.1, 600), default=5.0, show_default=True,
+                  help="Seconds to wait for the camera's HEARTBEAT.")
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        return fn(*args, **kwargs)
+
+    return wrapper
+
+
+@contextlib.contextmanager
+def _camera(url, component, system, signing_key, mavlink1, timeout, find_s):
+    from wiris_tools.camera_client import CameraClient
+    from wiris_tools.link import Link
+    from wiris_tools.signing import load_signing_key
+
+    key = load_signing_key(signing_key) if signing_key else None
+    with Link(url, signing_key=key, mavlink1=mavlink1) as link:
+        yield CameraClient(link, component=component, system=system, find_timeout_s=find_s, timeout_s=timeout)
+
+
+def _echo_json(obj) -> None:
+    click.echo(json.dumps(obj, indent=2, allow_nan=False, default=str))
+
+
+def _num(v) -> str:
+    if v is None:
+        return "?"
+    if isinstance(v, float):
+        if math.isnan(v):
+            return "NaN"
+        return f"{v:.6g}"
+    return str(v)
+
+
+def _findings(report, as_json: bool) -> None:
+    if as_json or not report.findings:
+        return
+    for f in report.findings:
+        click.echo("  " + f.format("definition"), err=True)
+
+
+@click.group()
+def camera() -> None:
+    """Talk to a MAVLink camera: identify it, read and change settings, capture, run a setup sequence."""
+
+
+@camera.command()
+@_link_options
+@click.option("--json", "as_json", is_flag=True, help="Print JSON.")
+def info(url, component, system, signing_key, mavlink1, timeout, find_s, as_json) -> None:
+    """CAMERA_INFORMATION, storage and capture status."""
+    with _camera(url, component, system, signing_key, mavlink1, timeout, find_s) as cam:
+        information = cam.information()
+        storage = cam.storage()
+        status = cam.capture_status()
+    if as_json:
+        _echo_json({"camera": information.to_json(), "storage": storage, "capture_status": status})
+        return
+    i = information
+    click.echo(f"{i.vendor} {i.model} (system {i.system}, component {i.component})")
+    click.echo(f"  resolution {i.resolution_px[0]}x{i.resolution_px[1]}, focal length {_num(i.focal_length_mm)} mm, "
+               f"lens {i.lens_id}")
+    click.echo(f"  capabilities: {', '.join(i.flag_names) or 'none'} (0x{i.flags:x})")
+    click.echo(f"  definition v{i.definition_version}: {i.definition_uri or '(none)'}")
+    for s in storage:
+        click.echo(f"  storage {s['id']} {s['name'] or ''}: {_num(s['available_mib'])} of {_num(s['total_mib'])} MiB free")
+    click.echo(f"  capture: image status {status['image_status']}, video status {status['video_status']}, "
+               f"interval {_num(status['image_interval_s'])} s, {status['image_count']} images this session")
+
+
+@camera.command()
+@_link_options
+@click.option("--json", "as_json", is_flag=True, help="Print JSON.")
+def settings(url, component, system, signing_key, mavlink1, timeout, find_s, as_json) -> None:
+    """Every setting of the camera's definition with its current value."""
+    with _camera(url, component, system, signing_key, mavlink1, timeout, find_s) as cam:
+        information = cam.information()
+        loaded = cam.definition(information)
+        values = cam.read_settings(loaded.definition)
+    d = loaded.definition
+    rows = [{"name": p.name, "description": p.description, "type": p.type, "value": values.get(p.name),
+             "option": p.label_of(values.get(p.name)), "options": [{"value": o.value, "name": o.label} for o in p.options],
+             "min": p.min, "max": p.max} for p in d.params]
+    if as_json:
+        _echo_json({"camera": information.to_json(), "definition": {"uri": loaded.uri, "valid": loaded.report.valid,
+                    "findings": [f.to_json() for f in loaded.report.findings]}, "settings": rows})
+        return
+    state = "valid" if loaded.report.valid else "INVALID"
+    click.echo(f"{information.vendor} {information.model}: definition v{d.version} ({state}, "
+               f"{len(loaded.report.findings)} findings) from {loaded.uri}")
+    _findings(loaded.report, as_json)
+    width = max((len(r["name"]) for r in rows), default=4)
+    for r in rows:
+        shown = _num(r["value"]) + (f"  {r['option']}" if r["option"] else "")
+        extra = ""
+        if r["options"]:
+            extra = " [" + ", ".join(f"{o['value']}={o['name']}" for o in r["options"][:8]) \
+                    + (", ..." if len(r["options"]) > 8 else "") + "]"
+        elif r["min"] is not None or r["max"] is not None:
+            extra = f" [{_num(r['min'])}..{_num(r['max'])}]"
+        click.echo(f"  {r['name']:<{width}}  {shown:<24} {r['description']}{extra}")
+    missing = [r["name"] for r in rows if r["value"] is None]
+    if missing:
+        click.echo(f"the camera did not report: {', '.join(missing)}", err=True)
+
+
+@camera.command(name="set")
+@click.argument("name")
+@click.argument("value")
+@_link_options
+def set_(name, value, url, component, system, signing_key, mavlink1, timeout, find_s) -> None:
+    """Set NAME (a definition parameter) to VALUE (an option name or a number): PARAM_EXT_SET, waits for the ACK."""
+    with _camera(url, component, system, signing_key, mavlink1, timeout, find_s) as cam:
+        information = cam.information()
+        loaded = cam.definition(information)
+        if not loaded.report.valid:
+            _findings(loaded.report, False)
+        held = cam.set_setting(loaded.definition, name, value)
+    p = loaded.definition.param(name)
+    label = p.label_of(held) if p is not None else None
+    click.echo(f"{name} = {_num(held)}" + (f" ({label})" if label else "") + " (acknowledged)")
+
+
+@camera.command()
+@_link_options
+@click.option("--interval", "interval_s", type=click.FloatRange(0, None), default=0.0, show_default=True,
+              help="Seconds between images (periodic capture).")
+@click.option("--count", type=click.IntRange(0, None), default=1, show_default=True,
+              help="Number of images (0: until Ctrl-C or --duration).")
+@click.option("--duration", "duration_s", type=click.FloatRange(0, None), default=None,
+              help="Stop after this many seconds.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object per image.")
+def capture(url, component, system, signing_key, mavlink1, timeout, find_s, interval_s, count, duration_s,
+            as_json) -> None:
+    """IMAGE_START_CAPTURE, then print each CAMERA_IMAGE_CAPTURED."""
+    with _camera(url, component, system, signing_key, mavlink1, timeout, find_s) as cam:
+        n = 0
+        try:
+            for shot in cam.capture(interval_s=interval_s, count=count, duration_s=duration_s):
+                n += 1
+                if as_json:
+                    click.echo(json.dumps(shot.to_json()))
+                else:
+                    click.echo(f"image {shot.index}: {shot.file or '(failed)'} at {shot.lat / 1e7:.7f}, "
+                               f"{shot.lon / 1e7:.7f}, {shot.alt_mm / 1000:.1f} m")
+        except KeyboardInterrupt:
+            click.echo("stopped", err=True)
+    if not as_json:
+        click.echo(f"{n} image(s)", err=True)
+
+
+@camera.command()
+@click.argument("setup_file", type=click.Path(dir_okay=False))
+@_link_options
+@click.option("--json", "as_json", is_flag=True, help="Print the step results as JSON.")
+def apply(setup_file, url, component, system, signing_key, mavlink1, timeout, find_s, as_json) -> None:
+    """Run the pre-flight command sequence of SETUP_FILE (NAME.setup.json), each step acknowledged."""
+    from wiris_tools.camera_client import load_setup
+
+    steps = load_setup(setup_file)       # checked completely before anything is sent
+    done = []
+
+    def report(result) -> None:
+        done.append(result)
+        if not as_json:
+            click.echo(f"{result.step.label}: {result.outcome}" + (f" {result.detail}" if result.detail else ""))
+
+    with _camera(url, component, system, signing_key, mavlink1, timeout, find_s) as cam:
+        try:
+            cam.apply(steps, on_step=report)
+        except Exception:
+            if as_json:
+                _echo_json({"file": setup_file, "completed": [r.to_json() for r in done], "ok": False})
+            else:
+                click.echo(f"{len(done)} of {len(steps)} steps done before the failure", err=True)
+            raise
+    if as_json:
+        _echo_json({"file": setup_file, "completed": [r.to_json() for r in done], "ok": True})
+    else:
+        click.echo(f"all {len(steps)} steps acknowledged")
