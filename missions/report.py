@@ -99,7 +99,7 @@ class Photo:
     heading_deg: float
     payloads: tuple[str, ...]
     span: int                 # photos of one camera-on stretch share it (front overlap pairs)
-    cause: int                # index into compiled.items of the command that took it
+    cause: int                # index into compiled.items of the command that took it; -1: the camera's own mode
     time_s: float
 
 
@@ -150,13 +150,32 @@ def _payload_for_target(compiled: Compiled, target: float) -> tuple[str, ...]:
     return tuple(p.name for p in compiled.payloads if p.component_id == t)
 
 
+def self_triggering(compiled: Compiled) -> dict[str, tuple[float, float, float]]:
+    """Payloads the setup puts in a capture mode of their own: name -> (altitude, tolerance, front overlap %).
+
+    A RedEdge in overlap mode (autoCapMode 2, MicaSense's recommended mode) shoots from its own GPS whenever it
+    is within opAltTolerance of operatingAlt and has moved (1 − overlapAlongTrk) of a footprint: the autopilot's
+    trigger commands do not reach it, so its photos follow the path and altitude, not the trigger items.
+    """
+    params: dict[str, dict[str, float]] = {}
+    for st in compiled.setup:
+        if st.kind == "param_set" and st.param_id and st.value is not None:
+            params.setdefault(st.payload, {})[st.param_id] = float(st.value)
+    out = {}
+    for name, pv in params.items():
+        if int(pv.get("autoCapMode", -1)) == 2 and "operatingAlt" in pv:
+            out[name] = (pv["operatingAlt"], pv.get("opAltTolerance", 5.0), pv.get("overlapAlongTrk", 75.0))
+    return out
+
+
 def _trigger_payloads(compiled: Compiled) -> tuple[str, ...]:
+    own = self_triggering(compiled)
     names: list[str] = []
     for a in compiled.areas:
         for n in a.payloads:
-            if n not in names:
+            if n not in names and n not in own:
                 names.append(n)
-    return tuple(names) if names else tuple(p.name for p in compiled.payloads)
+    return tuple(names) if names or compiled.areas else tuple(p.name for p in compiled.payloads if p.name not in own)
 
 
 def _projection(compiled: Compiled):
@@ -466,6 +485,27 @@ def _photos(compiled: Compiled, verts: Sequence[Vertex], times: np.ndarray, w: _
             span_id += 1
         last_hd = hd
         raw.append((v.x, v.y, v.alt_m, hd, pl, span_id, src, float(times[vi])))
+    # payloads that trigger themselves (RedEdge overlap mode): distance triggering wherever the altitude fits
+    for name, (op_alt, tol, front_pct) in self_triggering(compiled).items():
+        pay = compiled.payload(name)
+        d = pay.footprint_m(op_alt)[1] * (1.0 - front_pct / 100.0)
+        inband = np.abs(alts - op_alt) <= tol + 1e-6
+        k = 0
+        while k < len(verts) - 1:
+            if inband[k] and inband[k + 1]:
+                j = k + 1
+                while j < len(verts) - 1 and inband[j + 1]:
+                    j += 1
+                pts = simulate_distance_trigger(xy, [TriggerSpan(k, j, d, True, False)])
+                seg_idx, frac = _locate(xy, k, j, pts)
+                for p, sk, f in zip(pts, seg_idx, frac):
+                    alt = alts[sk] + f * (alts[min(sk + 1, len(alts) - 1)] - alts[sk])
+                    raw.append((p.x, p.y, float(alt), p.heading_deg, (name,), span_id, -1,
+                                _time_at(times, verts, sk, f)))
+                span_id += 1
+                k = j
+            else:
+                k += 1
     if not raw:
         return []
     arr = np.array([(r[0], r[1]) for r in raw])
@@ -552,6 +592,11 @@ def _trigger_intervals(compiled: Compiled, w: _Walk, verts: Sequence[Vertex],
     for s0, s1, iv, pl, _n, src in w.time_spans:
         for p in pl:
             out.append((p, iv, iv, src))
+    for name, (op_alt, _tol, front_pct) in self_triggering(compiled).items():
+        d = compiled.payload(name).footprint_m(op_alt)[1] * (1.0 - front_pct / 100.0)
+        spd = max((v.speed_mps for v in verts if abs(v.alt_m - op_alt) <= _tol), default=compiled.speed_mps)
+        if spd > 0:
+            out.append((name, d, d / spd, -1))
     return out
 
 
@@ -725,7 +770,8 @@ def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | N
         secs, src = min(spans)
         pay = compiled.payload(pname)
         warnings.append({"code": "trigger_interval_short",
-                         "message": f"{pname} would shoot every {secs:.2f} s (item {src + seq_base}"
+                         "message": f"{pname} would shoot every {secs:.2f} s ("
+                                    + (f"item {src + seq_base}" if src >= 0 else "its own overlap mode")
                                     + (f" and {len(spans) - 1} more camera-on legs" if len(spans) > 1 else "")
                                     + f"), faster than the camera's minimum of {pay.min_interval_s:g} s at "
                                       f"{compiled.speed_mps:g} m/s — photos will be lost; fly slower or reduce "
@@ -775,3 +821,68 @@ def _optics_warnings(compiled: Compiled) -> list[dict]:
                                    "not from a published source — footprints, GSD and overlap depend on them; "
                                    "check them against your camera's datasheet"})
     return out
+
+
+# --------------------------------------------------------------------------------------------- text forms
+
+def summary_lines(rep: dict) -> list[str]:
+    """A few lines for `wiris mission compile`."""
+    mins, secs = divmod(int(round(rep["flight_time_s"] or 0)), 60)
+    lines = [f"{rep['name']}: {rep['firmware']} {rep['frame']}, {rep['mission_items']} items "
+             f"(limit {rep['item_limit']}, {rep['parts']} part{'s' if rep['parts'] != 1 else ''}), "
+             f"{rep['path_length_m'] / 1000:.2f} km, ~{mins} min {secs:02d} s"]
+    for name, n in rep["photos"].items():
+        extra = ""
+        if name in rep["coverage"]:
+            ov = rep["overlap"][name]
+            f = "–" if ov["front_min"] is None else f"{100 * ov['front_min']:.1f} %"
+            s = "–" if ov["side_min"] is None else f"{100 * ov['side_min']:.1f} %"
+            extra = f", coverage {100 * rep['coverage'][name]:.2f} %, min overlap front {f} side {s}"
+        lines.append(f"  {name}: {n} photos{extra}")
+    for w in rep["warnings"]:
+        lines.append(f"warning [{w['code']}]: {w['message']}")
+    for e in rep["errors"]:
+        lines.append(f"error [{e['code']}]: {e['message']}")
+    return lines
+
+
+def format_report(rep: dict) -> str:
+    """The human-readable report of `wiris mission check`."""
+    rows = [("plan", rep["plan"]), ("firmware", f"{rep['firmware']} {rep['frame']}"),
+            ("mission items", f"{rep['mission_items']} (limit {rep['item_limit']}; parts: "
+                              f"{', '.join(str(n) for n in rep['part_items'])})"),
+            ("path length", f"{rep['path_length_m']:.0f} m (climb {rep['climb_m']:.0f} m)"),
+            ("flight time", f"{rep['flight_time_s'] / 60:.1f} min (QGC's estimate: {rep['flight_time_qgc_s'] / 60:.1f} min)"),
+            ("highest point", f"{rep['max_altitude_m']:.1f} m above home"),
+            ("area", f"{rep['area_m2']:.0f} m² ({rep['area_m2'] / 10000:.2f} ha)")]
+    for name, n in rep["photos"].items():
+        g = rep["gsd_cm"].get(name)
+        gs = "" if not g else (f", GSD {g[0]:.2f} cm/px" if abs(g[1] - g[0]) < 0.005 else f", GSD {g[0]:.2f}–{g[1]:.2f} cm/px")
+        rows.append((f"photos {name}", f"{n}{gs}"))
+    for name, c in rep["coverage"].items():
+        ov = rep["overlap"][name]
+        f = "–" if ov["front_min"] is None else f"{100 * ov['front_min']:.1f} %"
+        s = "–" if ov["side_min"] is None else f"{100 * ov['side_min']:.1f} %"
+        rows.append((f"coverage {name}", f"{100 * c:.2f} % (minimum overlap: front {f}, side {s})"))
+    for a in rep.get("areas", []):
+        rows.append((f"step {a['step']} {a['kind']}", f"{a['area_m2']:.0f} m² at {a['altitude_m']:g} m, "
+                                                      f"{a.get('outside_m', 0):.0f} m flown outside the area"))
+    width = max(len(k) for k, _ in rows)
+    out = [f"{k.ljust(width)}  {v}" for k, v in rows]
+    for w in rep["warnings"]:
+        out.append(f"warning [{w['code']}]: {w['message']}")
+    for e in rep["errors"]:
+        out.append(f"error [{e['code']}]: {e['message']}")
+    if not rep["warnings"] and not rep["errors"]:
+        out.append("no warnings")
+    return "\n".join(out)
+
+
+def error_report(plan_path: str, err: Exception) -> dict:
+    """`check --json` for a plan that does not compile: the binding keys, nothing measured, the errors located."""
+    problems = getattr(err, "problems", None) or [err]
+    errors = [{"code": "plan", "message": getattr(p, "message", str(p)), "where": getattr(p, "where", None),
+               "hint": getattr(p, "hint", None)} for p in problems]
+    return {"plan": plan_path, "firmware": None, "mission_items": 0, "item_limit": None, "parts": 0, "photos": {},
+            "path_length_m": None, "flight_time_s": None, "area_m2": None, "gsd_cm": {}, "coverage": {},
+            "overlap": {}, "warnings": [], "errors": errors}

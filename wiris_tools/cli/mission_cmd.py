@@ -8,3 +8,80 @@ import click
 @click.group()
 def mission() -> None:
     """Capture plans to missions: schema, compile, check, preview, upload, download."""
+
+
+# --- schema, compile, check, preview (the compiler's commands; upload/download live below) -------------------
+
+def _compile(plan: str, firmware: str | None):
+    from missions.compile import compile_plan
+    return compile_plan(plan, firmware=firmware)
+
+
+@mission.command("schema")
+def schema_cmd() -> None:
+    """Print the JSON Schema of the capture-plan format (for editors)."""
+    import json
+
+    from missions.schema import plan_schema
+    click.echo(json.dumps(plan_schema(), indent=2))
+
+
+@mission.command("compile")
+@click.argument("plan", type=click.Path(dir_okay=False))
+@click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="directory for NAME.plan, NAME.waypoints, NAME.geojson, NAME.kml, NAME.setup.json, ...")
+@click.option("--firmware", type=click.Choice(["ardupilot", "px4"]), help="override the plan's vehicle.firmware")
+def compile_cmd(plan: str, out_dir: str, firmware: str | None) -> None:
+    """Compile PLAN.yaml into mission files in a directory (all or nothing)."""
+    from missions.outputs import write_outputs
+    from missions.report import report, simulate, summary_lines
+
+    compiled = _compile(plan, firmware)
+    sim = simulate(compiled)
+    rep = report(compiled, sim, plan_path=plan)
+    paths = write_outputs(compiled, out_dir, rep=rep, sim=sim)
+    for line in summary_lines(rep):
+        click.echo(line)
+    click.echo("wrote:")
+    for p in paths:
+        click.echo(f"  {p}")
+    if rep["errors"]:
+        raise click.exceptions.Exit(1)
+
+
+@mission.command("check")
+@click.argument("plan", type=click.Path(dir_okay=False))
+@click.option("--json", "as_json", is_flag=True, help="print the report as JSON")
+@click.option("--firmware", type=click.Choice(["ardupilot", "px4"]), help="override the plan's vehicle.firmware")
+def check_cmd(plan: str, as_json: bool, firmware: str | None) -> None:
+    """Compile PLAN.yaml in memory and print the measured report (exit 1 when it has errors)."""
+    import json
+
+    from missions.errors import PlanError
+    from missions.report import error_report, format_report, report
+
+    try:
+        rep = report(_compile(plan, firmware), plan_path=plan)
+    except PlanError as err:
+        if not as_json:
+            raise
+        click.echo(json.dumps(error_report(plan, err), indent=1))
+        click.echo(f"error: {err}", err=True)
+        raise click.exceptions.Exit(1)
+    click.echo(json.dumps(rep, indent=1, allow_nan=False) if as_json else format_report(rep))
+    if rep["errors"]:
+        raise click.exceptions.Exit(1)
+
+
+@mission.command("preview")
+@click.argument("plan", type=click.Path(dir_okay=False))
+@click.option("-o", "--output", "out", required=True, type=click.Path(dir_okay=False),
+              help="FILE.svg, FILE.png or FILE.html")
+@click.option("--firmware", type=click.Choice(["ardupilot", "px4"]), help="override the plan's vehicle.firmware")
+def preview_cmd(plan: str, out: str, firmware: str | None) -> None:
+    """Draw the compiled mission: area, path, photo footprints, scale, legend."""
+    from missions.preview import write_preview
+
+    click.echo(f"wrote {write_preview(_compile(plan, firmware), out)}")
+
+# --- end of the compiler's commands ----------------------------------------------------------------------------
