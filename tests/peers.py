@@ -134,15 +134,41 @@ class _Worker:
 
 
 def mavsdk_load_definitions(definitions: Sequence[bytes], workdir: Path, *, wait_s: float = 12.0,
-                            job_timeout_s: float = 40.0) -> list[MavsdkResult]:
-    """Load each definition into MAVSDK's camera plugin from a fake camera over HTTP, one after another
-    in one worker process (restarted after a crash). `workdir` becomes the worker's HOME and TMPDIR."""
+                            job_timeout_s: float = 40.0, workers: int = 2) -> list[MavsdkResult]:
+    """Load each definition into MAVSDK's camera plugin from a fake camera over HTTP. Files are split over
+    `workers` worker processes, each loading its share one after another (restarted after a crash);
+    `workdir/wN` becomes worker N's HOME and TMPDIR. Results come back in input order."""
+    defs = list(definitions)
+    workers = max(1, min(workers, len(defs)))
+    if workers == 1:
+        return _load_serial(defs, Path(workdir) / "w0", 0, wait_s, job_timeout_s)
+    shares = [list(range(i, len(defs), workers)) for i in range(workers)]
+    out: list[MavsdkResult | None] = [None] * len(defs)
+
+    def run(n: int) -> None:
+        res = _load_serial([defs[i] for i in shares[n]], Path(workdir) / f"w{n}", n, wait_s, job_timeout_s)
+        for i, r in zip(shares[n], res):
+            out[i] = r
+
+    threads = [threading.Thread(target=run, args=(n,)) for n in range(workers)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    missing = [i for i, r in enumerate(out) if r is None]
+    if missing:
+        raise RuntimeError(f"MAVSDK harness produced no result for definitions {missing}")
+    return out  # type: ignore[return-value]
+
+
+def _load_serial(definitions: Sequence[bytes], workdir: Path, tag: int, wait_s: float,
+                 job_timeout_s: float) -> list[MavsdkResult]:
     workdir = Path(workdir)
     home, tmp, files = workdir / "home", workdir / "tmp", workdir / "defs"
     for d in (home, tmp, files):
         d.mkdir(parents=True, exist_ok=True)
     env = dict(os.environ, HOME=str(home), TMPDIR=str(tmp), MAVLINK20="1")
-    stamp = f"{os.getpid() % 10000}{time.monotonic_ns() % 100000}"
+    stamp = f"{os.getpid() % 10000}{time.monotonic_ns() % 100000}w{tag}"
     results: list[MavsdkResult] = []
     worker: _Worker | None = None
     try:
@@ -164,7 +190,8 @@ def mavsdk_load_definitions(definitions: Sequence[bytes], workdir: Path, *, wait
                                             file_parameters=names, log=stray))
                 continue
             log = "\n".join(res.get("log", [])) + ("\n" + stray if stray else "")
-            known = {n for n, v in res.get("known", {}).items() if v is not None}
+            # parsed = answers get_setting, or was requested from the camera by name
+            known = {n for n, v in res.get("known", {}).items() if v is not None} | set(res.get("requested", ()))
             results.append(MavsdkResult(
                 accepted=res["outcome"] == "accepted", crashed=False, outcome=res["outcome"],
                 settings={k: tuple(v) for k, v in res.get("settings", {}).items()},
@@ -197,3 +224,55 @@ def mavproxy_load_definition(xml_bytes: bytes) -> MavproxyResult:
         return MavproxyResult(False, f"controls(): {type(err).__name__}: {err}", parameters=tuple(cd.parameters))
     settings = {name: tuple(v for _label, v in opts) for name, opts in controls.items()}
     return MavproxyResult(True, None, settings, tuple(cd.parameters))
+
+
+# ---- corpus agreement: the real parsers vs the validator's profiles ----------------------------------------
+
+# Rules whose finding means "MAVSDK silently skips this parameter" (reference §4.3, measured §D).
+MAVSDK_DROP_RULES = frozenset({"CDF112", "CDF113", "CDF119", "CDF123", "CDF127", "CDF203"})
+
+
+@dataclass(frozen=True)
+class AgreementRow:
+    file: str
+    mavsdk: MavsdkResult
+    mavproxy: MavproxyResult
+    reports: dict  # profile -> cdf.validate.Report
+    predicted_drops: tuple[str, ...]
+
+    def mavsdk_cell(self) -> str:
+        if self.mavsdk.crashed:
+            return "crash"
+        if not self.mavsdk.accepted:
+            return self.mavsdk.outcome.replace("rejected", "rejects")
+        return f"drops {len(self.mavsdk.dropped)}" if self.mavsdk.dropped else "accepts"
+
+    def profile_cell(self, profile: str) -> str:
+        r = self.reports[profile]
+        return "valid" if r.valid else "ERR " + ",".join(sorted(r.rules("error")))
+
+
+def corpus_agreement(paths: Sequence[Path], workdir: Path, *, workers: int = 3) -> list[AgreementRow]:
+    from cdf.validate import PROFILES, validate_bytes
+
+    datas = [Path(p).read_bytes() for p in paths]
+    msdk = mavsdk_load_definitions(datas, workdir, workers=workers)
+    rows = []
+    for path, data, m in zip(paths, datas, msdk):
+        reports = {prof: validate_bytes(data, Path(path).name, prof) for prof in PROFILES}
+        drops = {f.parameter for f in reports["mavsdk"].findings
+                 if f.rule in MAVSDK_DROP_RULES and f.parameter is not None}
+        predicted = tuple(n for n in m.file_parameters if n in drops)
+        rows.append(AgreementRow(Path(path).name, m, mavproxy_load_definition(data), reports, predicted))
+    return rows
+
+
+def format_agreement(rows: Sequence[AgreementRow]) -> str:
+    head = ("file", "MAVSDK", "MAVProxy", "qgc", "mavsdk", "strict")
+    body = [(r.file, r.mavsdk_cell(), "accepts" if r.mavproxy.accepted else "rejects",
+             r.profile_cell("qgc"), r.profile_cell("mavsdk"), r.profile_cell("strict")) for r in rows]
+    widths = [max(len(x[i]) for x in [head, *body]) for i in range(len(head))]
+    lines = ["| " + " | ".join(c.ljust(w) for c, w in zip(head, widths)) + " |",
+             "|" + "|".join("-" * (w + 2) for w in widths) + "|"]
+    lines += ["| " + " | ".join(c.ljust(w) for c, w in zip(row, widths)) + " |" for row in body]
+    return "\n".join(lines)

@@ -233,11 +233,14 @@ def run_job(job: dict) -> dict:
             settings[so.setting_id] = [o.option_id for o in so.options]
         known = {}
         for name, _t, _raw in cam.params:
+            before = len(log)
             try:
                 got = camera.get_setting(100, Setting(setting_id=name))
                 known[name] = got.option.option_id
             except CameraError as err:
-                known[name] = None if "Unknown setting" in "\n".join(log[-3:]) else f"error:{err}"
+                # "Unknown setting to get" = not in the parsed definition; other errors (e.g. the setting is
+                # excluded by the current value) still mean MAVSDK parsed it
+                known[name] = None if any("Unknown setting" in x for x in log[before:]) else f"error:{err}"
         return {"outcome": outcome, "settings": settings, "known": known,
                 "requested": sorted(set(cam.requested)), "log": log, "events": events}
     finally:
