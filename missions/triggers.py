@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Sequence
+from typing import NamedTuple, Sequence
 
 import numpy as np
 
@@ -24,8 +24,10 @@ import numpy as np
 _REL_TOL = 1e-9
 
 
-@dataclass(frozen=True)
-class PhotoPoint:
+class PhotoPoint(NamedTuple):
+    """One photo. A NamedTuple, not a frozen dataclass: a 100 km² survey has ~10^6 of them and a frozen
+    dataclass costs ~3 µs per instance to build against ~0.3 µs here; it is just as immutable."""
+
     x: float
     y: float
     heading_deg: float      # direction of travel, degrees clockwise from north
@@ -115,6 +117,20 @@ def _span_photos(seg: np.ndarray, d: float, at_start: bool, at_stop: bool, span:
                 ref = X
                 if tau >= 1.0:
                     break
+                # once the last photo lies on this straight segment, the straight-line distance is the
+                # distance along it: the remaining photos on the segment are equally spaced (vectorised)
+                step = d / math.sqrt(a)
+                k = int(math.floor((1.0 - tau) / step * (1.0 + _REL_TOL) + _REL_TOL))
+                if k > 0:
+                    ts = tau + step * np.arange(1, k + 1)
+                    ts[-1] = min(ts[-1], 1.0)
+                    xs = p[0] + ts * D[0]
+                    ys = p[1] + ts * D[1]
+                    out.extend(PhotoPoint(x_, y_, hd, span) for x_, y_ in zip(xs.tolist(), ys.tolist()))
+                    tau = float(ts[-1])
+                    ref = p + tau * D
+                    if tau >= 1.0:
+                        break
                 t = tau
     if at_stop:
         end = seg[-1]
