@@ -69,6 +69,20 @@ _NACK_HINTS = {
 }
 
 
+# Answers that end an upload when no further request follows (the others - ERROR,
+# INVALID_SEQUENCE - are ArduPilot's transient complaints and only noted).
+_FATAL_NACKS = frozenset({
+    mavlink2.MAV_MISSION_NO_SPACE, mavlink2.MAV_MISSION_UNSUPPORTED, mavlink2.MAV_MISSION_UNSUPPORTED_FRAME,
+    mavlink2.MAV_MISSION_DENIED, mavlink2.MAV_MISSION_INVALID, mavlink2.MAV_MISSION_OPERATION_CANCELLED,
+    *range(mavlink2.MAV_MISSION_INVALID_PARAM1, mavlink2.MAV_MISSION_INVALID_PARAM7 + 1),
+})
+
+
+def _describe(item: MissionItem) -> str:
+    from wiris_tools.link import command_name
+    return command_name(item.command)
+
+
 @dataclass(frozen=True)
 class Timeouts:
     ack_s: float = 1.5          # spec: waiting for the other side to start/finish
@@ -88,6 +102,10 @@ class TransferResult:
     resent: int = 0             # messages we sent again (lost items, counts, requests)
     nacks_tolerated: int = 0    # error MISSION_ACKs followed by further requests
     notes: tuple[str, ...] = ()
+
+
+class UploadUnconfirmed(LinkError):
+    """Every item was requested and sent, but no ACCEPTED ack arrived: only a read-back can tell."""
 
 
 class RttEstimator:
@@ -209,15 +227,16 @@ class MissionClient:
             raise LinkError(f"{count} items do not fit the protocol's 16-bit count", where=where)
         start = time.monotonic()
         resent = nacks = 0
-        last_nack: tuple[int, int] | None = None      # (result, item seq sent last)
-        nack_at: float | None = None
+        fatal_nack: tuple[int, int] | None = None     # (result, item sent last) awaiting the grace period
+        fatal_at = 0.0
+        last_nack: int | None = None
         sent_at: dict[int, float] = {}                # last transmission time per seq
         first_sent_at: dict[int, float] = {}          # only first transmissions give RTT samples (Karn)
         retransmitted: set[int] = set()
+        pushed: dict[int, int] = {}                 # unsolicited sends per seq
         requested_max = -1
-        last_item: int | None = None                  # the item we answered last
+        last_item: int | None = None                  # the item we sent last
         tries = 0
-        stage_deadline = 0.0
         count_wait = t.first_s
         # A vehicle that keeps asking for the same item forever must not keep us here forever.
         stall_s = (t.retries + 1) * t.ack_s + t.nack_grace_s
@@ -236,91 +255,115 @@ class MissionClient:
             sent_at[seq] = now
             self.link.send(self._encode_item(seq, items[seq], mission_type))
 
+        def rto() -> float:
+            return self.rtt.rto(t.min_rto_s, t.ack_s, t.item_s)
+
+        def unconfirmed(why: str) -> UploadUnconfirmed:
+            return UploadUnconfirmed(f"all {count} items were sent but {why}", where=where,
+                                     hint="the vehicle probably holds the mission: download it, or upload with "
+                                          "--verify, which reads it back and compares")
+
         with self._inbox(["MISSION_REQUEST_INT", "MISSION_REQUEST", "MISSION_ACK"], mission_type) as box:
             send_count()
-            stage_deadline = time.monotonic() + count_wait
+            deadline = time.monotonic() + count_wait
             while True:
                 now = time.monotonic()
-                msg = box.get(max(0.0, stage_deadline - now))
+                if fatal_nack is not None:
+                    deadline = min(deadline, fatal_at + t.nack_grace_s)
+                msg = box.get(max(0.0, deadline - now))
                 now = time.monotonic()
+                if fatal_nack is not None and (now - fatal_at >= t.nack_grace_s
+                                               or (msg is None and tries >= t.retries)):
+                    result, seq = fatal_nack
+                    raise LinkError(f"the vehicle answered {mission_result_name(result)}"
+                                    + (f" to item {seq} ({_describe(items[seq])})" if seq >= 0 else
+                                       f" to MISSION_COUNT ({count} items)"), where=where,
+                                    hint=_NACK_HINTS.get(result, "check the item the error names"))
                 if now - last_progress > stall_s:
-                    raise LinkError(f"no progress for {stall_s:g} s: the vehicle keeps asking for item "
-                                    f"{requested_max} of {count}", where=where,
-                                    hint="the uplink is losing our items; retry the upload or improve the link")
+                    if (count - 1) in sent_at:
+                        raise unconfirmed(f"no MISSION_ACK came within {stall_s:g} s")
+                    raise LinkError(f"no progress for {stall_s:g} s: stuck at item {max(requested_max, 0)} of "
+                                    f"{count}" + (f" (last answer: {mission_result_name(last_nack)})"
+                                                  if last_nack is not None else ""), where=where,
+                                    hint="the link is too lossy or was lost; retry the upload")
                 if msg is None:
-                    if nack_at is not None and now - nack_at >= t.nack_grace_s:
-                        result, seq = last_nack  # type: ignore[misc]
-                        raise LinkError(
-                            f"the vehicle answered {mission_result_name(result)}"
-                            + (f" after item {seq}" if seq is not None and seq >= 0 else " to MISSION_COUNT")
-                            + f" and asked for nothing more within {t.nack_grace_s:g} s", where=where,
-                            hint=_NACK_HINTS.get(result, "retry; if it persists check the item the error names"))
                     if tries >= t.retries:
                         if last_item is None:
                             raise LinkError(f"no request after MISSION_COUNT ({count} items), "
                                             f"{t.retries + 1} tries", where=where,
                                             hint="check the connection, the target system/component, and that "
                                                  "the vehicle supports this mission type")
-                        if requested_max >= count - 1:
-                            raise LinkError(f"all {count} items were sent but the vehicle never acknowledged "
-                                            "the upload", where=where,
-                                            hint="the vehicle may hold the mission anyway: download it or use "
-                                                 "--verify to check")
-                        raise LinkError(f"the vehicle stopped requesting after item {last_item} of {count}",
+                        if (count - 1) in sent_at:
+                            raise unconfirmed("the vehicle never acknowledged the upload")
+                        raise LinkError(f"the vehicle stopped requesting after item {last_item} of {count}"
+                                        + (f" (last answer: {mission_result_name(last_nack)})"
+                                           if last_nack is not None else ""),
                                         where=where, hint="the link is too lossy or was lost; retry the upload")
                     tries += 1
                     resent += 1
                     if last_item is None:
                         send_count()
                         count_wait = min(count_wait * 2, t.ack_s)
-                        stage_deadline = now + count_wait
+                        deadline = now + count_wait
                     else:
+                        # Fast retransmit: the vehicle's next request is overdue.
                         send_item(last_item)
-                        rto = self.rtt.rto(t.min_rto_s, t.ack_s, t.item_s)
-                        stage_deadline = now + min(rto * (2 ** tries), t.ack_s)
-                    if nack_at is not None:
-                        stage_deadline = min(stage_deadline, nack_at + t.nack_grace_s)
+                        deadline = now + min(rto() * (2 ** tries), t.ack_s)
                     continue
-                mtype = msg.get_type()
-                if mtype == "MISSION_ACK":
+                if msg.get_type() == "MISSION_ACK":
                     if msg.type == mavlink2.MAV_MISSION_ACCEPTED:
-                        if requested_max >= count - 1:
+                        if (count - 1) in sent_at:
                             if progress:
                                 progress(count, count)
                             return TransferResult(mission_type, count, time.monotonic() - start,
                                                   opaque_id_of(msg), resent, nacks)
                         continue  # stale: an ack from an earlier transfer
                     nacks += 1
-                    last_nack = (msg.type, last_item if last_item is not None else -1)
-                    if nack_at is None:
-                        nack_at = now
-                        stage_deadline = min(stage_deadline, now + t.nack_grace_s)
+                    last_nack = msg.type
+                    if msg.type in _FATAL_NACKS:
+                        # Still not believed at once (a stale ack of an earlier transfer looks the
+                        # same): fatal only if the vehicle asks for nothing more.
+                        if fatal_nack is None:
+                            fatal_nack = (msg.type, last_item if last_item is not None else -1)
+                            fatal_at = now
+                        continue
+                    if msg.type == mavlink2.MAV_MISSION_INVALID_SEQUENCE and last_item is not None \
+                            and last_item == requested_max:
+                        # ArduPilot answers an item it no longer expects this way: it already has
+                        # `last_item` and its request for the next one was lost.
+                        if last_item == count - 1 and last_item in retransmitted:
+                            raise unconfirmed("the final MISSION_ACK was lost (the vehicle no longer expects "
+                                              "items)")
+                        nxt = last_item + 1
+                        if nxt < count and pushed.get(nxt, 0) < 3 and (nxt not in sent_at or nxt in pushed):
+                            # Push the next item rather than wait for the vehicle's re-request
+                            # timer (1 s on ArduPilot); if we guessed wrong it answers with one
+                            # more INVALID_SEQUENCE, and nothing else changes.
+                            pushed[nxt] = pushed.get(nxt, 0) + 1
+                            send_item(nxt)
+                            retransmitted.add(nxt)  # no RTT sample from an unsolicited item
                     continue
                 seq = msg.seq
                 if seq >= count:
                     continue  # not ours to answer (another transfer, or a broken vehicle)
-                # Progress from the vehicle: it has everything before `seq`.
+                fatal_nack = None
                 if seq > requested_max:
                     prev = seq - 1
-                    if prev >= 0 and prev in first_sent_at and prev not in retransmitted:
+                    if prev in first_sent_at and prev not in retransmitted:
                         self.rtt.sample(now - first_sent_at[prev])
                     requested_max = seq
                     last_progress = now
                     if progress:
                         progress(seq, count)
-                if nack_at is not None:
-                    nack_at = None
-                    last_nack = None
+                tries = 0
                 srtt = self.rtt.srtt or 0.0
                 if seq == last_item and now - sent_at.get(seq, 0.0) < 0.5 * srtt:
                     continue  # a duplicated request: the answer is already on its way
-                if seq == last_item:
+                if seq in sent_at:
                     resent += 1
-                else:
-                    tries = 0
                 last_item = seq
                 send_item(seq)
-                stage_deadline = now + self.rtt.rto(t.min_rto_s, t.ack_s, t.item_s)
+                deadline = now + rto()
 
     # -- download ------------------------------------------------------------------------------
     def download(self, *, mission_type: int = MISSION_TYPE_MISSION,
@@ -411,9 +454,7 @@ class MissionClient:
         note: tuple[str, ...] = ()
         try:
             up = self.upload(items, mission_type=mission_type, progress=progress)
-        except LinkError as err:
-            if "never acknowledged" not in err.message:
-                raise
+        except UploadUnconfirmed:
             up = TransferResult(mission_type, len(items), 0.0)
             note = ("the vehicle's final MISSION_ACK never arrived; the read-back below proves the upload",)
         got, down = self.download(mission_type=mission_type)

@@ -1,0 +1,220 @@
+"""Mission transfer against our vehicle-side server over real UDP on 127.0.0.1: round trips of all
+three mission types, legacy requests, NACK tolerance, item limits, verification catching a changed
+item, ArduPilot's home row, stale acks, and clear errors when nobody answers."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from missions.items import (FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MISSION_TYPE_FENCE, MISSION_TYPE_MISSION,
+                            MISSION_TYPE_RALLY, MissionItem)
+from wiris_tools.errors import LinkError
+from wiris_tools.link import Link
+from wiris_tools.transfer import MissionClient, Timeouts, UploadUnconfirmed, compare_items
+from wiris_tools.vehicle_sim import VehicleSim
+
+FAST = Timeouts(ack_s=0.4, item_s=0.1, retries=3, nack_grace_s=0.8, first_s=0.2)
+
+
+def waypoints(n: int, mission_type: int = MISSION_TYPE_MISSION) -> list[MissionItem]:
+    out = []
+    for i in range(n):
+        if i % 7 == 3:
+            out.append(MissionItem(command=mavlink2.MAV_CMD_IMAGE_START_CAPTURE, frame=FRAME_MISSION,
+                                   param2=2.0, param3=0, param4=math.nan, mission_type=mission_type))
+        else:
+            out.append(MissionItem(command=mavlink2.MAV_CMD_NAV_WAYPOINT, frame=FRAME_GLOBAL_RELATIVE_ALT,
+                                   param4=math.nan, x=490000000 + 137 * i, y=160000000 - 91 * i, z=50.25 + i,
+                                   mission_type=mission_type, current=int(i == 0)))
+    return out
+
+
+@pytest.fixture(params=["ardupilot", "px4"])
+def vehicle(request):
+    with VehicleSim(flavour=request.param, heartbeat_s=0.2) as sim, \
+            Link(f"udpout:127.0.0.1:{sim.port}", heartbeat_s=0.2) as link:
+        link.wait_heartbeat(timeout=3, system=1)
+        yield sim, MissionClient(link, 1, 1)
+
+
+def test_mission_round_trip_is_identical(vehicle):
+    sim, client = vehicle
+    items = waypoints(60)
+    seen = []
+    up = client.upload(items, progress=lambda done, total: seen.append((done, total)))
+    assert up.count == 60 and up.opaque_id != 0
+    assert all(a.same_on_wire(b) for a, b in zip(items, sim.items()))
+    got, down = client.download()
+    compare_items(items, got)
+    assert down.opaque_id == up.opaque_id
+    assert seen[-1] == (60, 60) and [d for d, _ in seen] == sorted(d for d, _ in seen)
+
+
+@pytest.mark.parametrize("kind", [MISSION_TYPE_FENCE, MISSION_TYPE_RALLY])
+def test_fence_and_rally_lists_are_separate(vehicle, kind):
+    sim, client = vehicle
+    client.upload(waypoints(5))
+    other = [MissionItem(command=mavlink2.MAV_CMD_NAV_RALLY_POINT if kind == MISSION_TYPE_RALLY
+                         else mavlink2.MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION, param1=150.0, x=490000000, y=160000000,
+                         mission_type=kind)]
+    client.upload_verified(other, mission_type=kind)
+    assert len(sim.items(MISSION_TYPE_MISSION)) == 5 and len(sim.items(kind)) == 1
+
+
+def test_legacy_mission_request_is_answered_with_the_int_item():
+    # The ArduPilot flavour requests with MISSION_REQUEST and refuses float MISSION_ITEMs, so a
+    # completed upload proves the INT item went out for every legacy request.
+    with VehicleSim(flavour="ardupilot", legacy_requests=True) as sim, \
+            Link(f"udpout:127.0.0.1:{sim.port}") as link:
+        MissionClient(link).upload(waypoints(12))
+        assert sim.stats["items"] == 12 and sim.stats["nacks"] == 0
+
+
+def test_transient_nacks_are_tolerated():
+    with VehicleSim(flavour="ardupilot", nack_rate=0.3, seed=4, rerequest_s=0.1) as sim, \
+            Link(f"udpout:127.0.0.1:{sim.port}") as link:
+        items = waypoints(30)
+        result = MissionClient(link).upload_verified(items)
+        assert result.nacks_tolerated > 0 and sim.stats["nacks"] > 0
+        compare_items(items, sim.items())
+
+
+def test_px4_item_limit_gives_no_space_with_a_hint():
+    with VehicleSim(flavour="px4", item_limit=20) as sim, Link(f"udpout:127.0.0.1:{sim.port}") as link:
+        with pytest.raises(LinkError) as err:
+            MissionClient(link, timeouts=FAST).upload(waypoints(21))
+        assert "MAV_MISSION_NO_SPACE" in str(err.value) and "fewer items" in str(err.value)
+        assert sim.items() == []
+
+
+class TamperingSim(VehicleSim):
+    """Stores what it got but reports item 4 with another altitude - a vehicle that rounds or loses."""
+
+    def _download_view(self, kind):
+        items = list(super()._download_view(kind))
+        if len(items) > 4:
+            items[4] = items[4].with_(z=items[4].z + 0.5)
+        return items
+
+
+def test_verify_names_the_first_differing_item_and_field():
+    with TamperingSim(flavour="px4") as sim, Link(f"udpout:127.0.0.1:{sim.port}") as link:
+        with pytest.raises(LinkError) as err:
+            MissionClient(link).upload_verified(waypoints(8))
+    assert "item 4 differs in z" in str(err.value)
+
+
+def test_ardupilot_home_row_is_not_a_difference():
+    home = MissionItem(command=mavlink2.MAV_CMD_NAV_WAYPOINT, frame=0, x=491111111, y=161111111, z=312.0)
+    with VehicleSim(flavour="ardupilot", home=home) as sim, Link(f"udpout:127.0.0.1:{sim.port}") as link:
+        link.wait_heartbeat(timeout=3, system=1)
+        client = MissionClient(link)
+        client.upload_verified(waypoints(6))
+        got, _ = client.download()
+        assert got[0].x == home.x  # the vehicle really reports its home in item 0
+        with pytest.raises(LinkError, match="item 0 differs"):
+            compare_items(waypoints(6), got)
+
+
+def test_compare_items_float32_nan_and_length():
+    a = MissionItem(command=16, param1=0.1, param4=math.nan, z=10.0)
+    compare_items([a], [a.with_(param1=0.100000001)])          # equal as float32
+    with pytest.raises(LinkError, match="item 0 differs in param4"):
+        compare_items([a], [a.with_(param4=0.0)])
+    with pytest.raises(LinkError, match="holds 0 items, 1 were sent"):
+        compare_items([a], [])
+
+
+def test_no_vehicle_is_a_clear_error():
+    with Link("udpout:127.0.0.1:9", heartbeat_s=0) as link:   # discard port: nobody answers
+        with pytest.raises(LinkError) as err:
+            MissionClient(link, timeouts=FAST).upload(waypoints(3))
+        assert "no request after MISSION_COUNT" in str(err.value)
+        with pytest.raises(LinkError, match="no MISSION_COUNT"):
+            MissionClient(link, timeouts=FAST).download()
+
+
+def test_empty_upload_is_refused():
+    with Link("udpout:127.0.0.1:9", heartbeat_s=0) as link:
+        with pytest.raises(LinkError, match="empty"):
+            MissionClient(link).upload([])
+
+
+def scripted_vehicle(script):
+    """A raw vehicle on a Link: `script(link, msg)` answers each mission message."""
+    veh = Link("udpin:127.0.0.1:0", system=1, component=1, mav_type=mavlink2.MAV_TYPE_QUADROTOR,
+               autopilot=mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA, heartbeat_s=0.2)
+    veh.subscribe(lambda m: script(veh, m), ["MISSION_COUNT", "MISSION_ITEM_INT"], to_me=True)
+    return veh
+
+
+def test_stale_accepted_ack_does_not_end_an_upload():
+    got = []
+
+    def script(veh, m):
+        src = (m.get_srcSystem(), m.get_srcComponent())
+        if m.get_type() == "MISSION_COUNT":
+            veh.send(veh.mav.mission_ack_encode(*src, mavlink2.MAV_MISSION_ACCEPTED, 0))   # stale
+            veh.send(veh.mav.mission_request_int_encode(*src, 0, 0))
+        else:
+            got.append(m.seq)
+            nxt = m.seq + 1
+            if nxt < 4:
+                veh.send(veh.mav.mission_request_int_encode(*src, nxt, 0))
+            else:
+                veh.send(veh.mav.mission_ack_encode(*src, mavlink2.MAV_MISSION_ACCEPTED, 0))
+
+    veh = scripted_vehicle(script)
+    try:
+        with Link(f"udpout:127.0.0.1:{veh.local_port}") as link:
+            MissionClient(link).upload(waypoints(4))
+        assert got == [0, 1, 2, 3]
+    finally:
+        veh.close()
+
+
+def test_fatal_nack_without_further_requests_names_the_item():
+    def script(veh, m):
+        src = (m.get_srcSystem(), m.get_srcComponent())
+        if m.get_type() == "MISSION_COUNT":
+            veh.send(veh.mav.mission_request_int_encode(*src, 0, 0))
+        elif m.seq == 0:
+            veh.send(veh.mav.mission_request_int_encode(*src, 1, 0))
+        else:
+            veh.send(veh.mav.mission_ack_encode(*src, mavlink2.MAV_MISSION_UNSUPPORTED, 0))
+
+    veh = scripted_vehicle(script)
+    try:
+        with Link(f"udpout:127.0.0.1:{veh.local_port}") as link:
+            with pytest.raises(LinkError) as err:
+                MissionClient(link, timeouts=FAST).upload(waypoints(3))
+        text = str(err.value)
+        assert "MAV_MISSION_UNSUPPORTED to item 1 (MAV_CMD_NAV_WAYPOINT)" in text and "firmware" in text
+    finally:
+        veh.close()
+
+
+def test_lost_final_ack_is_unconfirmed_and_verify_settles_it():
+    """ArduPilot answers a repeated last item with INVALID_SEQUENCE once it is done; if its
+    ACCEPTED ack was lost, upload says 'unconfirmed' and upload_verified proves it by read-back."""
+    state = {"drop": 1}
+    with VehicleSim(flavour="ardupilot") as sim:
+        original = sim._ack
+
+        def drop_one_accept(to, result, kind, opaque=0):
+            if result == mavlink2.MAV_MISSION_ACCEPTED and state["drop"] > 0:
+                state["drop"] -= 1
+                return
+            original(to, result, kind, opaque)
+
+        sim._ack = drop_one_accept
+        with Link(f"udpout:127.0.0.1:{sim.port}") as link:
+            client = MissionClient(link, timeouts=FAST)
+            with pytest.raises(UploadUnconfirmed):
+                client.upload(waypoints(5))
+            state["drop"] = 1
+            result = client.upload_verified(waypoints(5))
+            assert "verified" in result.notes and any("final MISSION_ACK" in n for n in result.notes)
