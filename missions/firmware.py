@@ -149,3 +149,94 @@ def check_items(items: tuple[MissionItem, ...] | list[MissionItem], prof: Firmwa
         # MISSION_ITEM_INT carries params 5/6 as int32: no NaN, no fractions (reference §4.2)
         if not (isinstance(it.x, int) and isinstance(it.y, int)) or not (-2**31 <= it.x < 2**31 and -2**31 <= it.y < 2**31):
             raise PlanError("params 5/6 (x/y) must be int32 in MISSION_ITEM_INT", where=here)
+
+
+# ------------------------------------------------------------------------------------------- item limits
+
+_TRIGGER_STATE = (C.MAV_CMD_DO_SET_CAM_TRIGG_DIST, C.MAV_CMD_DO_SET_CAM_TRIGG_INTERVAL, C.MAV_CMD_DO_TRIGGER_CONTROL)
+_POSITIONAL = (C.MAV_CMD_NAV_WAYPOINT, C.MAV_CMD_NAV_LOITER_TIME, C.MAV_CMD_NAV_TAKEOFF, C.MAV_CMD_NAV_VTOL_TAKEOFF)
+
+
+def _camera_on(state: dict[int, MissionItem]) -> bool:
+    d = state.get(C.MAV_CMD_DO_SET_CAM_TRIGG_DIST)
+    t = state.get(C.MAV_CMD_DO_TRIGGER_CONTROL)
+    return bool((d is not None and d.param1 > 0) or (t is not None and t.param1 == 1))
+
+
+def _resume_prefix(last_nav: MissionItem, speed: MissionItem | None, trig: dict[int, MissionItem]) -> list[MissionItem]:
+    """What a part needs to continue where the previous one stopped: speed, the stop position, camera state."""
+    out = []
+    if speed is not None:
+        out.append(speed.with_(comment="resume: survey speed"))
+    out.append(MissionItem(command=C.MAV_CMD_NAV_WAYPOINT, frame=last_nav.frame, param4=float("nan"),
+                           x=last_nav.x, y=last_nav.y, z=last_nav.z, comment="resume: where the previous part ended"))
+    if _camera_on(trig):
+        for cmd in _TRIGGER_STATE:
+            it = trig.get(cmd)
+            if it is not None:
+                # no extra photo on resume: the previous part's last photo is already there
+                out.append(it.with_(param3=0.0, comment="resume: camera trigger as it was")
+                           if cmd == C.MAV_CMD_DO_SET_CAM_TRIGG_DIST else it.with_(comment="resume: camera trigger"))
+    return out
+
+
+def _suffix(last_nav: MissionItem, trig: dict[int, MissionItem]) -> list[MissionItem]:
+    """End of a non-final part: camera off and wait in place (ArduPlane would fly home on mission end)."""
+    out = []
+    if _camera_on(trig):
+        if C.MAV_CMD_DO_SET_CAM_TRIGG_DIST in trig and trig[C.MAV_CMD_DO_SET_CAM_TRIGG_DIST].param1 > 0:
+            out.append(MissionItem(command=C.MAV_CMD_DO_SET_CAM_TRIGG_DIST, frame=C.MAV_FRAME_MISSION,
+                                   comment="part end: camera off"))
+        if C.MAV_CMD_DO_TRIGGER_CONTROL in trig and trig[C.MAV_CMD_DO_TRIGGER_CONTROL].param1 == 1:
+            out.append(MissionItem(command=C.MAV_CMD_DO_TRIGGER_CONTROL, frame=C.MAV_FRAME_MISSION, param2=-1.0,
+                                   param3=-1.0, comment="part end: camera off"))
+    out.append(MissionItem(command=C.MAV_CMD_NAV_LOITER_UNLIM, frame=last_nav.frame, x=last_nav.x, y=last_nav.y,
+                           z=last_nav.z, param4=float("nan"),
+                           comment="part end: wait here, upload the next part, switch to AUTO again"))
+    return out
+
+
+def split_parts(items: tuple[MissionItem, ...], limit: int) -> tuple[tuple[MissionItem, ...], ...]:
+    """`items` as missions of at most `limit` items each. A part ends after a positional NAV item with the
+    camera switched off and NAV_LOITER_UNLIM there (the vehicle waits; ArduPlane would otherwise RTL at mission
+    end); the next part starts with the speed, a waypoint at that position and the camera trigger as it was,
+    then continues. PlanError when no cut fits (a run of items without a positional NAV item longer than the
+    limit allows)."""
+    if len(items) <= limit:
+        return (tuple(items),)
+    parts: list[tuple[MissionItem, ...]] = []
+    start = 0
+    prefix: list[MissionItem] = []
+    speed: MissionItem | None = None
+    trig: dict[int, MissionItem] = {}
+    while True:
+        remaining = len(items) - start
+        if len(prefix) + remaining <= limit:
+            parts.append(tuple(prefix) + tuple(items[start:]))
+            return tuple(parts)
+        # find the last cut (after a positional NAV) that fits with prefix and suffix
+        best = None
+        spd, tr = speed, dict(trig)
+        states = []
+        for j in range(start, len(items)):
+            it = items[j]
+            if it.command == C.MAV_CMD_DO_CHANGE_SPEED:
+                spd = it
+            elif it.command in _TRIGGER_STATE:
+                tr[it.command] = it
+            if it.command in _POSITIONAL and (it.x or it.y):
+                size = len(prefix) + (j - start + 1) + len(_suffix(it, tr))
+                if size <= limit and j > start:
+                    best = j
+                    states.append((j, spd, dict(tr)))
+                elif size > limit:
+                    break
+        if best is None:
+            raise PlanError(f"the mission has {len(items)} items and cannot be split into parts of at most {limit}",
+                            hint="a stretch of the mission has no waypoint to split at within the limit; raise "
+                                 "vehicle.max_mission_items or fly fewer in-flight camera changes in a row")
+        _, speed, trig = next(s for s in states if s[0] == best)
+        last_nav = items[best]
+        parts.append(tuple(prefix) + tuple(items[start:best + 1]) + tuple(_suffix(last_nav, trig)))
+        prefix = _resume_prefix(last_nav, speed, trig)
+        start = best + 1

@@ -1,0 +1,229 @@
+"""compile_plan: capture plan -> Compiled (mission items, parts, setup sequence, Lua bridge, params, warnings).
+
+    compiled = compile_plan("plan.yaml")                 # the plan's firmware
+    compiled = compile_plan(plan, firmware="px4")        # a loaded Plan, another firmware
+
+Pipeline: load (schema, locations) -> per step: area -> survey/corridor geometry (missions.survey,
+missions.corridor) -> items (missions.emit, firmware × camera) -> firmware check (missions.firmware) ->
+item limit / parts -> setup sequence (missions.setup) -> Lua bridge (missions.lua) -> autopilot params
+(missions.params) -> warnings. Pure: no sockets, no files written; errors are PlanError with the plan's
+file:line:col.
+
+Warnings are "code: message" strings. Codes: altitude_above_120m, assumed_optics, trigger_interval_near_min,
+area_smaller_than_footprint (and the survey planner's own codes), no_takeoff, component_id_chosen,
+no_optics, mission_split, px4_single_capture_all.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from missions.compiled import AreaInfo, Compiled, PayloadInfo
+from missions.emit import Emitter, Track, TrackPoint, HOVER_HOLD_S
+from missions.errors import PlanError
+from missions.firmware import check_items, profile, split_parts
+from missions.plan import (CameraStep, CorridorStep, LandStep, Plan, RtlStep, SurveyStep, TakeoffStep, WaypointStep,
+                           load_plan)
+from missions.schema import MAX_ALTITUDE_M, MIN_ALTITUDE_M
+from missions import optics
+
+MAX_AGL_M = 120.0            # the common regulatory ceiling without a permit (EU open category, US Part 107)
+NEAR_MIN_INTERVAL = 1.2      # warn when photos come less than 20 % slower than the camera's minimum
+TURNAROUND_DEFAULT_M = {"copter": 10.0, "plane": 30.0, "vtol": 30.0}   # QGC's defaults (survey-planners §1.4)
+
+
+def _relocate(err: PlanError, where: str) -> PlanError:
+    """Geometry errors name a field ("overlap.front") or nothing; give them the plan's file:line:col."""
+    w = err.where
+    if w is None or (":" not in w and "/" not in w and not w.endswith((".kml", ".geojson", ".json"))):
+        new = PlanError(err.message, where=where + (f" ({w})" if w else ""), hint=err.hint)
+        return new
+    return err
+
+
+def _rededge_tolerance(alts: list[float]) -> tuple[float, float]:
+    """operatingAlt and opAltTolerance covering every survey altitude the RedEdge flies. The tolerance keeps it
+    from shooting while climbing; a quarter of the altitude (at least 10 m) is our choice, not MicaSense's."""
+    lo, hi = min(alts), max(alts)
+    mid = (lo + hi) / 2.0
+    return mid, (hi - lo) / 2.0 + max(10.0, 0.25 * mid)
+
+
+def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -> Compiled:
+    from cdf.catalogue import catalogue
+    from missions.lua import render_script
+    from missions.params import autopilot_params
+    from missions.setup import RedEdgeSurvey, setup_steps
+
+    plan = path_or_plan if isinstance(path_or_plan, Plan) else load_plan(path_or_plan)
+    fw = firmware or plan.vehicle.firmware
+    prof = profile(fw)
+    cat = catalogue()
+    cameras = {p.name: cat.get(p.camera) for p in plan.payloads}
+    components = {p.name: p.component_id for p in plan.payloads}
+    warnings: list[str] = [f"component_id_chosen: {n}" for n in plan.notes]
+
+    # ArduPilot drives each WIRIS as an AP_Camera instance (CAMn_TYPE 6); the RedEdge is not one (it triggers
+    # itself). PX4 addresses cameras by component id instead.
+    wiris = [p.name for p in plan.payloads if cameras[p.name].protocol != "rededge-serial"]
+    instances = {name: i + 1 for i, name in enumerate(wiris)}
+    if len(wiris) > prof.max_camera_instances:
+        raise PlanError(f"{prof.title} drives at most {prof.max_camera_instances} MAVLink cameras (CAM1..CAM"
+                        f"{prof.max_camera_instances}); the plan has {len(wiris)}", where=plan.where("payloads"),
+                        hint="fly fewer WIRIS payloads")
+
+    # optics, per payload; an unknown imager is an error only where a footprint is needed
+    infos: dict[str, PayloadInfo] = {}
+    optics_errors: dict[str, PlanError] = {}
+    for p in plan.payloads:
+        try:
+            info, warn = optics.payload_info(p, cameras[p.name], where=plan.where("payloads", p.name))
+            infos[p.name] = info
+            warnings.extend(warn)
+        except PlanError as e:
+            optics_errors[p.name] = e
+
+    em = Emitter(prof, plan.vehicle.frame, plan.vehicle.speed_mps, (plan.home.lat, plan.home.lon), cameras,
+                 components, instances)
+    areas: list[AreaInfo] = []
+    intent: list[Any] = []
+    rededge_alts: dict[str, list[float]] = {}
+    rededge_overlap: dict[str, tuple[float, float]] = {}
+    altitudes: list[tuple[float, str]] = []
+    speed = plan.vehicle.speed_mps
+    if not any(isinstance(s, TakeoffStep) for s in plan.mission):
+        warnings.append("no_takeoff: the mission has no takeoff step; it must be started with the vehicle in the air")
+
+    for step in plan.mission:
+        here = plan.step_where(step)
+        if isinstance(step, TakeoffStep):
+            em.takeoff(step.alt_m)
+            altitudes.append((step.alt_m, plan.step_where(step, "alt_m")))
+        elif isinstance(step, (SurveyStep, CorridorStep)):
+            kind = "survey" if isinstance(step, SurveyStep) else "corridor"
+            lead = step.payloads[0]
+            if lead in optics_errors:
+                e = optics_errors[lead]
+                raise PlanError(f"{kind} lines need {lead}'s footprint: {e.message}",
+                                where=plan.step_where(step, "payloads", 0), hint=e.hint)
+            info = infos[lead]
+            if step.altitude_m is not None:
+                alt = step.altitude_m
+            else:
+                alt = optics.altitude_for_gsd(info, step.gsd_cm)
+                if not MIN_ALTITUDE_M <= alt <= MAX_ALTITUDE_M:
+                    raise PlanError(f"gsd_cm {step.gsd_cm:g} needs {alt:.1f} m above ground with {lead}'s optics, "
+                                    f"outside {MIN_ALTITUDE_M:g}..{MAX_ALTITUDE_M:g} m",
+                                    where=plan.step_where(step, "gsd_cm"), hint="choose another GSD")
+            altitudes.append((alt, plan.step_where(step, "altitude_m" if step.altitude_m is not None else "gsd_cm")))
+            fp = optics.footprint(info, alt)
+            trig = optics.trigger_m(info, alt, step.front_pct)
+            where_speed = plan.step_where(step, "overlap", "front")
+            moving = step.trigger != "hover"
+            interval = optics.check_interval(info, trig, speed, where=where_speed) if moving else None
+            for other in step.payloads[1:]:
+                if cameras[other].protocol == "rededge-serial":
+                    # its own overlap mode: its own footprint and the plan's front overlap, at the same speed
+                    if other in infos:
+                        optics.check_interval(infos[other], optics.trigger_m(infos[other], alt, step.front_pct),
+                                              speed, where=where_speed)
+                    rededge_alts.setdefault(other, []).append(alt)
+                    rededge_overlap.setdefault(other, (step.front_pct, step.side_pct))
+                elif other not in infos:
+                    warnings.append(f"no_optics: {other} triggers alongside {lead} but its optics are unknown, "
+                                    "so its coverage cannot be measured")
+                elif moving:
+                    optics.check_interval(infos[other], trig, speed, where=where_speed)
+            if moving:
+                if info.min_interval_s and interval < NEAR_MIN_INTERVAL * info.min_interval_s:
+                    warnings.append(f"trigger_interval_near_min: {lead} shoots every {interval:.2f} s at {here}, close "
+                                    f"to its minimum of {info.min_interval_s:g} s; a gust of tail wind loses photos")
+            turnaround = step.turnaround_m if step.turnaround_m is not None else TURNAROUND_DEFAULT_M[plan.vehicle.frame]
+            start = em.s.last_pos[:2] if em.s.last_pos else (plan.home.lat, plan.home.lon)
+            try:
+                if kind == "survey":
+                    from missions.area import load_area
+                    from missions.survey import plan_survey
+
+                    area = load_area(step.area, exclude=step.exclude, base_dir=plan.base_dir,
+                                     where=plan.step_where(step, "area"))
+                    geo = plan_survey(area, fp, step.front_pct, step.side_pct, angle_deg=step.angle_deg,
+                                      turnaround_m=turnaround, speed_mps=speed,
+                                      min_interval_s=info.min_interval_s, refly_90=step.refly_90,
+                                      hover=step.trigger == "hover", start_latlon=start)
+                else:
+                    from missions.corridor import plan_corridor
+
+                    if step.trigger == "hover":
+                        raise PlanError("corridors are flown with distance or interval triggering",
+                                        where=plan.step_where(step, "trigger"), hint="use trigger: distance")
+                    geo = plan_corridor(step.line, step.width_m, fp, step.front_pct, step.side_pct,
+                                        turnaround_m=turnaround, speed_mps=speed, min_interval_s=info.min_interval_s,
+                                        where=plan.step_where(step, "line"))
+                    area = geo.area
+            except PlanError as e:
+                raise _relocate(e, here) from None
+            hold = max(HOVER_HOLD_S, info.min_interval_s or 0.0)
+            track = Track(points=tuple(TrackPoint(w.lat, w.lon, w.kind) for w in geo.waypoints),
+                          spans=tuple((s.start_index, s.stop_index) for s in geo.camera_spans),
+                          altitude_m=alt, trigger=step.trigger, trigger_distance_m=geo.trigger_distance_m,
+                          interval_s=(geo.trigger_distance_m / speed), hold_s=hold)
+            em.track(track, where=plan.step_where(step, "trigger"))
+            for w in geo.warnings:
+                warnings.append(f"{w.code}: {kind} at {here}: {w.message}")
+            areas.append(AreaInfo(step=step.index, kind=kind, payloads=step.payloads, area=area, altitude_m=alt,
+                                  front_overlap=step.front_pct / 100.0, side_overlap=step.side_pct / 100.0,
+                                  trigger=step.trigger, trigger_distance_m=geo.trigger_distance_m))
+            intent.append(geo)
+        elif isinstance(step, WaypointStep):
+            em.waypoint(step.lat, step.lon, step.alt_m, step.hold_s, step.capture,
+                        where=plan.step_where(step, "capture"))
+            altitudes.append((step.alt_m, plan.step_where(step, "alt_m")))
+        elif isinstance(step, CameraStep):
+            em.camera_change(step.payload, step.values, where=plan.step_where(step, "settings"))
+        elif isinstance(step, RtlStep):
+            em.rtl()
+        elif isinstance(step, LandStep):
+            em.land(step.lat, step.lon, where=here)
+
+    emitted = em.result()
+    warnings.extend(emitted.warnings)
+    items = emitted.items
+    check_items(items, prof)
+    limit = plan.vehicle.max_mission_items or prof.default_item_limit
+    parts = split_parts(items, limit)
+    for k, part in enumerate(parts):
+        check_items(part, prof, where=f"part {k + 1}")
+    if len(parts) > 1:
+        warnings.append(f"mission_split: {len(items)} items exceed {prof.title}'s limit of {limit} "
+                        f"({prof.item_limit_why if not plan.vehicle.max_mission_items else 'vehicle.max_mission_items'})"
+                        f"; split into {len(parts)} parts: each part ends holding position (NAV_LOITER_UNLIM), upload "
+                        "the next and switch to AUTO again; it resumes at that position with speed and camera "
+                        "trigger restored")
+
+    for alt, where in altitudes:
+        if alt > MAX_AGL_M:
+            warnings.append(f"altitude_above_120m: {alt:g} m above home at {where}; most rules allow "
+                            f"{MAX_AGL_M:g} m above ground without a permit (ground assumed flat at home's height)")
+
+    rededge = {}
+    for name, alts in rededge_alts.items():
+        op_alt, tol = _rededge_tolerance(alts)
+        front, side = rededge_overlap[name]
+        rededge[name] = RedEdgeSurvey(op_alt, tol, front, side)
+    setup = setup_steps(plan.payloads, cameras, rededge)
+    lua = render_script(plan.name) if emitted.needs_lua else None
+    params = autopilot_params(prof, plan.payloads, cameras, infos, instances, needs_lua=emitted.needs_lua,
+                              triggers={a.trigger for a in areas})
+    # PayloadInfo only for payloads whose optics are known: the report measures coverage with them
+    payloads = tuple(infos[p.name] for p in plan.payloads if p.name in infos)
+    for name, e in optics_errors.items():
+        if not any(name in a.payloads[:1] for a in areas):
+            warnings.append(f"no_optics: {name}: {e.message}")
+    return Compiled(
+        name=plan.name, firmware=prof.name, frame=plan.vehicle.frame,
+        home=(plan.home.lat, plan.home.lon, plan.home.alt_amsl_m), speed_mps=speed, items=items, parts=parts,
+        item_limit=limit, payloads=payloads, areas=tuple(areas), setup=setup, lua=lua, params=params,
+        warnings=tuple(dict.fromkeys(warnings)), intent=tuple(intent))

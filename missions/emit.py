@@ -1,0 +1,297 @@
+"""Mission items per firmware × camera: the one place that turns planned geometry and plan steps into
+MISSION_ITEM_INT values. Every command choice cites the reference's acceptance matrix
+(shared/reference/autopilots-and-cameras.md §7, survey-planners-and-mission-protocol.md §1.6/§7).
+
+Conventions of every emitted item:
+- positions in FRAME_GLOBAL_RELATIVE_ALT (altitude above home, as the plan gives it); DO/condition items in
+  FRAME_MISSION with params 5/6 as int32 zeros (MISSION_ITEM_INT cannot carry NaN there, reference §4.2);
+- yaw/reserved float params that mean "unchanged" are NaN, as QGroundControl writes them (survey-planners §1.6).
+
+Triggering (one DO_SET_CAM_TRIGG_DIST per camera-on segment triggers every camera: ArduPilot calls
+take_picture() on every AP_Camera instance; PX4's camera_trigger sends to components 100..105; reference §7):
+- distance: DO_SET_CAM_TRIGG_DIST(d, 0, 1) after the entry waypoint (param3 = 1: one photo at once, QGC
+  does the same, survey-planners §1.6), DO_SET_CAM_TRIGG_DIST(0, 0, 0) after the exit waypoint;
+- interval: PX4 only (ArduPilot rejects DO_SET_CAM_TRIGG_INTERVAL at upload): DO_SET_CAM_TRIGG_INTERVAL(ms)
+  + DO_TRIGGER_CONTROL(1) at the entry, DO_TRIGGER_CONTROL(0) at the exit (PX4 camera_trigger, reference §3.2);
+- hover: a waypoint with a hold and one IMAGE_START_CAPTURE(total 1) — on ArduPilot param1 is the AP_Camera
+  instance (0 = all, n = CAMn), on PX4 the target component (common.xml 7..255; PX4 ≥ PR #23115; PX4 turns
+  a single shot into DO_DIGICAM_CONTROL for every camera, reference §3.2).
+- A RedEdge is never triggered by the mission: it takes COMMAND_LONG neither for 203 nor 2000 (reference
+  §0.4); it captures itself in overlap mode (missions.setup) from the GPS the autopilot streams to it.
+
+In-flight camera changes (`camera` steps): PX4 takes SET_CAMERA_MODE and DO_DIGICAM_CONTROL in missions and
+forwards them; ArduPilot takes neither USER_1/2 nor SET_CAMERA_MODE, and its MAVLinkCamV2 backend (CAMx_TYPE 6,
+the one that finds a WIRIS by its MAV_TYPE_CAMERA heartbeat) does not forward DIGICAM settings, so on
+ArduPilot every change goes through the Lua bridge (missions.lua). USER_1/2 on PX4 is an error naming the rule.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import math
+from typing import Any, Sequence
+
+from missions.errors import PlanError
+from missions.firmware import FirmwareProfile, cmd_name
+from missions.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem, deg_to_e7, mavlink
+from missions import lua as bridge
+from missions.setup import commands_for
+
+NAN = math.nan
+TAKEOFF_PITCH_DEG = 15.0       # fixed-wing minimum climb pitch of NAV_TAKEOFF param1 (ArduPlane, PX4)
+HOVER_HOLD_S = 4.0             # QGC's hover-and-capture delay (survey-planners §1.4)
+BRIDGE_PAUSE_S = 1.0           # hold between Lua bridge batches so the 5-item script queue drains
+
+
+@dataclass(frozen=True)
+class TrackPoint:
+    lat: float
+    lon: float
+    kind: str                  # turnaround | entry | exit | via | photo
+
+
+@dataclass(frozen=True)
+class Track:
+    """A survey or corridor as it will be flown: ordered points and the camera-on spans."""
+
+    points: tuple[TrackPoint, ...]
+    spans: tuple[tuple[int, int], ...]          # (entry index, exit index) into points
+    altitude_m: float
+    trigger: str                                # distance | interval | hover
+    trigger_distance_m: float
+    interval_s: float | None = None
+    hold_s: float = HOVER_HOLD_S
+
+
+@dataclass
+class _State:
+    """Mutable bookkeeping of one emission run (local to `Emitter`, never shared)."""
+
+    items: list[MissionItem] = field(default_factory=list)
+    last_pos: tuple[float, float, float] | None = None
+    script_run: int = 0        # script items since the last NAV item
+    lua: bool = False
+    warnings: list[str] = field(default_factory=list)
+    speed_set: bool = False
+
+
+@dataclass(frozen=True)
+class Emitted:
+    items: tuple[MissionItem, ...]
+    needs_lua: bool
+    warnings: tuple[str, ...]
+
+
+def _do(command: int, p1: float = 0.0, p2: float = 0.0, p3: float = 0.0, p4: float = 0.0, x: int = 0, y: int = 0,
+        z: float = 0.0, comment: str = "") -> MissionItem:
+    return MissionItem(command=command, frame=FRAME_MISSION, param1=float(p1), param2=float(p2), param3=float(p3),
+                       param4=float(p4), x=int(x), y=int(y), z=float(z), comment=comment)
+
+
+def _nav(command: int, lat: float, lon: float, alt: float, p1: float = 0.0, p2: float = 0.0, p3: float = 0.0,
+         p4: float = NAN, comment: str = "") -> MissionItem:
+    return MissionItem(command=command, frame=FRAME_GLOBAL_RELATIVE_ALT, param1=float(p1), param2=float(p2),
+                       param3=float(p3), param4=float(p4), x=deg_to_e7(lat), y=deg_to_e7(lon), z=float(alt),
+                       comment=comment)
+
+
+class Emitter:
+    """Builds the item list step by step. One instance per compile (no module-level state)."""
+
+    def __init__(self, profile: FirmwareProfile, frame: str, speed_mps: float, home: tuple[float, float],
+                 cameras: dict[str, Any], component_ids: dict[str, int], instances: dict[str, int]) -> None:
+        self.profile = profile
+        self.frame = frame
+        self.speed_mps = speed_mps
+        self.home = home
+        self.cameras = cameras                  # payload name -> catalogue Camera
+        self.component_ids = component_ids      # payload name -> component id
+        self.instances = instances              # payload name -> ArduPilot CAMn instance (WIRIS only)
+        self.camera_state: dict[str, dict] = {}
+        self.s = _State()
+
+    # ------------------------------------------------------------------------------------------ plumbing
+    def _add(self, item: MissionItem) -> None:
+        self.s.items.append(item)
+        if item.frame != FRAME_MISSION:
+            self.s.script_run = 0
+            if item.x or item.y:
+                self.s.last_pos = (item.lat, item.lon, item.z)
+
+    def result(self) -> Emitted:
+        return Emitted(tuple(self.s.items), self.s.lua, tuple(self.s.warnings))
+
+    # ------------------------------------------------------------------------------------------ steps
+    def takeoff(self, alt_m: float) -> None:
+        lat, lon = self.home
+        if self.frame == "vtol":
+            # NAV_VTOL_TAKEOFF: both stacks take off vertically, then transition toward the next waypoint.
+            self._add(_nav(mavlink.MAV_CMD_NAV_VTOL_TAKEOFF, lat, lon, alt_m, comment="VTOL take-off"))
+        elif self.frame == "plane":
+            self._add(_nav(mavlink.MAV_CMD_NAV_TAKEOFF, lat, lon, alt_m, p1=TAKEOFF_PITCH_DEG,
+                           comment="take-off (param1 minimum pitch)"))
+        else:
+            # ArduCopter climbs where it stands (lat/lon ignored); PX4 uses them: home is where it stands.
+            self._add(_nav(mavlink.MAV_CMD_NAV_TAKEOFF, lat, lon, alt_m, comment="take-off"))
+        self.set_speed()
+
+    def set_speed(self) -> None:
+        # param1 SPEED_TYPE_GROUNDSPEED: the plan's speed is over ground (photo spacing depends on it);
+        # param3 -1 = throttle unchanged.
+        self._add(_do(mavlink.MAV_CMD_DO_CHANGE_SPEED, float(mavlink.SPEED_TYPE_GROUNDSPEED), self.speed_mps, -1.0,
+                      comment=f"survey speed {self.speed_mps:g} m/s"))
+        self.s.speed_set = True
+
+    def track(self, t: Track, where: str | None = None) -> None:
+        if not self.s.speed_set:
+            self.set_speed()
+        if t.trigger == "interval" and not self.profile.interval_trigger:
+            raise PlanError(f"trigger: interval cannot be flown on {self.profile.title}", where=where,
+                            hint=self.profile.rule(mavlink.MAV_CMD_DO_SET_CAM_TRIGG_INTERVAL))
+        starts = {a for a, _ in t.spans}
+        stops = {b for _, b in t.spans}
+        for i, p in enumerate(t.points):
+            if t.trigger == "hover" and p.kind == "photo":
+                self._add(_nav(mavlink.MAV_CMD_NAV_WAYPOINT, p.lat, p.lon, t.altitude_m, p1=t.hold_s,
+                               comment=f"hover {t.hold_s:g} s and shoot"))
+                self._add(self._capture(None, where))
+                continue
+            self._add(_nav(mavlink.MAV_CMD_NAV_WAYPOINT, p.lat, p.lon, t.altitude_m, comment=p.kind))
+            if i in starts and t.trigger != "hover":
+                self._trigger_on(t)
+            if i in stops and t.trigger != "hover":
+                self._trigger_off(t)
+
+    def _trigger_on(self, t: Track, shoot_now: bool = True) -> None:
+        if t.trigger == "interval":
+            ms = round(t.interval_s * 1000.0)
+            self._add(_do(mavlink.MAV_CMD_DO_SET_CAM_TRIGG_INTERVAL, ms, 0.0, 0.0,
+                          comment=f"camera every {ms} ms (PX4 camera_trigger)"))
+            self._add(_do(mavlink.MAV_CMD_DO_TRIGGER_CONTROL, 1.0, -1.0, -1.0, comment="camera trigger on"))
+        else:
+            self._add(_do(mavlink.MAV_CMD_DO_SET_CAM_TRIGG_DIST, t.trigger_distance_m, 0.0, 1.0 if shoot_now else 0.0,
+                          comment=f"camera every {t.trigger_distance_m:.2f} m, one photo now"))
+
+    def _trigger_off(self, t: Track) -> None:
+        if t.trigger == "interval":
+            self._add(_do(mavlink.MAV_CMD_DO_TRIGGER_CONTROL, 0.0, -1.0, -1.0, comment="camera trigger off"))
+        else:
+            self._add(_do(mavlink.MAV_CMD_DO_SET_CAM_TRIGG_DIST, 0.0, 0.0, 0.0, comment="camera off"))
+
+    def waypoint(self, lat: float, lon: float, alt_m: float, hold_s: float, capture: str | None,
+                 where: str | None = None) -> None:
+        self._add(_nav(mavlink.MAV_CMD_NAV_WAYPOINT, lat, lon, alt_m, p1=hold_s,
+                       comment=f"waypoint, hold {hold_s:g} s" if hold_s else "waypoint"))
+        if capture is not None:
+            self._add(self._capture(capture, where))
+
+    def _capture(self, payload: str | None, where: str | None) -> MissionItem:
+        """One photo: IMAGE_START_CAPTURE(total 1). `payload` None = every camera."""
+        if payload is not None and self.cameras[payload].protocol == "rededge-serial":
+            raise PlanError(f"the mission cannot make the RedEdge ({payload}) take a photo", where=where,
+                            hint="the RedEdge takes neither IMAGE_START_CAPTURE nor DO_DIGICAM_CONTROL as "
+                                 "COMMAND_LONG (its serial API has only the DIGICAM_CONTROL message); it captures "
+                                 "itself in overlap or timer mode — capture with a WIRIS payload here")
+        if payload is None:
+            target = 0.0          # 0 = all cameras on both stacks
+            note = "every camera"
+        elif self.profile.camera_target == "instance":
+            target = float(self.instances[payload])
+            note = f"ArduPilot camera instance {int(target)} ({payload})"
+        else:
+            target = float(self.component_ids[payload])
+            note = f"component {int(target)} ({payload})"
+            others = [n for n, c in self.cameras.items() if n != payload and c.protocol != "rededge-serial"]
+            if others:
+                self.s.warnings.append(
+                    f"px4_single_capture_all: PX4 turns a single IMAGE_START_CAPTURE into DO_DIGICAM_CONTROL for "
+                    f"every camera (reference §3.2), so {', '.join(others)} may shoot too at {where or 'a capture'}")
+        return _do(mavlink.MAV_CMD_IMAGE_START_CAPTURE, target, 0.0, 1.0, 0.0, 0, 0, NAN, comment=f"one photo: {note}")
+
+    def camera_change(self, payload: str, values: Sequence[tuple[str, Any]], where: str | None = None) -> None:
+        cam = self.cameras[payload]
+        comp = self.component_ids[payload]
+        if cam.protocol == "rededge-serial":
+            raise PlanError(f"RedEdge ({payload}) settings cannot change in flight", where=where,
+                            hint="they are PARAM_SET messages, which no mission item carries; put them in the "
+                                 "payload's settings (pre-flight)")
+        state = self.camera_state.setdefault(payload, {})
+        cmds = commands_for(cam, values, state)
+        state.update(dict(values))
+        if not cmds:
+            raise PlanError(f"none of these settings reaches {cam.id} by a command", where=where)
+        if self.s.last_pos is None:
+            raise PlanError("an in-flight camera change before the vehicle has a position", where=where,
+                            hint="put settings for the start in the payload's settings (they are applied pre-flight)")
+        for cmd in cmds:
+            if cmd.command in ("MAV_CMD_IMAGE_START_CAPTURE", "MAV_CMD_VIDEO_START_CAPTURE"):
+                keys = ", ".join(cmd.keys)
+                raise PlanError(f"{keys} cannot change in flight", where=where,
+                                hint=f"{cmd.command} carries {keys} and also "
+                                     f"{'takes a photo' if 'IMAGE' in cmd.command else 'starts recording'}; "
+                                     "set it in the payload's settings (pre-flight)")
+            if self.profile.script_messages:
+                self._bridge(cmd, comp, payload)
+            else:
+                self._px4_camera_item(cmd, cam, comp, payload, where)
+
+    def _bridge(self, cmd, comp: int, payload: str) -> None:
+        items = bridge.encode(bridge.BridgeCommand(cmd.command, comp, cmd.params),
+                              comment=f"Lua bridge: {cmd.command.removeprefix('MAV_CMD_')} "
+                                      f"({', '.join(cmd.keys)}) to {payload}")
+        for it in items:
+            if self.s.script_run >= bridge.QUEUE_SIZE:
+                lat, lon, alt = self.s.last_pos
+                self._add(_nav(mavlink.MAV_CMD_NAV_LOITER_TIME, lat, lon, alt, p1=BRIDGE_PAUSE_S, p4=0.0,
+                               comment="pause so the Lua bridge drains its 5-item queue"))
+            self._add(it)
+            self.s.script_run += 1
+        self.s.lua = True
+
+    def _px4_camera_item(self, cmd, cam: Any, comp: int, payload: str, where: str | None) -> None:
+        cid = cmd.command_id
+        if not self.profile.accepts(cid):
+            keys = ", ".join(cmd.keys)
+            raise PlanError(f"{keys} cannot change in flight on {self.profile.title}", where=where,
+                            hint=f"{self.profile.rule(cid)}. Set {keys} in the payload's settings (the pre-flight "
+                                 "sequence sends them as COMMAND_LONG), fly ArduPilot (Lua bridge), or send it "
+                                 "from a companion computer")
+        params = list(cmd.params)
+        if cmd.command == "MAV_CMD_SET_CAMERA_MODE":
+            params[0] = float(comp)      # target camera id = component (PX4 ≥ PR #23115 forwards to it)
+        xy = []
+        for idx in (4, 5):
+            v = params[idx]
+            if v is None:
+                # keep: int32 slots cannot hold NaN; the manual's 0 = keep where the catalogue says so
+                if not self._zero_keeps(cam, cmd.command, idx + 1):
+                    raise PlanError(f"{cmd.command} param {idx + 1} cannot say 'keep' in a mission item",
+                                    where=where, hint="set that setting too, or change it pre-flight")
+                xy.append(0)
+            else:
+                if v != int(v):
+                    raise PlanError(f"{cmd.command} param {idx + 1} = {v} must be whole in a mission item",
+                                    where=where)
+                xy.append(int(v))
+        p = [NAN if v is None else float(v) for v in params]
+        self._add(_do(cid, p[0], p[1], p[2], p[3], xy[0], xy[1], p[6],
+                      comment=f"{cmd.command.removeprefix('MAV_CMD_')} ({', '.join(cmd.keys)}) to {payload}"))
+
+    @staticmethod
+    def _zero_keeps(cam: Any, command: str, param: int) -> bool:
+        slots = [s.command for s in cam.settings if s.command and s.command.cmd == command and s.command.param == param]
+        if command == "MAV_CMD_DO_DIGICAM_CONTROL" and param in (5, 6):
+            return True   # p5 shoot 0 = no photo, p6 command identity unused (manual §6.3.2.2)
+        return bool(slots) and all("0" in s.keep for s in slots)
+
+    def rtl(self) -> None:
+        self._add(MissionItem(command=mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH, frame=FRAME_MISSION,
+                              comment="return to launch"))
+
+    def land(self, lat: float | None, lon: float | None, where: str | None = None) -> None:
+        if lat is None or lon is None:
+            if self.s.last_pos is None:
+                raise PlanError("land needs lat/lon when the vehicle has no position yet", where=where)
+            lat, lon = self.s.last_pos[0], self.s.last_pos[1]
+        cmd = mavlink.MAV_CMD_NAV_VTOL_LAND if self.frame == "vtol" else mavlink.MAV_CMD_NAV_LAND
+        self._add(_nav(cmd, lat, lon, 0.0, comment="land"))

@@ -1,0 +1,135 @@
+"""Autopilot parameters a compiled mission relies on, each with the reason, and the `.params` text.
+
+The serial port numbers are a wiring choice the plan does not know: cameras are placed on TELEM2 (SERIAL2 /
+MAV_1 = TELEM 2) first, then the next ports, and the reason line says so — change the port number to where
+the camera is plugged in. Sources: reference autopilots-and-cameras §2.1 (CAMx_TYPE), §2.4 (MAVLink ports
+and forwarding), §2.5 (streaming position to a camera, FLIR Vue example), §3.2 (PX4 camera_trigger and port
+set-up), §5.1 (RedEdge: MAVLink 1, 57600, GPS_RAW_INT or SYSTEM_TIME + GLOBAL_POSITION_INT); Workswell
+manual §5.2 (UART 57600, MAVLink 2) and §6.1 (GPS messages it geotags with).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Iterable, Mapping
+
+from missions.errors import PlanError
+
+# ArduPilot SERIALn ports tried for cameras, in order: TELEM2, then SERIAL4/5 (GPS2/spare UARTs on most boards).
+ARDUPILOT_PORTS = (2, 4, 5, 6)
+# PX4 MAV_n instances and the port each is put on (MAV_n_CONFIG values: 102 TELEM 2, 103 TELEM 3, 104 TELEM/SERIAL 4).
+PX4_PORTS = ((1, 102, "SER_TEL2_BAUD", "TELEM 2"), (2, 103, "SER_TEL3_BAUD", "TELEM 3"),
+             (3, 104, "SER_TEL4_BAUD", "TELEM 4"))
+
+Param = tuple[str, float, str]
+
+
+def _ardupilot(payloads: list[Any], cameras: Mapping[str, Any], infos: Mapping[str, Any],
+               instances: Mapping[str, int], needs_lua: bool) -> list[Param]:
+    out: list[Param] = []
+    ports = iter(ARDUPILOT_PORTS)
+    for p in payloads:
+        cam = cameras[p.name]
+        try:
+            n = next(ports)
+        except StopIteration:
+            raise PlanError("more cameras than free serial ports in the parameter template",
+                            hint="wire the extra camera by hand") from None
+        port = f"SERIAL{n}"
+        if cam.protocol == "rededge-serial":
+            out += [
+                (f"{port}_PROTOCOL", 1, f"{p.name} (RedEdge) port: MAVLink 1 — the RedEdge speaks only MAVLink v1 "
+                                        f"(serial API); {port} = the port it is wired to"),
+                (f"{port}_BAUD", 57, f"{p.name}: 57600 baud (RedEdge serial API)"),
+                # RedEdge geotags from GPS_RAW_INT (its time_usec sets UTC) or SYSTEM_TIME + GLOBAL_POSITION_INT,
+                # not both: stream GPS_RAW_INT (EXT_STAT group) and ATTITUDE (EXTRA1), nothing position-group.
+                (f"SR{n}_EXT_STAT", 5, f"{p.name}: GPS_RAW_INT at 5 Hz for the RedEdge's overlap mode and geotags"),
+                (f"SR{n}_EXTRA1", 5, f"{p.name}: ATTITUDE at 5 Hz (RedEdge records aircraft attitude)"),
+                (f"SR{n}_POSITION", 0, f"{p.name}: no GLOBAL_POSITION_INT — the RedEdge wants GPS_RAW_INT or "
+                                       "SYSTEM_TIME+GLOBAL_POSITION_INT, not both"),
+                (f"SR{n}_EXTRA3", 0, f"{p.name}: no SYSTEM_TIME (see SR{n}_POSITION)"),
+            ]
+            continue
+        i = instances[p.name]
+        out += [
+            (f"{port}_PROTOCOL", 2, f"{p.name} ({cam.model}) port: MAVLink 2 (Workswell manual §5.2); {port} = the "
+                                    "port it is wired to; not private, so PARAM_EXT settings from the GCS are routed"),
+            (f"{port}_BAUD", 57, f"{p.name}: 57600 baud (Workswell manual §5.2)"),
+            (f"SR{n}_POSITION", 5, f"{p.name}: GLOBAL_POSITION_INT at 5 Hz, which the camera geotags with (manual §6.1)"),
+            (f"CAM{i}_TYPE", 6, f"{p.name} is camera instance {i}: MAVLinkCamV2 — ArduPilot finds it by its "
+                                "MAV_TYPE_CAMERA heartbeat and sends IMAGE_START_CAPTURE per trigger (reference "
+                                "§2.1). If it is not found (heartbeat type unverified for WIRIS, reference §8), use 5: "
+                                "MAVLink, DO_DIGICAM_CONTROL to components with the autopilot's system id"),
+        ]
+        info = infos.get(p.name)
+        if info is not None and info.min_interval_s:
+            out.append((f"CAM{i}_INTRVAL_MIN", float(info.min_interval_s),
+                        f"{p.name}: never trigger faster than the camera's minimum capture interval "
+                        f"({info.min_interval_s:g} s, catalogue)"))
+    if needs_lua:
+        out.append(("SCR_ENABLE", 1, "Lua scripting on: the mission changes camera settings through the generated "
+                                     "bridge script (copy NAME.lua to APM/scripts/, reboot)"))
+    return out
+
+
+def _px4(payloads: list[Any], cameras: Mapping[str, Any], triggers: set[str]) -> list[Param]:
+    if {"distance", "interval"} <= triggers:
+        raise PlanError("PX4 has one TRIG_MODE: this plan mixes distance and interval triggering",
+                        hint="use the same trigger for every survey and corridor")
+    mode = 1 if "interval" in triggers else 4
+    out: list[Param] = [
+        ("TRIG_INTERFACE", 3, "camera_trigger sends MAVLink (IMAGE_START_CAPTURE + DO_DIGICAM_CONTROL to "
+                              "components 100..105; reference §3.2)"),
+        ("TRIG_MODE", mode, "time based, on command (DO_SET_CAM_TRIGG_INTERVAL)" if mode == 1 else
+                            "distance based, on command (DO_SET_CAM_TRIGG_DIST in the mission)"),
+    ]
+    ports = iter(PX4_PORTS)
+    has_v1 = False
+    for p in payloads:
+        cam = cameras[p.name]
+        try:
+            n, cfg, baud, label = next(ports)
+        except StopIteration:
+            raise PlanError("more cameras than MAVLink instances in the parameter template",
+                            hint="wire the extra camera by hand") from None
+        out += [
+            (f"MAV_{n}_CONFIG", cfg, f"{p.name} ({cam.model}) on {label}: change to the port it is wired to"),
+            (f"MAV_{n}_MODE", 2, f"{p.name}: Onboard mode (PX4 camera docs) — streams GPS/position for geotags"),
+            (f"MAV_{n}_RATE", 0, f"{p.name}: 0 = PX4 chooses the rate from the baud rate"),
+            (f"MAV_{n}_FORWARD", 1, f"{p.name}: forward MAVLink between the camera and the ground station "
+                                     "(camera protocol / PARAM_EXT from QGC)"),
+            (baud, 57600, f"{p.name}: 57600 baud"),
+        ]
+        has_v1 = has_v1 or cam.mavlink_version == 1
+    if has_v1:
+        out.append(("MAV_PROTO_VER", 0, "start every link in MAVLink 1 and upgrade only links that speak 2: the "
+                                        "RedEdge speaks only MAVLink 1"))
+    return out
+
+
+def autopilot_params(prof: Any, payloads: Iterable[Any], cameras: Mapping[str, Any], infos: Mapping[str, Any],
+                     instances: Mapping[str, int], needs_lua: bool = False,
+                     triggers: Iterable[str] = ()) -> tuple[Param, ...]:
+    """(name, value, why) for the firmware `prof` (missions.firmware.FirmwareProfile)."""
+    payloads = list(payloads)
+    if prof.name == "ardupilot":
+        rows = _ardupilot(payloads, cameras, infos, instances, needs_lua)
+    else:
+        rows = _px4(payloads, cameras, set(triggers))
+    return tuple((n, float(v), why) for n, v, why in rows)
+
+
+def _fmt(v: float) -> str:
+    return str(int(v)) if float(v).is_integer() else repr(float(v))
+
+
+def format_params(compiled: Any) -> str:
+    """The `.params` text: ArduPilot/Mission Planner `NAME,VALUE` lines, or PX4 `param set NAME VALUE` lines
+    (an nsh script for the SD card's etc/extras.txt or the MAVLink shell), each after a `#` reason."""
+    px4 = compiled.firmware == "px4"
+    head = [f"# {compiled.name}: autopilot parameters this mission relies on ({compiled.firmware})",
+            "# Review each line: serial port numbers assume the camera is wired to the port named."]
+    lines = list(head)
+    for name, value, why in compiled.params:
+        lines.append(f"# {why}")
+        lines.append(f"param set {name} {_fmt(value)}" if px4 else f"{name},{_fmt(value)}")
+    return "\n".join(lines) + "\n"
