@@ -73,11 +73,22 @@ class BundleHandler(http.server.BaseHTTPRequestHandler):
         pass  # one line per request is written by _log instead
 
     def _log(self, status: int, nbytes: int) -> None:
-        path = self.path if len(self.path) <= 200 else self.path[:200] + "…"
-        self.config.log(f"{self.command} {path} {status} {nbytes}")
+        path = getattr(self, "path", None) or "-"   # unset when the request line did not parse
+        path = path if len(path) <= 200 else path[:200] + "…"
+        self.config.log(f"{getattr(self, 'command', None) or '-'} {path} {status} {nbytes}")
+
+    def parse_request(self) -> bool:
+        ok = super().parse_request()
+        if ok and self.request_version == "HTTP/0.9":
+            # a bare "GET /x" line: no headers either way, and no ground station speaks HTTP/0.9
+            self.send_error(400, "HTTP/0.9 requests are not supported")
+            return False
+        return ok
 
     def _plain(self, status: int, text: str, extra: dict[str, str] | None = None) -> None:
         body = (text + "\n").encode("utf-8")
+        # logged before answering, so the line exists by the time a client has its response
+        self._log(status, 0 if self.command == "HEAD" else len(body))
         self.send_response(status)
         self.send_header("Content-Type", "text/plain; charset=utf-8")
         self.send_header("Content-Length", str(len(body)))
@@ -85,15 +96,14 @@ class BundleHandler(http.server.BaseHTTPRequestHandler):
         for k, v in (extra or {}).items():
             self.send_header(k, v)
         self.end_headers()
-        sent = 0
         if self.command != "HEAD":
             self.wfile.write(body)
-            sent = len(body)
-        self._log(status, sent)
 
     def send_error(self, code: int, message: str | None = None, explain: str | None = None) -> None:
         # malformed request lines, over-long headers and the like (raised inside http.server)
         self.close_connection = True
+        if getattr(self, "request_version", "HTTP/0.9") == "HTTP/0.9":
+            self.request_version = "HTTP/1.0"   # answer with a status line and headers all the same
         try:
             self._plain(code, message or http.HTTPStatus(code).phrase)
         except (OSError, ValueError):
@@ -167,13 +177,14 @@ class BundleHandler(http.server.BaseHTTPRequestHandler):
                               else "no-cache"),
         }
         if self._not_modified(etag, mtime):
+            self._log(304, 0)
             self.send_response(304)
             for k, v in headers.items():
                 if k != "Content-Type":
                     self.send_header(k, v)
             self.end_headers()
-            self._log(304, 0)
             return
+        self._log(200, len(data) if body else 0)
         self.send_response(200)
         for k, v in headers.items():
             self.send_header(k, v)
@@ -181,7 +192,6 @@ class BundleHandler(http.server.BaseHTTPRequestHandler):
         self.end_headers()
         if body:
             self.wfile.write(data)
-        self._log(200, len(data) if body else 0)
 
     def _not_modified(self, etag: str, mtime: int) -> bool:
         inm = self.headers.get("If-None-Match")

@@ -1,0 +1,221 @@
+"""`wiris cdf serve`: a real threaded HTTP server on 127.0.0.1 (port 0) over a built bundle — content types,
+GET/HEAD, ETag/Last-Modified/304, 405, no escape out of the directory, one log line per request."""
+
+from __future__ import annotations
+
+import hashlib
+import http.client
+import json
+import os
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from cdf.bundle import build_bundle
+from cdf.errors import WirisError
+from wiris_tools.serve import make_server, prefix_from_manifest, server_url
+
+PRO = "workswell_wiris-pro_v1.xml"
+
+
+@pytest.fixture(scope="module")
+def bundle(tmp_path_factory) -> Path:
+    base = tmp_path_factory.mktemp("serve")
+    out = base / "cdf"
+    build_bundle(out, ["wiris-pro", "wiris-security"], base_url="http://127.0.0.1:8000/cdf", xz=True)
+    (base / "secret.txt").write_text("outside the bundle")
+    os.symlink(base / "secret.txt", out / "leak.xml")                    # points outside: 403
+    os.symlink(out / PRO, out / "alias.xml")                              # points inside: fine
+    (out / ".hidden.xml").write_text("<x/>")
+    (out / "sub").mkdir()
+    return out
+
+
+@pytest.fixture
+def server(bundle):
+    lines: list[str] = []
+    srv = make_server(bundle, "127.0.0.1", 0, log=lines.append)
+    thread = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
+    thread.start()
+    try:
+        yield srv, lines
+    finally:
+        srv.shutdown()
+        srv.server_close()
+        thread.join(5)
+
+
+def request(srv, method: str, path: str, headers: dict | None = None):
+    conn = http.client.HTTPConnection("127.0.0.1", srv.server_address[1], timeout=10)
+    try:
+        conn.putrequest(method, path, skip_accept_encoding=True)
+        for k, v in (headers or {}).items():
+            conn.putheader(k, v)
+        conn.endheaders()
+        resp = conn.getresponse()
+        return resp.status, {k.lower(): v for k, v in resp.getheaders()}, resp.read()
+    finally:
+        conn.close()
+
+
+def test_serves_definitions_xz_and_manifest_with_their_content_types(server, bundle):
+    srv, lines = server
+    assert server_url(srv).endswith("/cdf/")   # the path of the manifest's URIs
+    for name, ctype in ((PRO, "application/xml"), (PRO + ".xz", "application/x-xz"),
+                        ("manifest.json", "application/json")):
+        status, headers, body = request(srv, "GET", f"/cdf/{name}")
+        assert status == 200
+        assert headers["content-type"] == ctype
+        assert body == (bundle / name).read_bytes()
+        assert headers["content-length"] == str(len(body))
+        assert headers["etag"] == f'"{hashlib.sha256(body).hexdigest()}"'
+        assert "last-modified" in headers
+    manifest = json.loads(request(srv, "GET", "/cdf/manifest.json")[2])
+    row = next(r for r in manifest["models"] if r["file"] == PRO)
+    assert request(srv, "GET", f"/cdf/{PRO}")[1]["etag"] == f'"{row["sha256"]}"'   # ETag = manifest sha256
+    assert lines[0] == f"GET /cdf/{PRO} 200 {row['bytes']}"
+    assert len(lines) == 5
+
+
+def test_versioned_files_are_immutable_and_the_manifest_revalidated(server):
+    srv, _ = server
+    assert "immutable" in request(srv, "GET", f"/cdf/{PRO}")[1]["cache-control"]
+    assert request(srv, "GET", "/cdf/manifest.json")[1]["cache-control"] == "no-cache"
+
+
+def test_head_has_the_headers_and_no_body(server, bundle):
+    srv, lines = server
+    status, headers, body = request(srv, "HEAD", f"/cdf/{PRO}")
+    assert status == 200 and body == b""
+    assert headers["content-length"] == str((bundle / PRO).stat().st_size)
+    assert lines == [f"HEAD /cdf/{PRO} 200 0"]
+
+
+def test_if_none_match_answers_304(server):
+    srv, lines = server
+    etag = request(srv, "GET", f"/cdf/{PRO}")[1]["etag"]
+    status, headers, body = request(srv, "GET", f"/cdf/{PRO}", {"If-None-Match": etag})
+    assert status == 304 and body == b"" and headers["etag"] == etag
+    assert request(srv, "GET", f"/cdf/{PRO}", {"If-None-Match": f'"x", W/{etag}'})[0] == 304
+    assert request(srv, "GET", f"/cdf/{PRO}", {"If-None-Match": '"other"'})[0] == 200
+    last = request(srv, "HEAD", f"/cdf/{PRO}")[1]["last-modified"]
+    assert request(srv, "GET", f"/cdf/{PRO}", {"If-Modified-Since": last})[0] == 304
+    assert request(srv, "GET", f"/cdf/{PRO}", {"If-Modified-Since": "Thu, 01 Jan 1970 00:00:00 GMT"})[0] == 200
+    assert request(srv, "GET", f"/cdf/{PRO}", {"If-Modified-Since": "garbage"})[0] == 200
+    assert f"GET /cdf/{PRO} 304 0" in lines
+
+
+@pytest.mark.parametrize("path", [
+    "/cdf/../secret.txt", "/cdf/%2e%2e/secret.txt", "/cdf/%2E%2E%2Fsecret.txt", "/cdf/..%2fsecret.txt",
+    "/cdf/%252e%252e/secret.txt", "/cdf/sub/../../secret.txt", "/cdf//etc/passwd", "/cdf/..\\secret.txt",
+    "/cdf/%00", "/cdf/.hidden.xml", "/cdf/sub", "/cdf/", "/cdf/nope.xml", "/secret.txt", "/" + PRO,
+    "/cdf/%ff.xml", "/cdf/./" + PRO,
+])
+def test_nothing_outside_the_bundle_or_hidden_is_served(server, path):
+    srv, _ = server
+    status, _, body = request(srv, "GET", path)
+    assert status == 404
+    assert b"outside the bundle" not in body
+
+
+def test_a_symlink_out_of_the_bundle_is_forbidden_one_inside_is_served(server, bundle):
+    srv, lines = server
+    status, _, body = request(srv, "GET", "/cdf/leak.xml")
+    assert status == 403 and b"outside" not in body
+    status, _, body = request(srv, "GET", "/cdf/alias.xml")
+    assert status == 200 and body == (bundle / PRO).read_bytes()
+    assert lines[0].startswith("GET /cdf/leak.xml 403 ")
+
+
+@pytest.mark.parametrize("method", ["POST", "PUT", "DELETE", "PATCH", "OPTIONS", "TRACE", "FOO"])
+def test_other_methods_are_405_and_change_nothing(server, bundle, method):
+    srv, lines = server
+    before = (bundle / PRO).read_bytes()
+    status, headers, _ = request(srv, method, f"/cdf/{PRO}")
+    assert status == 405 and headers["allow"] == "GET, HEAD"
+    assert (bundle / PRO).read_bytes() == before
+    assert lines == [f"{method} /cdf/{PRO} 405 {int(headers['content-length'])}"]
+
+
+def test_a_malformed_request_gets_an_error_not_a_crash(server):
+    srv, lines = server
+    with socket.create_connection(("127.0.0.1", srv.server_address[1]), timeout=5) as s:
+        s.sendall(b"GARBAGE\r\n\r\n")
+        answer = s.recv(1024)
+    assert answer.startswith(b"HTTP/1.1 400")
+    with socket.create_connection(("127.0.0.1", srv.server_address[1]), timeout=5) as s:
+        s.sendall(b"GET /cdf/" + PRO.encode() + b"\r\n\r\n")   # HTTP/0.9: refused, not served header-less
+        answer = s.recv(1024)
+    assert answer.startswith(b"HTTP/1.1 400")
+    assert request(srv, "GET", f"/cdf/{PRO}")[0] == 200   # still serving
+    assert lines[0] == "- - 400 " + lines[0].rsplit(" ", 1)[1]
+
+
+def test_concurrent_requests_are_served(server):
+    srv, _ = server
+    results = []
+
+    def fetch():
+        results.append(request(srv, "GET", f"/cdf/{PRO}")[0])
+    threads = [threading.Thread(target=fetch) for _ in range(16)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(20)
+    assert results == [200] * 16
+
+
+def test_explicit_prefix_and_root_prefix(bundle):
+    srv = make_server(bundle, "127.0.0.1", 0, prefix="/", log=lambda _l: None)
+    thread = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
+    thread.start()
+    try:
+        assert request(srv, "GET", f"/{PRO}")[0] == 200
+        assert request(srv, "GET", f"/cdf/{PRO}")[0] == 404
+    finally:
+        srv.shutdown()
+        srv.server_close()
+    assert prefix_from_manifest(bundle) == "/cdf/"
+    assert prefix_from_manifest(bundle / "sub") == "/"
+
+
+def test_missing_directory_and_busy_port_are_errors(tmp_path, bundle):
+    with pytest.raises(WirisError, match="not a directory"):
+        make_server(tmp_path / "missing", "127.0.0.1", 0)
+    srv = make_server(bundle, "127.0.0.1", 0, log=lambda _l: None)
+    try:
+        with pytest.raises(WirisError, match="cannot listen") as err:
+            make_server(bundle, "127.0.0.1", srv.server_address[1])
+        assert "--port" in err.value.hint
+    finally:
+        srv.server_close()
+
+
+def test_cli_serve_runs_until_interrupted(bundle):
+    """The real command in a subprocess: it prints its URL, serves, and stops on SIGINT."""
+    code = ("import sys; from wiris_tools.cli import main; sys.argv=['wiris','cdf','serve',sys.argv[1],'--port','0']; main()")
+    proc = subprocess.Popen([sys.executable, "-c", code, str(bundle)], stderr=subprocess.PIPE, text=True)
+    try:
+        first = proc.stderr.readline()
+        assert first.startswith(f"serving {bundle} at http://127.0.0.1:") and "/cdf/" in first
+        port = int(first.split("127.0.0.1:")[1].split("/")[0])
+        conn = http.client.HTTPConnection("127.0.0.1", port, timeout=10)
+        conn.request("GET", f"/cdf/{PRO}")
+        assert conn.getresponse().status == 200
+        conn.close()
+        assert proc.stderr.readline().strip() == f"GET /cdf/{PRO} 200 {(bundle / PRO).stat().st_size}"
+        proc.send_signal(2)   # SIGINT to our own child
+        deadline = time.monotonic() + 10
+        while proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert proc.returncode == 0
+        assert "stopped" in proc.stderr.read()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(5)
