@@ -1,0 +1,87 @@
+"""Validate the whole CDF corpus vs a bare lxml parse of the same files, side by side in one run.
+
+    .venv/bin/python bench/bench_validate.py [--repeat 7]
+
+Both sides get the same in-memory bytes (xz inflated up front for the bare parse, as validate does it
+itself). Prints medians, the ratio, the split of validate's time (XSD via xmlschema vs everything else),
+and peak memory (tracemalloc for one validation pass; ru_maxrss of the process). Target: ratio <= 5.
+"""
+
+from __future__ import annotations
+
+import argparse
+import lzma
+import resource
+import statistics
+import sys
+import time
+import tracemalloc
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+from lxml import etree  # noqa: E402
+
+from cdf.validate import validate_bytes  # noqa: E402
+from cdf.validation import schema  # noqa: E402
+
+CORPUS = REPO.parent / "shared" / "corpus" / "cdf"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--repeat", type=int, default=7)
+    args = ap.parse_args()
+    files = sorted(CORPUS.rglob("*.xml")) + sorted(CORPUS.rglob("*.xml.xz"))
+    raw = [f.read_bytes() for f in files]
+    plain = [lzma.decompress(d) if d.startswith(b"\xfd7zXZ\x00") else d for d in raw]
+    schema.compiled_schema()  # one-off compile (~0.3 s), not per file
+
+    def bare() -> None:
+        for d in plain:
+            etree.fromstring(d)
+
+    def full() -> None:
+        for d, f in zip(raw, files):
+            validate_bytes(d, f.name, "strict")
+
+    from cdf.validation import engine
+
+    def without_xsd() -> None:
+        real = engine.schema_hits
+        engine.schema_hits = lambda root: []  # the same pipeline minus the xmlschema pass
+        try:
+            full()
+        finally:
+            engine.schema_hits = real
+
+    def median_s(fn) -> float:
+        times = []
+        for _ in range(args.repeat):
+            t = time.perf_counter()
+            fn()
+            times.append(time.perf_counter() - t)
+        return statistics.median(times)
+
+    # interleave the measurements so both sides see the same machine state
+    b1, v1, n1 = median_s(bare), median_s(full), median_s(without_xsd)
+    b2, v2, n2 = median_s(bare), median_s(full), median_s(without_xsd)
+    b, v, n = (b1 + b2) / 2, (v1 + v2) / 2, (n1 + n2) / 2
+    tracemalloc.start()
+    full()
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    total_kb = sum(len(d) for d in plain) / 1024
+    print(f"corpus: {len(files)} files, {total_kb:.0f} KiB of XML; median of {args.repeat} runs, two rounds")
+    print(f"{'bare lxml parse':<34}{b * 1000:9.2f} ms")
+    print(f"{'validate (strict, all rules)':<34}{v * 1000:9.2f} ms")
+    print(f"{'validate without the XSD pass':<34}{n * 1000:9.2f} ms")
+    print(f"ratio validate / bare parse: {v / b:.1f}x (target <= 5x); without the XSD pass: {n / b:.1f}x; "
+          f"the XSD pass (xmlschema) is {100 * (v - n) / v:.0f}% of validate")
+    print(f"peak memory: tracemalloc {peak / 1e6:.1f} MB for one validation pass; "
+          f"ru_maxrss {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MB (whole process)")
+
+
+if __name__ == "__main__":
+    main()
