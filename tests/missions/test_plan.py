@@ -1,0 +1,230 @@
+"""Capture-plan loader: every named bad case gets a located problem with a hint; every problem is reported."""
+
+from __future__ import annotations
+
+import re
+import shutil
+from pathlib import Path
+
+import pytest
+
+from missions.errors import PlanError
+from missions.plan import MAX_PLAN_BYTES, load_plan, parse_plan
+from missions.schema import plan_schema
+
+PLANS = Path(__file__).resolve().parent / "plans"
+LOC = re.compile(r"^(?P<file>.+):(?P<line>\d+):(?P<col>\d+)$")
+
+BASE = """\
+version: 1
+name: t
+vehicle: {firmware: ardupilot, frame: copter, speed_mps: 5}
+home: {lat: 50.1098, lon: 14.5002, alt_amsl_m: 262}
+payloads:
+  thermal:
+    camera: wiris-pro
+    lens_mm: 13
+    component_id: 101
+    settings: {layout: fullscreen}
+mission:
+  - takeoff: {alt_m: 30}
+  - survey:
+      area: [[50.1100, 14.5000], [50.1100, 14.5030], [50.1120, 14.5030], [50.1120, 14.5000]]
+      payloads: [thermal]
+      altitude_m: 40
+      overlap: {front: 80, side: 70}
+  - rtl: {}
+"""
+
+
+def problems_of(text: str, tmp_path: Path) -> list:
+    p = tmp_path / "plan.yaml"
+    p.write_text(text, encoding="utf-8")
+    with pytest.raises(PlanError) as ei:
+        load_plan(p)
+    probs = ei.value.problems
+    for pr in probs:
+        assert pr.where.startswith(str(p)), pr
+    return list(probs)
+
+
+def one(text: str, tmp_path: Path, needle: str):
+    probs = problems_of(text, tmp_path)
+    hits = [p for p in probs if needle in p.message]
+    assert hits, [str(p) for p in probs]
+    return hits[0]
+
+
+def line_col(where: str) -> tuple[int, int]:
+    m = LOC.match(where)
+    assert m, where
+    return int(m["line"]), int(m["col"])
+
+
+def test_good_plan_loads_with_locations():
+    plan = load_plan(PLANS / "good.yaml")
+    assert plan.name == "good-survey"
+    assert [p.name for p in plan.payloads] == ["thermal", "multispectral"]
+    thermal = plan.payload("thermal")
+    assert thermal.value("layout") == 2 and thermal.value("capture") == 0x01 | 0x08
+    # the location of a value is its own line and column in the file
+    text = (PLANS / "good.yaml").read_text().splitlines()
+    line, col = line_col(plan.where("mission", 1, "survey", "altitude_m"))
+    assert text[line - 1][col - 1:].startswith("60")
+
+
+def test_unknown_key_did_you_mean(tmp_path):
+    p = one(BASE.replace("overlap: {front: 80, side: 70}", "overlap: {front: 80, side: 70}\n      refly90: true"),
+            tmp_path, "unknown key 'refly90'")
+    assert "refly_90" in p.hint
+    assert line_col(p.where) == (18, 7)
+
+
+def test_wrong_unit_names_the_unit_key(tmp_path):
+    p = one(BASE.replace("altitude_m: 40", "altitude: 40"), tmp_path, "unknown key 'altitude'")
+    assert "altitude_m" in p.hint
+    p = one(BASE.replace("speed_mps: 5", "speed_kmh: 18"), tmp_path, "unknown key 'speed_kmh'")
+    assert "speed_mps" in p.hint and "unit" in p.hint
+
+
+def test_setting_value_not_in_catalogue_lists_allowed_values(tmp_path):
+    p = one(BASE.replace("layout: fullscreen", "layout: full"), tmp_path, "'full' is not a choice")
+    for option in ("inspection", "security", "fullscreen", "blended"):
+        assert option in p.hint
+
+
+def test_setting_out_of_range_uses_catalogue_message(tmp_path):
+    p = one(BASE.replace("layout: fullscreen", "emissivity: 1.5"), tmp_path, "emissivity")
+    assert "out of range" in p.message and "0.5" in p.hint and "1" in p.hint
+
+
+def test_unknown_setting_did_you_mean(tmp_path):
+    p = one(BASE.replace("layout: fullscreen", "pallete: 3"), tmp_path, "no setting 'pallete'")
+    assert "'palette'" in p.hint
+
+
+def test_when_condition_of_a_slot(tmp_path):
+    p = one(BASE.replace("layout: fullscreen", "range_min_c: 10"), tmp_path, "range_min_c takes effect only")
+    assert "range_mode: manual" in p.hint
+
+
+@pytest.mark.parametrize("alt,word", [(1, "below the 2 m minimum"), (1.5, "below"), (501, "above the 500 m maximum")])
+def test_altitude_limits(tmp_path, alt, word):
+    one(BASE.replace("altitude_m: 40", f"altitude_m: {alt}"), tmp_path, word)
+
+
+@pytest.mark.parametrize("front", [100, 150])
+def test_overlap_100_percent_or_more(tmp_path, front):
+    p = one(BASE.replace("front: 80", f"front: {front}"), tmp_path, "front overlap")
+    assert "100" in p.message
+
+
+def test_overlap_above_planner_limit(tmp_path):
+    one(BASE.replace("side: 70", "side: 97"), tmp_path, "above the 95 %")
+
+
+def test_unknown_payload(tmp_path):
+    p = one(BASE.replace("payloads: [thermal]", "payloads: [thermla]"), tmp_path, "unknown payload 'thermla'")
+    assert "'thermal'" in p.hint
+
+
+def test_unknown_camera_id(tmp_path):
+    p = one(BASE.replace("camera: wiris-pro", "camera: wiris-por"), tmp_path, "unknown camera 'wiris-por'")
+    assert "wiris-pro" in p.hint
+
+
+def test_altitude_and_gsd_both(tmp_path):
+    one(BASE.replace("altitude_m: 40", "altitude_m: 40\n      gsd_cm: 3"), tmp_path, "both altitude_m and gsd_cm")
+    one(BASE.replace("      altitude_m: 40\n", ""), tmp_path, "needs altitude_m or gsd_cm")
+
+
+REDEDGE = """
+  ms:
+    camera: rededge-mx
+"""
+
+
+def test_wiris_and_rededge_on_component_100(tmp_path):
+    text = BASE.replace("component_id: 101", "component_id: 100").replace("mission:", REDEDGE.lstrip("\n") + "mission:")
+    text = text.replace("    camera: rededge-mx\n", "    camera: rededge-mx\n    component_id: 100\n")
+    p = one(text, tmp_path, "both on component 100")
+    assert "101..105" in p.hint and "RedEdge" in p.message
+
+
+def test_unspecified_wiris_moves_off_100_next_to_rededge(tmp_path):
+    text = BASE.replace("    component_id: 101\n", "").replace("mission:", REDEDGE.lstrip("\n") + "mission:")
+    plan = parse_plan(text, str(tmp_path / "p.yaml"), tmp_path)
+    assert plan.payload("ms").component_id == 100
+    assert plan.payload("thermal").component_id == 101
+    assert any("101" in n for n in plan.notes)
+
+
+def test_rededge_cannot_move(tmp_path):
+    text = BASE.replace("mission:", REDEDGE.lstrip("\n") + "mission:").replace(
+        "    camera: rededge-mx\n", "    camera: rededge-mx\n    component_id: 102\n")
+    one(text, tmp_path, "cannot use component id 102")
+
+
+def test_every_problem_reported_in_position_order(tmp_path):
+    text = (BASE.replace("speed_mps: 5", "speed: 5").replace("layout: fullscreen", "layout: nope")
+            .replace("altitude_m: 40", "altitude_m: 900").replace("payloads: [thermal]", "payloads: [x]"))
+    probs = problems_of(text, tmp_path)
+    assert len(probs) >= 5    # missing speed_mps, unknown speed, layout, altitude, payload
+    positions = [line_col(p.where) for p in probs]
+    assert positions == sorted(positions)
+    with pytest.raises(PlanError) as ei:
+        parse_plan(text, "x.yaml", tmp_path)
+    assert f"{len(ei.value.problems)} problems" in str(ei.value)
+
+
+def test_area_file_relative_to_plan(tmp_path):
+    sub = tmp_path / "sub"
+    (sub / "areas").mkdir(parents=True)
+    shutil.copy(PLANS / "areas" / "field.geojson", sub / "areas" / "field.geojson")
+    text = BASE.replace("area: [[50.1100, 14.5000], [50.1100, 14.5030], [50.1120, 14.5030], [50.1120, 14.5000]]",
+                        "area: areas/field.geojson")
+    (sub / "p.yaml").write_text(text)
+    plan = load_plan(sub / "p.yaml")
+    assert plan.mission[1].area == "areas/field.geojson" and Path(plan.base_dir) == sub.resolve()
+    (tmp_path / "p.yaml").write_text(text)
+    one(text, tmp_path, "area file 'areas/field.geojson' not found")
+
+
+def test_yaml_syntax_error_located(tmp_path):
+    p = one(BASE.replace("home: {lat", "home: [lat"), tmp_path, "invalid YAML")
+    assert line_col(p.where)[0] >= 4
+
+
+def test_duplicate_key(tmp_path):
+    one(BASE.replace("name: t\n", "name: t\nname: u\n"), tmp_path, "duplicate key 'name'")
+
+
+def test_alias_bomb_is_capped(tmp_path):
+    bomb = "a: &a [x, x, x, x, x, x, x, x, x, x]\n" + "".join(
+        f"{chr(98 + i)}: &{chr(98 + i)} [*{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}, "
+        f"*{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}]\n"
+        for i in range(8))
+    one(bomb, tmp_path, "more than")
+
+
+def test_size_cap(tmp_path):
+    with pytest.raises(PlanError, match="larger than"):
+        parse_plan("#" * (MAX_PLAN_BYTES + 1), "big.yaml", tmp_path)
+
+
+def test_yaml11_booleans_stay_words(tmp_path):
+    plan = parse_plan(BASE.replace("layout: fullscreen", "alarm_mode: off"), "p.yaml", tmp_path)
+    assert plan.payload("thermal").value("alarm_mode") == 0
+
+
+def test_not_a_mapping(tmp_path):
+    one("- just\n- a list\n", tmp_path, "a plan is a mapping")
+
+
+def test_schema_is_valid_and_lists_steps():
+    import jsonschema
+
+    s = plan_schema()
+    jsonschema.Draft202012Validator.check_schema(s)
+    assert set(s["properties"]["mission"]["items"]["properties"]) == {
+        "takeoff", "survey", "corridor", "waypoint", "camera", "rtl", "land"}
