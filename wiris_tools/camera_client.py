@@ -443,9 +443,25 @@ class CameraClient:
                 on_step(result)
         return results
 
+    def _system_of(self, component: int) -> int:
+        """The system id of the component a step names (a RedEdge adopts ours; a WIRIS has its own)."""
+        for (s, c) in self.link.heartbeats():
+            if c == component and (s, c) != (self.link.system, self.link.component):
+                return s
+        return self.system
+
     def _run_step(self, step: Step) -> StepResult:
         where = step.label
         target = step.target_component or self.component
+        if target != self.component:
+            system, self.system = self.system, self._system_of(target)
+            try:
+                return self._run_step_on(step, where, target)
+            finally:
+                self.system = system
+        return self._run_step_on(step, where, target)
+
+    def _run_step_on(self, step: Step, where: str, target: int) -> StepResult:
         if step.kind == "command_long":
             assert step.command is not None
             expect = getattr(mavlink2, step.expect, mavlink2.MAV_RESULT_ACCEPTED)

@@ -1,0 +1,254 @@
+"""The camera client (library and `wiris camera ...`) against the emulators over real UDP sockets on 127.0.0.1:
+identify, definition + validation, settings, set, capture, apply a compiled sequence, refusal, timeout,
+a camera that disappears mid-sequence."""
+
+from __future__ import annotations
+
+import json
+import math
+import socket
+
+import pytest
+from click.testing import CliRunner
+
+from cdf.catalogue import catalogue
+from missions.compiled import SetupStep
+from missions.setup import dumps_setup
+from wiris_tools.camera_client import CameraClient, load_setup
+from wiris_tools.cli import cli
+from wiris_tools.emulate.runner import start_emulator
+from wiris_tools.errors import LinkError
+from wiris_tools.link import Link
+
+NAN = math.nan
+
+
+@pytest.fixture
+def pro():
+    with start_emulator("wiris-pro", "udpin:127.0.0.1:0", storage_capacity_mib=(100.0, 100.0, 100.0),
+                        image_size_mib=10.0) as emu:
+        yield emu
+
+
+@pytest.fixture
+def client(pro):
+    with Link(f"udpout:127.0.0.1:{pro.link.local_port}", heartbeat_s=0.2) as link:
+        yield CameraClient(link, timeout_s=0.5, retries=2)
+
+
+def _url(emu) -> str:
+    return f"udpout:127.0.0.1:{emu.link.local_port}"
+
+
+def test_identify_and_information(client):
+    info = client.information()
+    cam = catalogue().get("wiris-pro")
+    assert (info.vendor, info.model, info.definition_version) == (cam.vendor, cam.model, cam.definition_version)
+    assert (info.system, info.component) == (1, 100)
+    assert set(info.flag_names) == {c.removeprefix("CAMERA_CAP_FLAGS_") for c in cam.capabilities}
+    assert [s["id"] for s in client.storage()] == [0, 1, 2]
+    assert client.capture_status()["image_count"] == 0
+
+
+def test_definition_is_downloaded_and_valid(client, pro):
+    info = client.information()
+    loaded = client.definition(info)
+    assert loaded.data == pro.definition and loaded.report.valid, loaded.report.findings
+    values = client.read_settings(loaded.definition)
+    assert set(values) == {p.name for p in loaded.definition.params}
+    with pro.lock:
+        state = dict(pro.state.values)
+    for name, value in values.items():
+        assert value == pytest.approx(state[name], rel=1e-6), name
+
+
+def test_set_by_option_name_and_number(client, pro):
+    d = client.definition(client.information()).definition
+    assert client.set_setting(d, "RANGE_MODE", "Span") == 2
+    assert client.set_setting(d, "LAYOUT", "3") == 3
+    assert client.set_setting(d, "EMISSIVITY", "0.9") == pytest.approx(0.9)
+    with pro.lock:
+        assert (pro.state.value("range_mode"), pro.state.value("layout")) == (2, 3)
+        assert pro.state.value("emissivity") == pytest.approx(0.9)
+
+
+@pytest.mark.parametrize("name,value,message", [
+    ("LAYOUT", "Diagonal", "neither an option nor a number"),
+    ("LAYOUT", "7", "not one of the options"),
+    ("EMISSIVITY", "1.5", "above the maximum"),
+    ("CAM_EV", "1.5", "not a whole number"),
+    ("LAYUOT", "1", "did you mean LAYOUT"),
+])
+def test_set_refused_by_the_definition_sends_nothing(client, pro, name, value, message):
+    d = client.definition(client.information()).definition
+    with pro.lock:
+        before = dict(pro.state.values)
+    with pytest.raises(LinkError, match=message):
+        client.set_setting(d, name, value)
+    with pro.lock:
+        assert pro.state.values == before
+
+
+def test_camera_refusal_names_the_result(client):
+    with pytest.raises(LinkError, match="PARAM_ACK_VALUE_UNSUPPORTED"):
+        client.set_param_ext("EMISSIVITY", 3.0, "float")
+    with pytest.raises(LinkError, match="PARAM_ACK_FAILED"):
+        client.set_param_ext("NOT_A_PARAM", 1, "uint32")
+
+
+def test_capture_periodic_then_storage_full(client):
+    shots = list(client.capture(interval_s=1, count=2))
+    assert [s.index for s in shots] == [0, 1] and all(s.result == 1 for s in shots)
+    with pytest.raises(LinkError, match="failed to capture"):
+        list(client.capture(interval_s=1, count=0, duration_s=20))       # 100 MiB, 10 MiB per image
+    assert client.capture_status()["image_count"] == 10
+
+
+def _setup_file(tmp_path, steps) -> str:
+    path = tmp_path / "flight.setup.json"
+    path.write_text(dumps_setup("flight", steps))
+    return str(path)
+
+
+def _compiled_like_steps(last_bad: bool = False):
+    cam = catalogue().get("wiris-pro")
+    layout = cam.setting("layout").command
+    steps = [
+        SetupStep("identify", 100, "command_long", "MAV_CMD_REQUEST_MESSAGE", (259.0, 0, 0, 0, 0, 0, 0)),
+        SetupStep("layout blended", 100, "command_long", "MAV_CMD_SET_CAMERA_MODE",
+                  (0.0, 0.0, None, None, layout.encode(3), None, None)),
+        SetupStep("manual range 10..80 °C", 100, "command_long", "MAV_CMD_USER_1", (1, None, 80, 10, None, None, None)),
+        SetupStep("emissivity", 100, "param_ext_set", param_id="EMISSIVITY", value=0.97, type="float",
+                  expect="PARAM_ACK_ACCEPTED"),
+    ]
+    if last_bad:
+        steps.insert(3, SetupStep("impossible range mode", 100, "command_long", "MAV_CMD_USER_1",
+                                  (9, None, None, None, None, None, None)))
+    return steps
+
+
+def test_apply_a_compiled_sequence(tmp_path, pro):
+    path = _setup_file(tmp_path, _compiled_like_steps())
+    result = CliRunner().invoke(cli, ["camera", "apply", path, "--connect", _url(pro), "--json"])
+    assert result.exit_code == 0, result.output
+    out = json.loads(result.output)
+    assert out["ok"] and [s["outcome"] for s in out["completed"]] == [
+        "MAV_RESULT_ACCEPTED", "MAV_RESULT_ACCEPTED", "MAV_RESULT_ACCEPTED", "PARAM_ACK_ACCEPTED"]
+    with pro.lock:
+        s = pro.state
+        assert (s.value("layout"), s.value("range_mode"), s.value("range_max_c"), s.value("range_min_c")) == (3, 1, 80, 10)
+        assert s.value("emissivity") == pytest.approx(0.97)
+
+
+def test_apply_stops_at_the_first_refusal_naming_it(tmp_path, pro):
+    path = _setup_file(tmp_path, _compiled_like_steps(last_bad=True))
+    result = CliRunner().invoke(cli, ["camera", "apply", path, "--connect", _url(pro)])
+    assert result.exit_code == 1
+    assert "step 4 (impossible range mode)" in result.output and "MAV_RESULT_DENIED" in result.output
+    assert "3 of 5 steps done" in result.output
+    with pro.lock:
+        assert pro.state.value("emissivity") != pytest.approx(0.97)     # step 5 never ran
+
+
+def test_apply_when_the_camera_disappears(tmp_path):
+    steps = load_setup(_setup_file(tmp_path, _compiled_like_steps()))
+    emu = start_emulator("wiris-pro", "udpin:127.0.0.1:0")
+    try:
+        with Link(f"udpout:127.0.0.1:{emu.link.local_port}", heartbeat_s=0.2) as link:
+            cam = CameraClient(link, timeout_s=0.3, retries=1)
+            done = []
+            cam.apply(steps[:1], on_step=done.append)
+            emu.close()
+            with pytest.raises(LinkError, match=r"step 2 \(layout blended\).*no answer"):
+                cam.apply(steps[1:2], on_step=done.append)
+            assert len(done) == 1
+    finally:
+        emu.close()
+
+
+def test_no_camera_times_out():
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+        result = CliRunner().invoke(cli, ["camera", "info", "--connect", f"udpout:127.0.0.1:{port}", "--wait", "0.5"])
+    assert result.exit_code == 1 and "no HEARTBEAT" in result.output and "Traceback" not in result.output
+
+
+@pytest.mark.parametrize("content,message", [
+    ("{not json", "not valid JSON"),
+    ('{"steps": [{"kind": "reboot", "target_component": 100}]}', "unknown step kind"),
+    ('{"steps": [{"kind": "command_long", "command": "MAV_CMD_NOPE", "target_component": 100}]}', "unknown command"),
+    ('{"steps": [{"kind": "param_ext_set", "param_id": "X", "value": 300, "type": "uint8", "target_component": 100}]}',
+     "does not fit uint8"),
+    ('{"steps": [{"kind": "command_long", "command": 203, "params": [1,2,3,4,5,6,7,8]}]}', "at most 7"),
+    ('[]', '"steps" list'),
+])
+def test_bad_setup_files_are_refused_before_sending(tmp_path, pro, content, message):
+    path = tmp_path / "bad.setup.json"
+    path.write_text(content)
+    with pro.lock:
+        before = dict(pro.state.values)
+    result = CliRunner().invoke(cli, ["camera", "apply", str(path), "--connect", _url(pro)])
+    assert result.exit_code == 1 and message in result.output, result.output
+    with pro.lock:
+        assert pro.state.values == before
+
+
+def test_unknown_fields_are_tolerated(tmp_path, pro):
+    doc = {"format": "wiris-setup", "version": 9, "future": True,
+           "steps": [{"description": "zoom", "target_component": 100, "kind": "command_long",
+                      "command": "MAV_CMD_DO_DIGICAM_CONTROL", "params": [None, 4, None, None, 0, None, None],
+                      "expect": {"result": "MAV_RESULT_ACCEPTED", "extra": 1}, "payload": "thermal", "x": [1]}]}
+    path = tmp_path / "f.setup.json"
+    path.write_text(json.dumps(doc))
+    result = CliRunner().invoke(cli, ["camera", "apply", str(path), "--connect", _url(pro)])
+    assert result.exit_code == 0, result.output
+    with pro.lock:
+        assert pro.state.value("zoom") == 4
+
+
+def test_cli_info_settings_set_capture(pro):
+    r = CliRunner()
+    info = r.invoke(cli, ["camera", "info", "--connect", _url(pro), "--json"])
+    assert info.exit_code == 0, info.output
+    assert json.loads(info.output)["camera"]["model"] == "WIRIS Pro"
+    settings = r.invoke(cli, ["camera", "settings", "--connect", _url(pro), "--json"])
+    assert settings.exit_code == 0, settings.output
+    doc = json.loads(settings.output)
+    assert doc["definition"]["valid"]
+    layout = next(s for s in doc["settings"] if s["name"] == "LAYOUT")
+    assert layout["option"] == "Fullscreen" and len(layout["options"]) == 4
+    ok = r.invoke(cli, ["camera", "set", "LAYOUT", "blended", "--connect", _url(pro)])
+    assert ok.exit_code == 0 and "LAYOUT = 3 (Blended)" in ok.output
+    bad = r.invoke(cli, ["camera", "set", "LAYOUT", "9", "--connect", _url(pro)])
+    assert bad.exit_code == 1 and "not one of the options" in bad.output
+    cap = r.invoke(cli, ["camera", "capture", "--connect", _url(pro), "--json"])
+    assert cap.exit_code == 0, cap.output
+    assert json.loads(cap.output.splitlines()[0])["ok"] is True
+
+
+def test_rededge_parameters_through_the_client(tmp_path):
+    steps = [SetupStep("overlap mode", 100, "param_set", param_id="autoCapMode", value=2.0,
+                       type="MAV_PARAM_TYPE_REAL32", expect="PARAM_VALUE"),
+             SetupStep("target altitude", 100, "param_set", param_id="operatingAlt", value=90.0,
+                       type="MAV_PARAM_TYPE_REAL32", expect="PARAM_VALUE"),
+             SetupStep("impossible mode", 100, "param_set", param_id="autoCapMode", value=9.0,
+                       type="MAV_PARAM_TYPE_REAL32", expect="PARAM_VALUE")]
+    path = _setup_file(tmp_path, steps)
+    with start_emulator("rededge-mx", "udpin:127.0.0.1:0") as emu:
+        result = CliRunner().invoke(cli, ["camera", "apply", path, "--connect", _url(emu), "--mavlink1"])
+        assert result.exit_code == 1, result.output
+        assert "step 3 (impossible mode)" in result.output and "kept 2" in result.output
+        with emu.lock:
+            assert emu.state.values["autoCapMode"] == 2 and emu.state.values["operatingAlt"] == 90
+
+
+def test_emulate_command_runs_and_stops():
+    result = CliRunner().invoke(cli, ["emulate", "wiris-security", "--connect", "udpin:127.0.0.1:0",
+                                      "--duration", "0.3"])
+    assert result.exit_code == 0, result.output
+    assert "WIRIS Security" in result.output and "http://127.0.0.1:" in result.output
+    bad = CliRunner().invoke(cli, ["emulate", "wiris-pro", "--connect", "udpin:127.0.0.1:0", "--component", "99"])
+    assert bad.exit_code == 1 and "100" in bad.output
+    unknown = CliRunner().invoke(cli, ["emulate", "wiris-pr", "--connect", "udpin:127.0.0.1:0"])
+    assert unknown.exit_code == 1 and "did you mean" in unknown.output
