@@ -1,0 +1,127 @@
+"""Firmware profiles against an independent list written from the reference, check_items, and item-limit parts."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from pymavlink.dialects.v20 import ardupilotmega as m
+
+from missions.errors import PlanError
+from missions.firmware import ARDUPILOT, PX4, check_items, split_parts
+from missions.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem
+
+# Written from shared/reference/autopilots-and-cameras.md §2.2 / §3.1 / §7 and survey-planners §7, by name.
+REFERENCE = {
+    "ardupilot": {
+        "accepts": ["DO_DIGICAM_CONFIGURE", "DO_DIGICAM_CONTROL", "DO_SET_CAM_TRIGG_DIST", "IMAGE_START_CAPTURE",
+                    "VIDEO_START_CAPTURE", "VIDEO_STOP_CAPTURE", "SET_CAMERA_ZOOM", "SET_CAMERA_FOCUS",
+                    "DO_SEND_SCRIPT_MESSAGE", "NAV_SCRIPT_TIME", "DO_MOUNT_CONTROL", "DO_GIMBAL_MANAGER_PITCHYAW"],
+        "rejects": ["SET_CAMERA_MODE", "DO_TRIGGER_CONTROL", "DO_SET_CAM_TRIGG_INTERVAL", "STORAGE_FORMAT",
+                    "RESET_CAMERA_SETTINGS", "VIDEO_START_STREAMING", "VIDEO_STOP_STREAMING",
+                    "USER_1", "USER_2", "USER_3", "USER_4", "USER_5"],
+    },
+    "px4": {
+        "accepts": ["DO_TRIGGER_CONTROL", "DO_DIGICAM_CONTROL", "DO_MOUNT_CONFIGURE", "DO_MOUNT_CONTROL",
+                    "DO_GIMBAL_MANAGER_PITCHYAW", "DO_GIMBAL_MANAGER_CONFIGURE", "SET_CAMERA_FOCUS",
+                    "IMAGE_START_CAPTURE", "IMAGE_STOP_CAPTURE", "VIDEO_START_CAPTURE", "VIDEO_STOP_CAPTURE",
+                    "DO_CONTROL_VIDEO", "DO_SET_CAM_TRIGG_DIST", "OBLIQUE_SURVEY", "DO_SET_CAM_TRIGG_INTERVAL",
+                    "SET_CAMERA_MODE", "DO_VTOL_TRANSITION", "NAV_DELAY", "CONDITION_DELAY", "CONDITION_DISTANCE",
+                    "DO_CHANGE_SPEED", "DO_SET_HOME", "DO_LAND_START"],
+        "rejects": ["DO_DIGICAM_CONFIGURE", "STORAGE_FORMAT", "RESET_CAMERA_SETTINGS", "VIDEO_START_STREAMING",
+                    "VIDEO_STOP_STREAMING", "USER_1", "USER_2", "USER_3", "USER_4", "USER_5"],
+    },
+}
+PROFILES = {"ardupilot": ARDUPILOT, "px4": PX4}
+
+
+def cmd(name: str) -> int:
+    return getattr(m, "MAV_CMD_" + name)
+
+
+@pytest.mark.parametrize("fw", ["ardupilot", "px4"])
+def test_profiles_agree_with_reference(fw):
+    prof = PROFILES[fw]
+    for name in REFERENCE[fw]["accepts"]:
+        assert prof.accepts(cmd(name)), f"{fw} should accept {name}"
+    for name in REFERENCE[fw]["rejects"]:
+        assert not prof.accepts(cmd(name)), f"{fw} should reject {name}"
+
+
+def test_item_limits_and_camera_addressing():
+    assert ARDUPILOT.default_item_limit == 700 and PX4.default_item_limit == 500
+    assert ARDUPILOT.camera_target == "instance" and PX4.camera_target == "component"
+    assert not ARDUPILOT.interval_trigger and PX4.interval_trigger
+
+
+@pytest.mark.parametrize("fw,name,words", [
+    ("ardupilot", "USER_1", "MAV_MISSION_UNSUPPORTED"), ("px4", "USER_1", "MAV_MISSION_UNSUPPORTED"),
+    ("ardupilot", "SET_CAMERA_MODE", "SET_CAMERA_MODE"), ("ardupilot", "DO_SET_CAM_TRIGG_INTERVAL", "214"),
+    ("px4", "DO_DIGICAM_CONFIGURE", "202")])
+def test_check_items_names_the_rule(fw, name, words):
+    items = [MissionItem(command=cmd("NAV_WAYPOINT"), x=1, y=1, z=10),
+             MissionItem(command=cmd(name), frame=FRAME_MISSION)]
+    with pytest.raises(PlanError) as ei:
+        check_items(items, PROFILES[fw])
+    assert "mission item 2" in ei.value.where and name in ei.value.where
+    assert words in ei.value.hint
+
+
+def _wp(i: int) -> MissionItem:
+    return MissionItem(command=cmd("NAV_WAYPOINT"), frame=FRAME_GLOBAL_RELATIVE_ALT, param4=math.nan,
+                       x=500000000 + i * 100, y=140000000, z=40.0)
+
+
+def _trig(d: float) -> MissionItem:
+    return MissionItem(command=cmd("DO_SET_CAM_TRIGG_DIST"), frame=FRAME_MISSION, param1=d, param3=1.0 if d else 0.0)
+
+
+def long_mission(legs: int) -> tuple[MissionItem, ...]:
+    items = [MissionItem(command=cmd("NAV_TAKEOFF"), x=500000000, y=140000000, z=40.0),
+             MissionItem(command=cmd("DO_CHANGE_SPEED"), frame=FRAME_MISSION, param1=1, param2=6, param3=-1)]
+    k = 0
+    for _ in range(legs):
+        items += [_wp(k), _trig(8.0), _wp(k + 1), _wp(k + 2), _trig(0.0)]
+        k += 3
+    items.append(MissionItem(command=cmd("NAV_RETURN_TO_LAUNCH"), frame=FRAME_MISSION))
+    return tuple(items)
+
+
+@pytest.mark.parametrize("limit", [12, 17, 40, 99])
+def test_parts_fit_and_resume(limit):
+    items = long_mission(30)
+    parts = split_parts(items, limit)
+    assert len(parts) > 1
+    assert all(len(p) <= limit for p in parts)
+    # every original item appears, in order, across the parts
+    originals = [it for p in parts for it in p if not it.comment.startswith(("resume:", "part end:"))]
+    assert originals == list(items)
+    for prev, nxt in zip(parts, parts[1:]):
+        end = prev[-1]
+        assert end.command == cmd("NAV_LOITER_UNLIM")
+        # the next part starts with the speed, then a waypoint where the previous part waits
+        assert nxt[0].command == cmd("DO_CHANGE_SPEED")
+        assert nxt[1].command == cmd("NAV_WAYPOINT") and (nxt[1].x, nxt[1].y, nxt[1].z) == (end.x, end.y, end.z)
+        # camera trigger state carried across: if the previous part ended with the camera on, the next one turns
+        # it on again (without an extra photo) and the previous one switched it off before waiting
+        trig = [it for it in prev if it.command == cmd("DO_SET_CAM_TRIGG_DIST") and not it.comment.startswith("part")]
+        on = bool(trig) and trig[-1].param1 > 0
+        resumed = [it for it in nxt if it.command == cmd("DO_SET_CAM_TRIGG_DIST") and it.comment.startswith("resume")]
+        assert bool(resumed) == on
+        if on:
+            assert resumed[0].param1 == 8.0 and resumed[0].param3 == 0.0
+            assert prev[-2].command == cmd("DO_SET_CAM_TRIGG_DIST") and prev[-2].param1 == 0.0
+        check_items(nxt, ARDUPILOT)
+
+
+def test_fits_unsplit():
+    items = long_mission(3)
+    assert split_parts(items, len(items)) == (items,)
+
+
+def test_split_impossible_names_the_count():
+    items = (_wp(0),) + tuple(MissionItem(command=cmd("DO_SEND_SCRIPT_MESSAGE"), frame=FRAME_MISSION, param1=1)
+                              for _ in range(30)) + (_wp(1),)
+    with pytest.raises(PlanError) as ei:
+        split_parts(items, 20)
+    assert "32 items" in ei.value.message and "20" in ei.value.message
