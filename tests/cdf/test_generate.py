@@ -351,3 +351,17 @@ def test_xml_comment_filter_keeps_comments_well_formed():
     assert "--" not in str(xml_comment("a -- b --- c-"))
     assert not str(xml_comment("ends-")).endswith("-")
     parse(f"<a><!-- {xml_comment('x -- y -')} --></a>".encode())
+
+
+def test_output_does_not_depend_on_hash_seed_or_process():
+    """Byte-identical across processes with different hash seeds (sets and dicts must not leak order)."""
+    import hashlib
+    import os
+    import subprocess
+    import sys
+
+    code = ("import hashlib; from cdf.generate import definition_xmls; "
+            "print(hashlib.sha256(b''.join(definition_xmls().values())).hexdigest())")
+    digests = {subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                              env=dict(os.environ, PYTHONHASHSEED=seed)).stdout.strip() for seed in ("1", "4242")}
+    assert digests == {hashlib.sha256(b"".join(definition_xmls().values())).hexdigest()}

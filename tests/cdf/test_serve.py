@@ -219,3 +219,26 @@ def test_cli_serve_runs_until_interrupted(bundle):
         if proc.poll() is None:
             proc.kill()
             proc.wait(5)
+
+
+def test_random_paths_never_leave_the_bundle(server, bundle):
+    """Property: whatever path a client sends, the answer is 404/403, or 200 with a file of the bundle."""
+    from hypothesis import HealthCheck, given, settings
+    from hypothesis import strategies as st
+
+    srv, _ = server
+    hosted = {p.read_bytes() for p in bundle.iterdir() if p.is_file() and not p.name.startswith(".")}
+    secret = (bundle.parent / "secret.txt").read_bytes()
+    pieces = st.sampled_from(["..", ".", "%2e", "%2E", "%2f", "%2F", "%5c", "/", "\\", "%00", "%25", "cdf",
+                              "secret.txt", "manifest.json", PRO, "sub", "leak.xml", "alias.xml", "x"])
+
+    @settings(max_examples=150, deadline=None, suppress_health_check=list(HealthCheck))
+    @given(st.lists(pieces, min_size=1, max_size=8))
+    def check(parts):
+        path = "/" + "".join(parts)
+        status, _, body = request(srv, "GET", path)
+        assert status in (200, 403, 404), path
+        if status == 200:
+            assert body in hosted and body != secret, path
+
+    check()
