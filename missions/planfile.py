@@ -1,0 +1,510 @@
+"""QGroundControl `.plan` files: read and write (pure: no sockets, no pymavlink).
+
+    text = write_plan(items, (lat, lon, alt_amsl), firmware="ardupilot", vehicle="copter",
+                      fence=fence_items, rally=rally_items, cruise_speed=12.0)
+    items, fence, rally, home = read_plan(text, "survey.plan")
+
+Conventions (shared with missions.wpl and the transfer tools):
+  * `items` never contain a home row: the file keeps home in `plannedHomePosition`. When uploading
+    to ArduPilot the transfer layer puts home in as item 0, as QGC and MAVSDK do.
+  * `home` is (lat_deg, lon_deg, alt_m_amsl) or None (written as [0, 0, 0]).
+  * fence and rally are lists of MissionItem with mission_type FENCE / RALLY, exactly what is
+    uploaded: polygon vertices NAV_FENCE_POLYGON_VERTEX_INCLUSION/EXCLUSION (param1 = vertex
+    count), circles NAV_FENCE_CIRCLE_INCLUSION/EXCLUSION (param1 = radius m), the return point
+    NAV_FENCE_RETURN_POINT, rally points NAV_RALLY_POINT.
+
+What is written is what QGroundControl writes (MissionController, GeoFenceController,
+RallyPointController): `fileType` "Plan", `version` 1, `groundStation` "QGroundControl";
+`mission.version` 2 with firmwareType (MAV_AUTOPILOT), vehicleType (MAV_TYPE), cruiseSpeed,
+hoverSpeed, globalPlanAltitudeMode, plannedHomePosition and SimpleItems (NaN params as null);
+`geoFence.version` 2 with `polygons` / `circles` (each version 1); `rallyPoints.version` 2. Both
+the geoFence and rallyPoints sections are always written (MAVSDK's importer fails silently without
+them). Keys sorted and four-space indents, like Qt's QJsonDocument.
+
+Reading is strict about what QGC is strict about (versions, required sections and keys) and
+tolerant of QGC's complex items: a Survey or CorridorScan ComplexItem contributes the
+`TransectStyleComplexItem.Items` QGC stored in the file (QGC itself flies those verbatim until the
+pattern is edited). A StructureScan stores no items, so it is refused with a hint. Errors are
+PlanError with a location: `NAME:LINE:COL` for JSON syntax, `NAME: mission.items[3].params` for
+content.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from decimal import ROUND_HALF_UP, Decimal, InvalidOperation
+from pathlib import Path
+from typing import Any
+
+from missions.errors import PlanError
+from missions.items import (FRAME_GLOBAL, FRAME_GLOBAL_RELATIVE_ALT, FRAME_GLOBAL_TERRAIN_ALT, MISSION_TYPE_FENCE,
+                            MISSION_TYPE_MISSION, MISSION_TYPE_RALLY, MissionItem)
+
+Home = tuple[float, float, float]
+
+MAX_PLAN_BYTES = 20 * 1024 * 1024     # a 2000-item survey plan is well under 2 MB
+MAX_ITEMS = 65535                     # MISSION_COUNT is 16 bits
+
+# MAV_CMD numbers (common.xml) — named here because missions/ modules stay free of pymavlink.
+CMD_NAV_WAYPOINT = 16
+CMD_FENCE_RETURN_POINT = 5000
+CMD_FENCE_POLYGON_INCLUSION = 5001
+CMD_FENCE_POLYGON_EXCLUSION = 5002
+CMD_FENCE_CIRCLE_INCLUSION = 5003
+CMD_FENCE_CIRCLE_EXCLUSION = 5004
+CMD_RALLY_POINT = 5100
+
+# MAV_AUTOPILOT (common.xml): what QGC writes as firmwareType.
+FIRMWARE_TYPES = {"generic": 0, "ardupilot": 3, "px4": 12}
+# MAV_TYPE (common.xml): what QGC writes as vehicleType.
+VEHICLE_TYPES = {"generic": 0, "fixedwing": 1, "plane": 1, "copter": 2, "multirotor": 2, "quadrotor": 2,
+                 "helicopter": 4, "rover": 10, "boat": 11, "sub": 12, "hexarotor": 13, "octorotor": 14,
+                 "vtol": 21}  # 21 = MAV_TYPE_VTOL_TILTROTOR; QGC treats every VTOL type alike
+
+# QGC's AltMode enum (QGroundControlQmlGlobal.h) for globalPlanAltitudeMode / AltitudeMode.
+ALT_MODE_MIXED, ALT_MODE_RELATIVE, ALT_MODE_ABSOLUTE, ALT_MODE_TERRAIN_FRAME = 0, 1, 2, 4
+_FRAME_ALT_MODE = {FRAME_GLOBAL_RELATIVE_ALT: ALT_MODE_RELATIVE, FRAME_GLOBAL: ALT_MODE_ABSOLUTE,
+                   FRAME_GLOBAL_TERRAIN_ALT: ALT_MODE_TERRAIN_FRAME}
+
+# How MISSION_ITEM_INT carries x/y per MAV_FRAME (common.xml): global frames as degE7, local
+# frames as metres * 1e4, anything else (MAV_FRAME_MISSION) as a plain integer.
+_GLOBAL_FRAMES = frozenset({0, 3, 5, 6, 10, 11})      # GLOBAL, _RELATIVE_ALT, their _INT twins, TERRAIN_ALT(_INT)
+_LOCAL_FRAMES = frozenset({1, 4, 7, 8, 9, 20, 21, 22, 23})
+
+QGC_DEFAULT_CRUISE_SPEED = 15.0   # QGC's application defaults, written when the caller gives none
+QGC_DEFAULT_HOVER_SPEED = 5.0
+
+
+def _scale(frame: int) -> int:
+    if frame in _GLOBAL_FRAMES:
+        return 10**7
+    if frame in _LOCAL_FRAMES:
+        return 10**4
+    return 1
+
+
+# -- writing ---------------------------------------------------------------------------------------
+
+def _num(v: float | int | None) -> float | int | None:
+    """A JSON number as QGC writes it: integral values as integers, NaN as null."""
+    if v is None:
+        return None
+    if isinstance(v, int):
+        return v
+    if math.isnan(v):
+        return None
+    if math.isinf(v):
+        raise PlanError(f"an infinite value ({v}) cannot be written to a .plan file")
+    return int(v) if v.is_integer() and abs(v) < 2**53 else v
+
+
+def _coord(v: int, frame: int) -> float | int:
+    s = _scale(frame)
+    if s == 1:
+        return int(v)
+    q = Decimal(int(v)) / Decimal(s)
+    return _num(float(q))  # type: ignore[return-value]
+
+
+def _simple_item(item: MissionItem, jump_id: int) -> dict[str, Any]:
+    out: dict[str, Any] = {
+        "autoContinue": bool(item.autocontinue),
+        "command": int(item.command),
+        "doJumpId": jump_id,
+        "frame": int(item.frame),
+        "params": [_num(item.param1), _num(item.param2), _num(item.param3), _num(item.param4),
+                   _coord(item.x, item.frame), _coord(item.y, item.frame), _num(item.z)],
+        "type": "SimpleItem",
+    }
+    mode = _FRAME_ALT_MODE.get(item.frame)
+    if mode is not None:
+        # SimpleMissionItem::save writes these for items whose frame carries an altitude.
+        out.update(AMSLAltAboveTerrain=None, Altitude=_num(item.z), AltitudeMode=mode)
+    return out
+
+
+def _fence_json(fence: list[MissionItem]) -> dict[str, Any]:
+    polygons: list[dict[str, Any]] = []
+    circles: list[dict[str, Any]] = []
+    out: dict[str, Any] = {"circles": circles, "polygons": polygons, "version": 2}
+    i = 0
+    while i < len(fence):
+        it = fence[i]
+        where = f"fence item {i}"
+        if it.command in (CMD_FENCE_POLYGON_INCLUSION, CMD_FENCE_POLYGON_EXCLUSION):
+            n = int(it.param1)
+            if n < 3 or it.param1 != n or i + n > len(fence) or any(
+                    f.command != it.command or f.param1 != it.param1 for f in fence[i:i + n]):
+                raise PlanError(f"a fence polygon needs {max(n, 3)} consecutive vertices of command {it.command} "
+                                f"with param1 = vertex count", where=where,
+                                hint="emit each polygon as param1 = N on all N vertex items")
+            polygons.append({"inclusion": it.command == CMD_FENCE_POLYGON_INCLUSION,
+                             "polygon": [[_coord(f.x, 0), _coord(f.y, 0)] for f in fence[i:i + n]],
+                             "version": 1})
+            i += n
+        elif it.command in (CMD_FENCE_CIRCLE_INCLUSION, CMD_FENCE_CIRCLE_EXCLUSION):
+            circles.append({"circle": {"center": [_coord(it.x, 0), _coord(it.y, 0)], "radius": _num(it.param1)},
+                            "inclusion": it.command == CMD_FENCE_CIRCLE_INCLUSION, "version": 1})
+            i += 1
+        elif it.command == CMD_FENCE_RETURN_POINT:
+            out["breachReturn"] = [_coord(it.x, 0), _coord(it.y, 0), _num(it.z)]
+            i += 1
+        else:
+            raise PlanError(f"command {it.command} is not a fence item", where=where,
+                            hint="fence items are NAV_FENCE_* commands (5000-5004)")
+    return out
+
+
+def _rally_json(rally: list[MissionItem]) -> dict[str, Any]:
+    for i, it in enumerate(rally):
+        if it.command != CMD_RALLY_POINT:
+            raise PlanError(f"command {it.command} is not a rally point", where=f"rally item {i}",
+                            hint="rally items are NAV_RALLY_POINT (5100)")
+    return {"points": [[_coord(r.x, 0), _coord(r.y, 0), _num(r.z)] for r in rally], "version": 2}
+
+
+def _code(table: dict[str, int], value: str | int | None, what: str) -> int:
+    if value is None:
+        return 0
+    if isinstance(value, int):
+        return value
+    try:
+        return table[value.lower()]
+    except KeyError:
+        raise PlanError(f"unknown {what} {value!r}", hint=f"use one of: {', '.join(sorted(table))}") from None
+
+
+def plan_document(items, home: Home | None, *, firmware: str | int | None, vehicle: str | int | None,
+                  fence=None, rally=None, cruise_speed: float | None = None,
+                  hover_speed: float | None = None) -> dict[str, Any]:
+    """The .plan JSON object (see write_plan)."""
+    items = list(items)
+    if len(items) > MAX_ITEMS:
+        raise PlanError(f"{len(items)} mission items do not fit a MAVLink mission (at most {MAX_ITEMS})")
+    modes = {_FRAME_ALT_MODE.get(it.frame) for it in items if it.frame in _FRAME_ALT_MODE}
+    alt_mode = modes.pop() if len(modes) == 1 else (ALT_MODE_RELATIVE if not modes else ALT_MODE_MIXED)
+    lat, lon, alt = home if home is not None else (0.0, 0.0, 0.0)
+    mission = {
+        "cruiseSpeed": _num(float(cruise_speed if cruise_speed is not None else QGC_DEFAULT_CRUISE_SPEED)),
+        "firmwareType": _code(FIRMWARE_TYPES, firmware, "firmware"),
+        "globalPlanAltitudeMode": alt_mode,
+        "hoverSpeed": _num(float(hover_speed if hover_speed is not None else QGC_DEFAULT_HOVER_SPEED)),
+        "items": [_simple_item(it, i + 1) for i, it in enumerate(items)],
+        "plannedHomePosition": [_num(float(lat)), _num(float(lon)), _num(float(alt))],
+        "vehicleType": _code(VEHICLE_TYPES, vehicle, "vehicle type"),
+        "version": 2,
+    }
+    return {"fileType": "Plan", "geoFence": _fence_json(list(fence or [])), "groundStation": "QGroundControl",
+            "mission": mission, "rallyPoints": _rally_json(list(rally or [])), "version": 1}
+
+
+def write_plan(items, home=None, /, *, firmware: str | int | None = None, vehicle: str | int | None = None,
+               fence=None, rally=None, cruise_speed: float | None = None, hover_speed: float | None = None,
+               **file_form) -> str:
+    """The .plan text for `items` (no home row) with `home` = (lat, lon, alt AMSL) or None.
+
+    `firmware`: "ardupilot" | "px4" | a MAV_AUTOPILOT number; `vehicle`: "copter" | "plane" |
+    "vtol" | "rover" | … | a MAV_TYPE number. `fence`/`rally`: MissionItem lists (module docstring).
+
+    File form, used by missions.outputs: `write_plan(path, compiled, items=part)` writes the plan
+    of a compiled mission (its items, or `items`) to `path` atomically and returns the text.
+    """
+    if isinstance(items, (str, os.PathLike)):
+        compiled = home
+        chosen = file_form.pop("items", None)
+        if file_form:
+            raise TypeError(f"unexpected arguments {sorted(file_form)}")
+        speed = getattr(compiled, "speed_mps", None)
+        text = write_plan(list(chosen if chosen is not None else compiled.items), compiled.home,
+                          firmware=compiled.firmware, vehicle=getattr(compiled, "frame", None),
+                          cruise_speed=speed, hover_speed=speed)
+        atomic_write(Path(items), text)
+        return text
+    if file_form:
+        raise TypeError(f"unexpected arguments {sorted(file_form)}")
+    doc = plan_document(items, home, firmware=firmware, vehicle=vehicle, fence=fence, rally=rally,
+                        cruise_speed=cruise_speed, hover_speed=hover_speed)
+    return json.dumps(doc, indent=4, sort_keys=True, allow_nan=False) + "\n"
+
+
+def atomic_write(path: Path, text: str) -> None:
+    """Write `text` to `path` via a temporary file in the same directory and a rename."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+
+
+# -- reading ---------------------------------------------------------------------------------------
+
+class _Reader:
+    def __init__(self, name: str) -> None:
+        self.name = name
+
+    def err(self, path: str, message: str, hint: str | None = None) -> PlanError:
+        return PlanError(message, where=f"{self.name}: {path}" if path else self.name, hint=hint)
+
+    def obj(self, value: Any, path: str) -> dict[str, Any]:
+        if not isinstance(value, dict):
+            raise self.err(path, f"expected a JSON object, found {_kind(value)}")
+        return value
+
+    def key(self, obj: dict[str, Any], key: str, path: str, hint: str | None = None) -> Any:
+        if key not in obj:
+            raise self.err(path, f"missing key {key!r}", hint)
+        return obj[key]
+
+    def version(self, obj: dict[str, Any], path: str, allowed: tuple[int, ...], what: str) -> int:
+        v = self.key(obj, "version", path)
+        if isinstance(v, bool) or not isinstance(v, (int, Decimal)) or v not in allowed:
+            raise self.err(f"{path}.version" if path else "version",
+                           f"{what} version {_show(v)} is not supported (QGroundControl writes "
+                           f"{' or '.join(map(str, allowed))})",
+                           "save the plan again with a current QGroundControl")
+        return int(v)
+
+    def number(self, value: Any, path: str, *, null_ok: bool = False) -> Decimal | None:
+        if value is None and null_ok:
+            return None
+        if isinstance(value, bool) or not isinstance(value, (int, float, Decimal)):
+            raise self.err(path, f"expected a number, found {_kind(value)}")
+        d = Decimal(value) if not isinstance(value, Decimal) else value
+        if not d.is_finite():
+            return None if null_ok else self._nonfinite(path)
+        return d
+
+    def _nonfinite(self, path: str):
+        raise self.err(path, "expected a finite number")
+
+    def integer(self, value: Any, path: str, lo: int, hi: int) -> int:
+        d = self.number(value, path)
+        if d is None or d != d.to_integral_value() or not lo <= d <= hi:
+            raise self.err(path, f"expected a whole number in {lo}..{hi}, found {_show(value)}")
+        return int(d)
+
+    def fixed(self, value: Any, path: str, frame: int) -> int:
+        """x/y as MISSION_ITEM_INT carries them (null, as QGC writes NaN, becomes 0)."""
+        d = self.number(value, path, null_ok=True)
+        if d is None:
+            return 0
+        v = int((d * _scale(frame)).to_integral_value(rounding=ROUND_HALF_UP))
+        if not -2**31 <= v < 2**31:
+            raise self.err(path, f"{_show(value)} does not fit MISSION_ITEM_INT's 32-bit x/y for frame {frame}")
+        return v
+
+    def latlon(self, value: Any, path: str) -> tuple[int, int]:
+        if not isinstance(value, list) or len(value) < 2:
+            raise self.err(path, f"expected [lat, lon], found {_kind(value)}")
+        lat = self.number(value[0], f"{path}[0]")
+        lon = self.number(value[1], f"{path}[1]")
+        assert lat is not None and lon is not None
+        if not (-90 <= lat <= 90 and -180 <= lon <= 180):
+            raise self.err(path, f"latitude {lat} / longitude {lon} out of range")
+        return self.fixed(lat, f"{path}[0]", 0), self.fixed(lon, f"{path}[1]", 0)
+
+
+def _kind(v: Any) -> str:
+    return {dict: "an object", list: "an array", str: "a string", bool: "a boolean", type(None): "null"}.get(
+        type(v), "a number")
+
+
+def _show(v: Any) -> str:
+    return json.dumps(v, default=str) if not isinstance(v, Decimal) else str(v)
+
+
+def _f(d: Decimal | None) -> float:
+    return math.nan if d is None else float(d)
+
+
+def _parse_json(text: str | bytes, name: str) -> Any:
+    if isinstance(text, bytes):
+        if len(text) > MAX_PLAN_BYTES:
+            raise PlanError(f"the file is larger than {MAX_PLAN_BYTES // 2**20} MB", where=name)
+        try:
+            text = text.decode("utf-8-sig")
+        except UnicodeDecodeError as err:
+            raise PlanError(f"not UTF-8 text (byte {err.start})", where=name,
+                            hint="a .plan file is JSON in UTF-8") from None
+    if len(text) > MAX_PLAN_BYTES:
+        raise PlanError(f"the file is larger than {MAX_PLAN_BYTES // 2**20} MB", where=name)
+    try:
+        return json.loads(text, parse_float=Decimal, parse_int=Decimal)
+    except json.JSONDecodeError as err:
+        raise PlanError(f"not valid JSON: {err.msg}", where=f"{name}:{err.lineno}:{err.colno}",
+                        hint="a .plan file is the JSON QGroundControl saves") from None
+    except RecursionError:
+        raise PlanError("JSON nested too deeply", where=name) from None
+
+
+def _simple(r: _Reader, raw: Any, path: str, mission_type: int) -> MissionItem:
+    it = r.obj(raw, path)
+    command = r.integer(r.key(it, "command", path), f"{path}.command", 0, 65535)
+    frame = r.integer(r.key(it, "frame", path), f"{path}.frame", 0, 255)
+    params = r.key(it, "params", path)
+    if not isinstance(params, list) or len(params) != 7:
+        raise r.err(f"{path}.params", f"expected an array of 7 numbers (null for NaN), found {_kind(params)}"
+                    + (f" of {len(params)}" if isinstance(params, list) else ""))
+    auto = r.key(it, "autoContinue", path)
+    if not isinstance(auto, bool):
+        raise r.err(f"{path}.autoContinue", f"expected true or false, found {_kind(auto)}")
+    p = [r.number(v, f"{path}.params[{k}]", null_ok=True) for k, v in enumerate(params)]
+    return MissionItem(command=command, frame=frame, param1=_f(p[0]), param2=_f(p[1]), param3=_f(p[2]),
+                       param4=_f(p[3]), x=r.fixed(params[4], f"{path}.params[4]", frame),
+                       y=r.fixed(params[5], f"{path}.params[5]", frame), z=_f(p[6]), autocontinue=int(auto),
+                       mission_type=mission_type)
+
+
+def _complex(r: _Reader, it: dict[str, Any], path: str) -> list[MissionItem]:
+    kind = r.key(it, "complexItemType", path)
+    if kind in ("survey", "CorridorScan"):
+        if kind == "survey":
+            # Versions 4 and 5 keep the generated items under TransectStyleComplexItem (the older
+            # v2/v3 layout is only readable by QGC itself); 5 is what QGC writes today.
+            r.version(it, path, (4, 5), "survey")
+        transect = r.obj(r.key(it, "TransectStyleComplexItem", path,
+                               "a survey stores its generated items under TransectStyleComplexItem.Items"),
+                         f"{path}.TransectStyleComplexItem")
+        tpath = f"{path}.TransectStyleComplexItem"
+        inner = transect.get("Items")
+        if not isinstance(inner, list) or not inner:
+            raise r.err(f"{tpath}.Items", f"the {kind} has no stored mission items",
+                        "open the plan in QGroundControl and save it again: QGC stores the generated items")
+        return [_simple(r, x, f"{tpath}.Items[{k}]", MISSION_TYPE_MISSION) for k, x in enumerate(inner)]
+    if kind == "StructureScan":
+        raise r.err(f"{path}.complexItemType", "a StructureScan stores no mission items in the file (QGC "
+                    "computes them when it loads the plan)",
+                    "upload it from QGroundControl, or replace it with waypoints or a capture plan")
+    raise r.err(f"{path}.complexItemType", f"complex item type {_show(kind)} is not supported",
+                "supported: survey, CorridorScan (their stored Items)")
+
+
+def _mission(r: _Reader, mission: dict[str, Any]) -> tuple[list[MissionItem], Home | None]:
+    r.version(mission, "mission", (2,), "mission")
+    raw_items = r.key(mission, "items", "mission")
+    if not isinstance(raw_items, list):
+        raise r.err("mission.items", f"expected an array, found {_kind(raw_items)}")
+    items: list[MissionItem] = []
+    for k, raw in enumerate(raw_items):
+        path = f"mission.items[{k}]"
+        it = r.obj(raw, path)
+        kind = r.key(it, "type", path)
+        if kind == "SimpleItem":
+            items.append(_simple(r, it, path, MISSION_TYPE_MISSION))
+        elif kind == "ComplexItem":
+            items.extend(_complex(r, it, path))
+        else:
+            raise r.err(f"{path}.type", f"item type {_show(kind)} is not SimpleItem or ComplexItem")
+        if len(items) > MAX_ITEMS:
+            raise r.err(path, f"more than {MAX_ITEMS} mission items")
+    home: Home | None = None
+    raw_home = mission.get("plannedHomePosition")
+    if raw_home is not None:
+        if not isinstance(raw_home, list) or len(raw_home) != 3:
+            raise r.err("mission.plannedHomePosition", "expected [lat, lon, altitude AMSL]")
+        x, y = r.latlon(raw_home, "mission.plannedHomePosition")
+        alt = r.number(raw_home[2], "mission.plannedHomePosition[2]", null_ok=True)
+        home = (x / 1e7, y / 1e7, 0.0 if alt is None else float(alt))
+    return items, home
+
+
+def _fence(r: _Reader, fence: dict[str, Any]) -> list[MissionItem]:
+    r.version(fence, "geoFence", (2,), "geoFence")
+    out: list[MissionItem] = []
+    polygons = fence.get("polygons", [])
+    circles = fence.get("circles", [])
+    for name, value in (("polygons", polygons), ("circles", circles)):
+        if not isinstance(value, list):
+            raise r.err(f"geoFence.{name}", f"expected an array, found {_kind(value)}")
+    for k, raw in enumerate(polygons):
+        path = f"geoFence.polygons[{k}]"
+        poly = r.obj(raw, path)
+        inclusion = r.key(poly, "inclusion", path)
+        vertices = r.key(poly, "polygon", path)
+        if not isinstance(inclusion, bool) or not isinstance(vertices, list) or len(vertices) < 3:
+            raise r.err(path, "a fence polygon needs \"inclusion\": true/false and at least 3 [lat, lon] vertices")
+        cmd = CMD_FENCE_POLYGON_INCLUSION if inclusion else CMD_FENCE_POLYGON_EXCLUSION
+        for j, v in enumerate(vertices):
+            x, y = r.latlon(v, f"{path}.polygon[{j}]")
+            out.append(MissionItem(command=cmd, frame=FRAME_GLOBAL, param1=float(len(vertices)), x=x, y=y,
+                                   mission_type=MISSION_TYPE_FENCE))
+    for k, raw in enumerate(circles):
+        path = f"geoFence.circles[{k}]"
+        c = r.obj(raw, path)
+        inclusion = r.key(c, "inclusion", path)
+        circle = r.obj(r.key(c, "circle", path), f"{path}.circle")
+        x, y = r.latlon(r.key(circle, "center", f"{path}.circle"), f"{path}.circle.center")
+        radius = r.number(r.key(circle, "radius", f"{path}.circle"), f"{path}.circle.radius")
+        if not isinstance(inclusion, bool) or radius is None or radius <= 0:
+            raise r.err(path, "a fence circle needs \"inclusion\": true/false and a positive radius")
+        out.append(MissionItem(command=CMD_FENCE_CIRCLE_INCLUSION if inclusion else CMD_FENCE_CIRCLE_EXCLUSION,
+                               frame=FRAME_GLOBAL, param1=float(radius), x=x, y=y, mission_type=MISSION_TYPE_FENCE))
+    ret = fence.get("breachReturn")
+    if isinstance(ret, list) and len(ret) == 3:
+        x, y = r.latlon(ret, "geoFence.breachReturn")
+        if (x, y) != (0, 0):
+            alt = r.number(ret[2], "geoFence.breachReturn[2]", null_ok=True)
+            out.append(MissionItem(command=CMD_FENCE_RETURN_POINT, frame=FRAME_GLOBAL_RELATIVE_ALT, x=x, y=y,
+                                   z=0.0 if alt is None else float(alt), mission_type=MISSION_TYPE_FENCE))
+    return out
+
+
+def _rally(r: _Reader, rally: dict[str, Any]) -> list[MissionItem]:
+    r.version(rally, "rallyPoints", (2,), "rallyPoints")
+    points = rally.get("points", [])
+    if not isinstance(points, list):
+        raise r.err("rallyPoints.points", f"expected an array, found {_kind(points)}")
+    out = []
+    for k, p in enumerate(points):
+        path = f"rallyPoints.points[{k}]"
+        if not isinstance(p, list) or len(p) != 3:
+            raise r.err(path, "expected [lat, lon, altitude]")
+        x, y = r.latlon(p, path)
+        alt = r.number(p[2], f"{path}[2]")
+        out.append(MissionItem(command=CMD_RALLY_POINT, frame=FRAME_GLOBAL_RELATIVE_ALT, x=x, y=y, z=float(alt),
+                               mission_type=MISSION_TYPE_RALLY))
+    return out
+
+
+def read_plan(text: str | bytes, name: str = "<plan>") -> tuple[list[MissionItem], list[MissionItem],
+                                                                  list[MissionItem], Home | None]:
+    """(mission items, fence items, rally items, home) from .plan text; PlanError with a location."""
+    doc = _parse_json(text, name)
+    r = _Reader(name)
+    top = r.obj(doc, "")
+    file_type = top.get("fileType")
+    if file_type != "Plan":
+        raise r.err("fileType", f"fileType is {_show(file_type)}, not \"Plan\"",
+                    "this is not a QGroundControl plan file (a .mission or fence/rally file?)")
+    r.version(top, "", (1,), "plan file")
+    mission = r.obj(r.key(top, "mission", "", "the plan has no mission section"), "mission")
+    items, home = _mission(r, mission)
+    # QGC writes both sections; MAVSDK's importer fails without them, so a file lacking one is broken.
+    fence = _fence(r, r.obj(r.key(top, "geoFence", "", "QGroundControl always writes a geoFence section"),
+                            "geoFence"))
+    rally = _rally(r, r.obj(r.key(top, "rallyPoints", "", "QGroundControl always writes a rallyPoints section"),
+                            "rallyPoints"))
+    return items, fence, rally, home
+
+
+def load_plan(path: str | Path) -> tuple[list[MissionItem], list[MissionItem], list[MissionItem], Home | None]:
+    """read_plan on a file, with the size limit applied before reading it all."""
+    p = Path(path)
+    try:
+        size = p.stat().st_size
+        if size > MAX_PLAN_BYTES:
+            raise PlanError(f"the file is larger than {MAX_PLAN_BYTES // 2**20} MB", where=str(p))
+        data = p.read_bytes()
+    except OSError as err:
+        raise PlanError(f"cannot read the file: {err.strerror}", where=str(p)) from None
+    return read_plan(data, str(p))

@@ -1,0 +1,185 @@
+"""`QGC WPL 110` waypoint files (Mission Planner, MAVProxy `wp load/save`, pymavlink mavwp): pure.
+
+    text = write_wpl(items, (lat, lon, alt_amsl))          # home row + items
+    items, home = read_wpl(text, "survey.waypoints")
+
+Format (mavlink.io file_formats): the line `QGC WPL 110`, then one tab-separated row per item:
+INDEX CURRENT FRAME COMMAND P1 P2 P3 P4 X/LAT Y/LON Z/ALT AUTOCONTINUE.
+
+Home row: ArduPilot keeps home as mission item 0, so Mission Planner and MAVProxy files for it
+carry home in row 0 (frame 0 = absolute altitude) and the mission from row 1. `write_wpl` always
+writes that row (home, or 0/0/0 when unknown - ArduPilot overwrites item 0 with its own home on
+upload); `read_wpl` takes row 0 as home when it looks like one (NAV_WAYPOINT - or command 0, an
+old Mission Planner quirk pymavlink also accepts - in frame 0), else every row is a mission item.
+Pass `home_row=True/False` to decide explicitly.
+
+Numbers: latitude/longitude with exactly 7 decimals (the wire's degE7, so nothing is lost;
+pymavlink's own writer keeps only 6, ~0.1 m), other values in the shortest form that reads back to
+the same double, NaN as `NaN` (pymavlink and Mission Planner both parse it). Reading accepts any
+whitespace between fields (as pymavlink does), `#` comment lines and blank lines.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from decimal import ROUND_HALF_UP, Decimal, InvalidOperation
+from pathlib import Path
+
+from missions.errors import PlanError
+from missions.items import FRAME_GLOBAL, MISSION_TYPE_MISSION, MissionItem
+from missions.planfile import MAX_ITEMS, _scale, atomic_write
+
+Home = tuple[float, float, float]
+
+HEADER = "QGC WPL 110"
+MAX_WPL_BYTES = 10 * 1024 * 1024
+CMD_NAV_WAYPOINT = 16   # MAV_CMD_NAV_WAYPOINT (common.xml)
+
+
+def _num(v: float) -> str:
+    if math.isnan(v):
+        return "NaN"
+    if math.isinf(v):
+        raise PlanError(f"an infinite value ({v}) cannot be written to a waypoint file")
+    if float(v).is_integer() and abs(v) < 2**53:
+        return str(int(v))
+    return repr(float(v))
+
+
+def _fixed(v: int, frame: int) -> str:
+    s = _scale(frame)
+    if s == 1:
+        return str(int(v))
+    digits = len(str(s)) - 1
+    sign = "-" if v < 0 else ""
+    whole, frac = divmod(abs(int(v)), s)
+    return f"{sign}{whole}.{frac:0{digits}d}"
+
+
+def _row(index: int, it: MissionItem, current: int) -> str:
+    return "\t".join((str(index), str(current), str(it.frame), str(it.command), _num(it.param1), _num(it.param2),
+                      _num(it.param3), _num(it.param4), _fixed(it.x, it.frame), _fixed(it.y, it.frame),
+                      _num(it.z), str(it.autocontinue)))
+
+
+def _home_item(home: Home | None) -> MissionItem:
+    from missions.items import deg_to_e7
+    lat, lon, alt = home if home is not None else (0.0, 0.0, 0.0)
+    return MissionItem(command=CMD_NAV_WAYPOINT, frame=FRAME_GLOBAL, x=deg_to_e7(lat), y=deg_to_e7(lon),
+                       z=float(alt))
+
+
+def wpl_text(items, home: Home | None = None) -> str:
+    items = list(items)
+    if len(items) + 1 > MAX_ITEMS:
+        raise PlanError(f"{len(items)} items do not fit a MAVLink mission (at most {MAX_ITEMS - 1} plus home)")
+    lines = [HEADER, _row(0, _home_item(home), 1)]
+    lines += [_row(i + 1, it, 0) for i, it in enumerate(items)]
+    return "\n".join(lines) + "\n"
+
+
+def write_wpl(items, /, *args, home: Home | None = None, firmware: str | None = None) -> str:
+    """WPL 110 text: home row 0, then `items` (which never contain a home row) from row 1.
+
+    `write_wpl(items, home)` returns the text. File form, used by missions.outputs:
+    `write_wpl(path, items, home=..., firmware=...)` also writes it to `path` atomically.
+    `firmware` is accepted for symmetry with write_plan; the file is the same for both stacks
+    (PX4 tools skip row 0 as home too).
+    """
+    if isinstance(items, (str, os.PathLike)):
+        if len(args) != 1:
+            raise TypeError("write_wpl(path, items, home=...) takes the items after the path")
+        text = wpl_text(args[0], home)
+        atomic_write(Path(items), text)
+        return text
+    if args:
+        if len(args) > 1 or home is not None:
+            raise TypeError("write_wpl(items, home) takes at most one positional home")
+        home = args[0]
+    return wpl_text(items, home)
+
+
+def _decimal(field: str, where: str, what: str) -> Decimal:
+    try:
+        d = Decimal(field)
+    except InvalidOperation:
+        raise PlanError(f"{what} {field!r} is not a number", where=where) from None
+    return d
+
+
+def read_wpl(text: str | bytes, name: str = "<waypoints>", *,
+             home_row: bool | None = None) -> tuple[list[MissionItem], Home | None]:
+    """(mission items, home) from WPL 110 text; PlanError with NAME:LINE otherwise."""
+    if isinstance(text, bytes):
+        if len(text) > MAX_WPL_BYTES:
+            raise PlanError(f"the file is larger than {MAX_WPL_BYTES // 2**20} MB", where=name)
+        try:
+            text = text.decode("utf-8-sig")
+        except UnicodeDecodeError as err:
+            raise PlanError(f"not UTF-8 text (byte {err.start})", where=name) from None
+    if len(text) > MAX_WPL_BYTES:
+        raise PlanError(f"the file is larger than {MAX_WPL_BYTES // 2**20} MB", where=name)
+    lines = text.splitlines()
+    if not lines or lines[0].strip() != HEADER:
+        first = lines[0].strip()[:40] if lines else ""
+        raise PlanError(f"the first line is {first!r}, not {HEADER!r}", where=f"{name}:1",
+                        hint="only QGC WPL 110 is read (Mission Planner and MAVProxy save it)")
+    rows: list[tuple[int, MissionItem, int]] = []
+    for lineno, line in enumerate(lines[1:], start=2):
+        stripped = line.strip()
+        if not stripped or stripped.startswith("#"):
+            continue
+        where = f"{name}:{lineno}"
+        fields = stripped.split()
+        if len(fields) != 12:
+            raise PlanError(f"expected 12 fields, found {len(fields)}", where=where,
+                            hint="INDEX CURRENT FRAME COMMAND P1 P2 P3 P4 LAT LON ALT AUTOCONTINUE")
+        ints = []
+        for k, what, hi in ((0, "index", 65535), (1, "current", 1), (2, "frame", 255), (3, "command", 65535),
+                            (11, "autocontinue", 1)):
+            d = _decimal(fields[k], where, what)
+            if not d.is_finite() or d != d.to_integral_value() or not 0 <= d <= hi:
+                raise PlanError(f"{what} {fields[k]!r} is not a whole number in 0..{hi}", where=where)
+            ints.append(int(d))
+        index, current, frame, command, auto = ints
+        if index != len(rows):
+            raise PlanError(f"row index {index}, expected {len(rows)}", where=where,
+                            hint="rows must be numbered 0, 1, 2, … without gaps")
+        params = [float(_decimal(fields[k], where, f"param{k - 3}")) for k in range(4, 8)]
+        xy = []
+        for k, what in ((8, "latitude/x"), (9, "longitude/y")):
+            d = _decimal(fields[k], where, what)
+            if not d.is_finite():
+                xy.append(0)
+                continue
+            v = int((d * _scale(frame)).to_integral_value(rounding=ROUND_HALF_UP))
+            if not -2**31 <= v < 2**31:
+                raise PlanError(f"{what} {fields[k]} does not fit MISSION_ITEM_INT for frame {frame}", where=where)
+            xy.append(v)
+        z = float(_decimal(fields[10], where, "altitude/z"))
+        rows.append((lineno, MissionItem(command=command, frame=frame, param1=params[0], param2=params[1],
+                                         param3=params[2], param4=params[3], x=xy[0], y=xy[1], z=z,
+                                         autocontinue=auto, current=current, mission_type=MISSION_TYPE_MISSION),
+                     index))
+        if len(rows) > MAX_ITEMS:
+            raise PlanError(f"more than {MAX_ITEMS} rows", where=where)
+    if home_row is None:
+        home_row = bool(rows) and rows[0][1].command in (CMD_NAV_WAYPOINT, 0) and rows[0][1].frame == FRAME_GLOBAL
+    home: Home | None = None
+    items = [it for _, it, _ in rows]
+    if home_row and items:
+        h = items.pop(0)
+        home = (h.x / 1e7, h.y / 1e7, h.z)
+    return items, home
+
+
+def load_wpl(path: str | Path, *, home_row: bool | None = None) -> tuple[list[MissionItem], Home | None]:
+    p = Path(path)
+    try:
+        if p.stat().st_size > MAX_WPL_BYTES:
+            raise PlanError(f"the file is larger than {MAX_WPL_BYTES // 2**20} MB", where=str(p))
+        data = p.read_bytes()
+    except OSError as err:
+        raise PlanError(f"cannot read the file: {err.strerror}", where=str(p)) from None
+    return read_wpl(data, str(p), home_row=home_row)

@@ -1,0 +1,236 @@
+"""QGroundControl .plan reading and writing: every corpus file (good ones read, broken ones refused
+with a location), exact round trips, fence and rally, hostile input, and MAVSDK's own QGC importer
+reading what we write."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from missions.errors import PlanError
+from missions.items import MISSION_TYPE_FENCE, MISSION_TYPE_RALLY, MissionItem
+from missions.planfile import load_plan, read_plan, write_plan
+
+CORPUS = Path(__file__).resolve().parents[3] / "shared" / "corpus" / "plans"
+if not CORPUS.is_dir():
+    CORPUS = Path(__file__).resolve().parents[2].parent / "shared" / "corpus" / "plans"
+
+# MAVSDK's mission_import_test.cpp expectations for its own samples: items (no home row) or the
+# fragment of our error's location.
+GOOD = {"qgroundcontrol_sample.plan": 6, "qgroundcontrol_sample_with_survey.plan": 13,
+        "qgroundcontrol_sample_with_digicam_control.plan": 1}
+BROKEN = {
+    "qgroundcontrol_sample_with_structured_scan.plan": "mission.items[1].complexItemType",
+    "qgroundcontrol_sample_with_survey_missing_items.plan": "mission.items[1].TransectStyleComplexItem.Items",
+    "qgroundcontrol_sample_with_survey_wrong_version.plan": "mission.items[1].version",
+    "qgroundcontrol_sample_without_mission.plan": "qgroundcontrol_sample_without_mission.plan",
+    "qgroundcontrol_sample_wrong_mission_version.plan": "mission.version",
+    "qgroundcontrol_sample_wrong_overall_version.plan": "version",
+}
+
+
+def test_corpus_is_covered():
+    plans = {p.name for p in CORPUS.glob("*.plan")}
+    assert plans == set(GOOD) | set(BROKEN)
+
+
+@pytest.mark.parametrize("name", sorted(GOOD))
+def test_good_corpus_plans_read(name):
+    items, fence, rally, home = load_plan(CORPUS / name)
+    assert len(items) == GOOD[name] and fence == [] and rally == []
+    raw = json.loads((CORPUS / name).read_text())
+    assert home == pytest.approx(tuple(raw["mission"]["plannedHomePosition"]))
+
+
+@pytest.mark.parametrize("name", sorted(BROKEN))
+def test_broken_corpus_plans_are_refused_with_location(name):
+    with pytest.raises(PlanError) as err:
+        load_plan(CORPUS / name)
+    assert err.value.where.startswith(str(CORPUS / name))
+    assert err.value.where.endswith(BROKEN[name])
+    assert err.value.hint
+
+
+def test_survey_items_are_the_stored_transect_items():
+    items, *_ = load_plan(CORPUS / "qgroundcontrol_sample_with_survey.plan")
+    raw = json.loads((CORPUS / "qgroundcontrol_sample_with_survey.plan").read_text())
+    stored = raw["mission"]["items"][1]["TransectStyleComplexItem"]["Items"]
+    assert [it.command for it in items[1:1 + len(stored)]] == [s["command"] for s in stored]
+    first = stored[0]["params"]
+    assert items[1].x == round(first[4] * 1e7) and items[1].y == round(first[5] * 1e7)
+    assert math.isnan(items[1].param4)   # null -> NaN
+
+
+def test_sample_values_exactly():
+    items, _, _, _ = load_plan(CORPUS / "qgroundcontrol_sample.plan")
+    takeoff = items[0]
+    assert (takeoff.command, takeoff.frame, takeoff.param1, takeoff.x, takeoff.y, takeoff.z) == \
+        (22, 3, 15.0, 473977507, 85456075, 50.0)
+    assert items[2].command == 2000 and items[2].frame == 2 and items[2].param3 == 1
+
+
+def sample_items():
+    return [MissionItem(command=22, param1=15, param4=math.nan, x=473977507, y=85456075, z=50),
+            MissionItem(command=16, param4=math.nan, x=-335000001, y=-700000009, z=42.125, frame=0),
+            MissionItem(command=2000, frame=2, param3=1, param4=0.1),
+            MissionItem(command=206, frame=2, param1=25.5, param3=1),
+            MissionItem(command=16, frame=10, x=1, y=-1, z=30),
+            MissionItem(command=20, frame=2, autocontinue=0)]
+
+
+def fence_items():
+    poly = [MissionItem(command=5001, frame=0, param1=3, x=x, y=y, mission_type=MISSION_TYPE_FENCE)
+            for x, y in ((470000000, 80000000), (470010000, 80000000), (470010000, 80010000))]
+    return poly + [MissionItem(command=5004, frame=0, param1=25.5, x=470005000, y=80005000,
+                               mission_type=MISSION_TYPE_FENCE)]
+
+
+def rally_items():
+    return [MissionItem(command=5100, frame=3, x=470002000, y=80002000, z=30, mission_type=MISSION_TYPE_RALLY)]
+
+
+def same(a, b):
+    return len(a) == len(b) and all(x.same_on_wire(y) for x, y in zip(a, b))
+
+
+def test_round_trip_with_fence_rally_and_home():
+    text = write_plan(sample_items(), (47.1, 8.2, 488.5), firmware="ardupilot", vehicle="copter",
+                      fence=fence_items(), rally=rally_items(), cruise_speed=12)
+    items, fence, rally, home = read_plan(text, "x.plan")
+    assert same(items, sample_items()) and same(fence, fence_items()) and same(rally, rally_items())
+    assert home == (47.1, 8.2, 488.5)
+    doc = json.loads(text)
+    assert (doc["fileType"], doc["version"], doc["mission"]["version"], doc["geoFence"]["version"],
+            doc["rallyPoints"]["version"]) == ("Plan", 1, 2, 2, 2)
+    assert doc["mission"]["firmwareType"] == 3 and doc["mission"]["vehicleType"] == 2
+    assert doc["mission"]["cruiseSpeed"] == 12 and doc["mission"]["globalPlanAltitudeMode"] == 0
+    assert doc["mission"]["items"][0]["params"][3] is None          # NaN as null, like QGC
+    assert doc["geoFence"]["polygons"][0]["version"] == 1 and doc["geoFence"]["circles"][0]["inclusion"] is False
+
+
+def test_writer_is_deterministic_and_sorted_like_qt():
+    a = write_plan(sample_items(), None, firmware="px4", vehicle="plane")
+    assert a == write_plan(sample_items(), None, firmware="px4", vehicle="plane")
+    doc = json.loads(a)
+    assert list(doc) == sorted(doc) and doc["mission"]["plannedHomePosition"] == [0, 0, 0]
+
+
+def test_corpus_round_trip_is_exact():
+    for name in GOOD:
+        items, fence, rally, home = load_plan(CORPUS / name)
+        again = read_plan(write_plan(items, home, firmware="px4", vehicle="copter", fence=fence, rally=rally))
+        assert same(again[0], items) and again[3] == pytest.approx(home)
+
+
+def test_file_form_writes_atomically(tmp_path):
+    class Compiled:
+        items = tuple(sample_items())
+        home = (47.0, 8.0, 400.0)
+        firmware = "px4"
+        frame = "copter"
+        speed_mps = 7.5
+
+    target = tmp_path / "m.plan"
+    text = write_plan(target, Compiled(), items=sample_items()[:2])
+    assert target.read_text() == text and len(read_plan(text)[0]) == 2
+    assert [p.name for p in tmp_path.iterdir()] == ["m.plan"]
+
+
+@pytest.mark.parametrize("mutate,where", [
+    (lambda d: d.__setitem__("fileType", "Mission"), "fileType"),
+    (lambda d: d.pop("geoFence"), "x.plan"),
+    (lambda d: d.pop("rallyPoints"), "x.plan"),
+    (lambda d: d["geoFence"].__setitem__("version", 1), "geoFence.version"),
+    (lambda d: d["mission"]["items"][0].pop("autoContinue"), "mission.items[0]"),
+    (lambda d: d["mission"]["items"][0].__setitem__("params", 5), "mission.items[0].params"),
+    (lambda d: d["mission"]["items"][0].__setitem__("params", [0, 0, 0, 0, 49.2]), "mission.items[0].params"),
+    (lambda d: d["mission"]["items"][0].__setitem__("command", "22"), "mission.items[0].command"),
+    (lambda d: d["mission"]["items"][0].__setitem__("type", "FancyItem"), "mission.items[0].type"),
+    (lambda d: d["mission"]["items"][1]["params"].__setitem__(4, "47.1"), "mission.items[1].params[4]"),
+    (lambda d: d["mission"]["items"][1]["params"].__setitem__(4, 1e12), "mission.items[1].params[4]"),
+    (lambda d: d["mission"].__setitem__("plannedHomePosition", [95, 0, 0]), "mission.plannedHomePosition"),
+    (lambda d: d["rallyPoints"]["points"].append([1, 2]), "rallyPoints.points[1]"),
+    (lambda d: d["geoFence"]["polygons"][0]["polygon"].pop(), "geoFence.polygons[0]"),
+    (lambda d: d["mission"]["items"].__setitem__(0, []), "mission.items[0]"),
+])
+def test_content_errors_name_their_location(mutate, where):
+    doc = json.loads(write_plan(sample_items(), (1, 2, 3), firmware="px4", vehicle="copter",
+                                fence=fence_items(), rally=rally_items()))
+    mutate(doc)
+    with pytest.raises(PlanError) as err:
+        read_plan(json.dumps(doc), "x.plan")
+    assert err.value.where.endswith(where), str(err.value)
+
+
+@pytest.mark.parametrize("text,where", [
+    ("{ not json", "x.plan:1:3"),
+    ("", "x.plan:1:1"),
+    ("[1, 2]", "x.plan"),
+    ("[" * 100000 + "]" * 100000, "x.plan"),
+])
+def test_syntax_and_hostile_input(text, where):
+    with pytest.raises(PlanError) as err:
+        read_plan(text, "x.plan")
+    assert err.value.where == where
+
+
+def test_size_and_encoding_limits(tmp_path):
+    with pytest.raises(PlanError, match="UTF-8"):
+        read_plan(b'{"fileType": "Plan\xff"}', "x.plan")
+    big = tmp_path / "big.plan"
+    with big.open("wb") as fh:
+        fh.seek(21 * 1024 * 1024)
+        fh.write(b"\0")
+    with pytest.raises(PlanError, match="larger than"):
+        load_plan(big)
+    with pytest.raises(PlanError, match="cannot read"):
+        load_plan(tmp_path / "missing.plan")
+
+
+def test_bad_writer_input():
+    with pytest.raises(PlanError, match="unknown firmware"):
+        write_plan(sample_items(), None, firmware="betaflight", vehicle="copter")
+    with pytest.raises(PlanError, match="fence polygon"):
+        write_plan([], None, firmware="px4", vehicle="copter", fence=fence_items()[:2])
+    with pytest.raises(PlanError, match="infinite"):
+        write_plan([MissionItem(command=16, param1=math.inf)], None, firmware="px4", vehicle="copter")
+
+
+finite = st.floats(allow_nan=True, allow_infinity=False, width=32)
+items_st = st.lists(st.builds(
+    MissionItem, command=st.integers(0, 65535), frame=st.sampled_from([0, 2, 3, 10]),
+    param1=finite, param2=finite, param3=finite, param4=finite,
+    x=st.integers(-900000000, 900000000), y=st.integers(-1800000000, 1800000000), z=finite,
+    autocontinue=st.integers(0, 1)), max_size=8)
+
+
+@settings(max_examples=150, deadline=None)
+@given(items_st)
+def test_property_round_trip(items):
+    assert same(read_plan(write_plan(items, None, firmware="px4", vehicle="copter"))[0], items)
+
+
+@pytest.mark.peer
+@pytest.mark.parametrize("autopilot", ["px4", "ardupilot"])
+def test_mavsdk_imports_what_we_write(tmp_path, autopilot):
+    import mission_peers
+
+    home = (47.1, 8.2, 488.5)
+    items = sample_items()
+    text = write_plan(items, home, firmware=autopilot, vehicle="copter", fence=fence_items(), rally=rally_items())
+    res = mission_peers.mavsdk_import_plan(text, tmp_path, autopilot=autopilot)
+    assert res["ok"], res.get("error")
+    mission = res["mission"]
+    if autopilot == "ardupilot":
+        # MAVSDK puts plannedHomePosition in as item 0 for ArduPilot, as QGC does on upload.
+        h = mission.pop(0)
+        assert (h.x, h.y, h.z) == (471000000, 82000000, 488.5)
+    assert same(mission, items), [(a, b) for a, b in zip(mission, items) if not a.same_on_wire(b)]
+    # MAVSDK marks fence and rally items autocontinue=0 (meaningless for them); the rest must match.
+    assert same([f.with_(autocontinue=1) for f in res["fence"]], fence_items())
+    assert same([r.with_(autocontinue=1) for r in res["rally"]], rally_items())

@@ -1,0 +1,115 @@
+"""QGC WPL 110: the Mission Planner sample from the corpus, the home row, 7-decimal coordinates,
+exact round trips, bad rows with file:line, and pymavlink's own loader (MAVWPLoader) reading
+what we write."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from missions.errors import PlanError
+from missions.items import MissionItem
+from missions.wpl import load_wpl, read_wpl, write_wpl
+
+CORPUS = Path(__file__).resolve().parents[3] / "shared" / "corpus" / "plans"
+
+
+def items():
+    return [MissionItem(command=22, param1=15, param4=math.nan, x=473977507, y=85456075, z=50),
+            MissionItem(command=16, x=-335000001, y=-700000009, z=42.125, frame=0),
+            MissionItem(command=206, frame=2, param1=25.5, param3=1),
+            MissionItem(command=20, frame=2, autocontinue=0)]
+
+
+def same(a, b):
+    return len(a) == len(b) and all(x.same_on_wire(y) for x, y in zip(a, b))
+
+
+def test_mission_planner_sample():
+    got, home = load_wpl(CORPUS / "mission_planner_sample.txt")
+    # Its row 0 is a takeoff in frame 5, not a home row: every row is a mission item.
+    assert home is None and [it.command for it in got] == [22, 16, 16, 20]
+    assert (got[0].frame, got[0].x, got[0].y, got[0].z, got[0].current) == (5, 473978101, 85455380, 15.0, 1)
+    forced, home = load_wpl(CORPUS / "mission_planner_sample.txt", home_row=True)
+    assert len(forced) == 3 and home == pytest.approx((47.3978101, 8.545538, 15.0))
+
+
+def test_layout_home_row_tabs_and_seven_decimals():
+    text = write_wpl(items(), (47.1, 8.2, 488.5))
+    lines = text.splitlines()
+    assert lines[0] == "QGC WPL 110"
+    assert lines[1].split("\t") == ["0", "1", "0", "16", "0", "0", "0", "0", "47.1000000", "8.2000000", "488.5", "1"]
+    row = lines[3].split("\t")
+    assert row[0] == "2" and row[8:10] == ["-33.5000001", "-70.0000009"]
+    assert all(len(line.split("\t")) == 12 for line in lines[1:])
+
+
+def test_round_trip_with_home():
+    got, home = read_wpl(write_wpl(items(), (47.1, 8.2, 488.5)))
+    assert same(got, items()) and home == (47.1, 8.2, 488.5)
+
+
+def test_without_home_writes_a_placeholder_row():
+    text = write_wpl(items())
+    assert text.splitlines()[1].split("\t")[8:11] == ["0.0000000", "0.0000000", "0"]
+    got, home = read_wpl(text)
+    assert same(got, items()) and home == (0.0, 0.0, 0.0)
+
+
+def test_file_form(tmp_path):
+    target = tmp_path / "m.waypoints"
+    text = write_wpl(target, items(), home=(1.0, 2.0, 3.0), firmware="ardupilot")
+    assert target.read_text() == text and [p.name for p in tmp_path.iterdir()] == ["m.waypoints"]
+
+
+def test_pymavlink_loader_reads_what_we_write(tmp_path):
+    from pymavlink import mavwp
+
+    f = tmp_path / "m.waypoints"
+    f.write_text(write_wpl(items(), (47.1, 8.2, 488.5)))
+    loader = mavwp.MAVWPLoader()
+    assert loader.load(str(f)) == 5
+    wps = [loader.wp(i) for i in range(5)]
+    assert [w.command for w in wps] == [16, 22, 16, 206, 20]
+    assert wps[2].x == pytest.approx(-33.5000001, abs=1e-9) and wps[2].y == pytest.approx(-70.0000009, abs=1e-9)
+    assert math.isnan(wps[1].param4)
+
+
+@pytest.mark.parametrize("text,where,msg", [
+    ("", "w:1", "not 'QGC WPL 110'"),
+    ("QGC WPL 100\n", "w:1", "not 'QGC WPL 110'"),
+    ("QGC WPL 110\n0\t1\t0\t16\t0\t0\t0\t0\t1\t2\t3\n", "w:2", "12 fields"),
+    ("QGC WPL 110\n0\t1\t0\t16\t0\t0\t0\t0\tabc\t2\t3\t1\n", "w:2", "not a number"),
+    ("QGC WPL 110\n1\t1\t0\t16\t0\t0\t0\t0\t1\t2\t3\t1\n", "w:2", "row index 1"),
+    ("QGC WPL 110\n\n# c\n0\t2\t0\t16\t0\t0\t0\t0\t1\t2\t3\t1\n", "w:4", "current"),
+    ("QGC WPL 110\n0\t0\t0\t16.5\t0\t0\t0\t0\t1\t2\t3\t1\n", "w:2", "command"),
+    ("QGC WPL 110\n0\t0\t0\t16\t0\t0\t0\t0\t300\t2\t3\t1\n", "w:2", "does not fit"),
+])
+def test_bad_rows_name_their_line(text, where, msg):
+    with pytest.raises(PlanError) as err:
+        read_wpl(text, "w")
+    assert err.value.where == where and msg in err.value.message
+
+
+def test_limits(tmp_path):
+    with pytest.raises(PlanError, match="UTF-8"):
+        read_wpl(b"QGC WPL 110\n\xff\n", "w")
+    with pytest.raises(PlanError, match="cannot read"):
+        load_wpl(tmp_path / "nope")
+
+
+finite = st.floats(allow_nan=True, allow_infinity=False, width=32)
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.lists(st.builds(MissionItem, command=st.integers(1, 65535), frame=st.sampled_from([2, 3, 5, 6, 10]),
+                          param1=finite, param2=finite, param3=finite, param4=finite,
+                          x=st.integers(-900000000, 900000000), y=st.integers(-1800000000, 1800000000),
+                          z=finite, autocontinue=st.integers(0, 1)), max_size=8))
+def test_property_round_trip(xs):
+    got, _ = read_wpl(write_wpl(xs, (1.0, 2.0, 3.0)))
+    assert same(got, xs)
