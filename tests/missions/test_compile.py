@@ -1,0 +1,318 @@
+"""compile_plan end to end: items per firmware × camera, the rules that refuse, parts, warnings, params."""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+
+import pytest
+import yaml
+from pymavlink.dialects.v20 import ardupilotmega as m
+
+from cdf.catalogue import catalogue
+from missions import lua
+from missions.compile import compile_plan
+from missions.errors import PlanError
+from missions.plan import parse_plan
+from missions.setup import commands_for
+
+PLANS = Path(__file__).resolve().parent / "plans"
+
+# What the compiler may emit, per firmware, written from reference autopilots-and-cameras §2.2/§3.1/§7.
+MAY_EMIT = {
+    "ardupilot": {"NAV_TAKEOFF", "NAV_VTOL_TAKEOFF", "NAV_WAYPOINT", "NAV_LOITER_TIME", "NAV_LOITER_UNLIM",
+                  "NAV_RETURN_TO_LAUNCH", "NAV_LAND", "NAV_VTOL_LAND", "DO_CHANGE_SPEED", "DO_SET_CAM_TRIGG_DIST",
+                  "IMAGE_START_CAPTURE", "DO_SEND_SCRIPT_MESSAGE"},
+    "px4": {"NAV_TAKEOFF", "NAV_VTOL_TAKEOFF", "NAV_WAYPOINT", "NAV_LOITER_TIME", "NAV_LOITER_UNLIM",
+            "NAV_RETURN_TO_LAUNCH", "NAV_LAND", "NAV_VTOL_LAND", "DO_CHANGE_SPEED", "DO_SET_CAM_TRIGG_DIST",
+            "DO_SET_CAM_TRIGG_INTERVAL", "DO_TRIGGER_CONTROL", "IMAGE_START_CAPTURE", "SET_CAMERA_MODE",
+            "DO_DIGICAM_CONTROL"},
+}
+
+SQUARE = [[50.1100, 14.5000], [50.1100, 14.5030], [50.1120, 14.5030], [50.1120, 14.5000]]
+BASE = {
+    "version": 1, "name": "t",
+    "vehicle": {"firmware": "ardupilot", "frame": "copter", "speed_mps": 5},
+    "home": {"lat": 50.1098, "lon": 14.5002, "alt_amsl_m": 262},
+    "payloads": {"thermal": {"camera": "wiris-pro", "lens_mm": 13, "component_id": 101,
+                             "settings": {"layout": "fullscreen"}}},
+    "mission": [
+        {"takeoff": {"alt_m": 30}},
+        {"survey": {"area": SQUARE, "payloads": ["thermal"], "altitude_m": 40, "overlap": {"front": 80, "side": 70}}},
+        {"rtl": {}},
+    ],
+}
+
+
+def build(tmp_path: Path, changes=None, firmware=None):
+    doc = copy.deepcopy(BASE)
+    if changes:
+        changes(doc)
+    text = yaml.safe_dump(doc, sort_keys=False)
+    path = tmp_path / "plan.yaml"
+    path.write_text(text)
+    return compile_plan(parse_plan(text, str(path), tmp_path), firmware=firmware)
+
+
+def names(items):
+    return [m.enums["MAV_CMD"][it.command].name.removeprefix("MAV_CMD_") for it in items]
+
+
+def survey(doc):
+    return next(s["survey"] for s in doc["mission"] if "survey" in s)
+
+
+@pytest.mark.parametrize("fw", ["ardupilot", "px4"])
+def test_good_plan_only_accepted_commands(fw):
+    c = compile_plan(PLANS / "good.yaml", firmware=fw) if fw == "ardupilot" else None
+    if fw == "px4":
+        # the good plan's in-flight range_mode change is a USER_1: refused on PX4 (tested below); drop it here
+        plan = parse_plan((PLANS / "good.yaml").read_text().replace(
+            "  - camera: {payload: thermal, settings: {range_mode: auto, palette: 3}}\n", ""),
+            str(PLANS / "good.yaml"), PLANS)
+        c = compile_plan(plan, firmware="px4")
+    assert set(names(c.items)) <= MAY_EMIT[fw]
+    assert c.firmware == fw and c.parts == (c.items,)
+
+
+def test_distance_trigger_brackets_each_leg(tmp_path):
+    c = build(tmp_path)
+    n = names(c.items)
+    assert n[:2] == ["NAV_TAKEOFF", "DO_CHANGE_SPEED"] and n[-1] == "NAV_RETURN_TO_LAUNCH"
+    trig = [it for it in c.items if it.command == m.MAV_CMD_DO_SET_CAM_TRIGG_DIST]
+    ons, offs = trig[0::2], trig[1::2]
+    assert len(ons) == len(offs) >= 2
+    assert all(t.param1 > 0 and t.param3 == 1 for t in ons)
+    assert all(t.param1 == 0 for t in offs)
+    # trigger distance = along-track footprint × (1 − front): 512 px × 17 µm × 40 m / 13 mm × 0.2
+    assert ons[0].param1 == pytest.approx(8.704 * 40 / 13 * 0.2, rel=1e-6)
+    for k, it in enumerate(c.items):
+        if it.command == m.MAV_CMD_DO_SET_CAM_TRIGG_DIST:
+            assert c.items[k - 1].command == m.MAV_CMD_NAV_WAYPOINT
+    wps = [it for it in c.items if it.command == m.MAV_CMD_NAV_WAYPOINT]
+    assert all(it.frame == m.MAV_FRAME_GLOBAL_RELATIVE_ALT and it.z == 40 for it in wps)
+    assert c.areas[0].altitude_m == 40 and c.areas[0].trigger_distance_m == pytest.approx(ons[0].param1)
+
+
+def test_gsd_sets_altitude(tmp_path):
+    def ch(doc):
+        s = survey(doc)
+        del s["altitude_m"]
+        s["gsd_cm"] = 5.0
+    c = build(tmp_path, ch)
+    assert c.areas[0].altitude_m == pytest.approx(0.05 * 13 / 0.017, rel=1e-6)   # GSD (m) · f / pitch
+
+
+def test_interval_on_ardupilot_names_the_rule(tmp_path):
+    with pytest.raises(PlanError) as ei:
+        build(tmp_path, lambda d: survey(d).update(trigger="interval"))
+    assert "ArduPilot" in ei.value.message and "214" in ei.value.hint
+    assert ei.value.where.startswith(str(tmp_path / "plan.yaml") + ":")
+
+
+def test_interval_on_px4(tmp_path):
+    c = build(tmp_path, lambda d: survey(d).update(trigger="interval"), firmware="px4")
+    iv = [it for it in c.items if it.command == m.MAV_CMD_DO_SET_CAM_TRIGG_INTERVAL]
+    assert iv and iv[0].param1 == pytest.approx(1000 * c.areas[0].trigger_distance_m / 5, abs=1)
+    ctl = [it.param1 for it in c.items if it.command == m.MAV_CMD_DO_TRIGGER_CONTROL]
+    assert ctl[0::2] == [1.0] * len(iv) and ctl[1::2] == [0.0] * len(iv)
+    assert ("TRIG_MODE", 1.0) in [(n, v) for n, v, _ in c.params]
+
+
+def add_camera_step(settings):
+    def ch(doc):
+        doc["mission"].insert(2, {"camera": {"payload": "thermal", "settings": settings}})
+    return ch
+
+
+def test_user1_in_flight_on_px4_names_the_rule(tmp_path):
+    with pytest.raises(PlanError) as ei:
+        build(tmp_path, add_camera_step({"emissivity": 0.9}), firmware="px4")
+    assert "emissivity" in ei.value.message and "PX4" in ei.value.message
+    assert "USER_1..5" in ei.value.hint and "MAV_MISSION_UNSUPPORTED" in ei.value.hint
+    assert ":" in ei.value.where
+
+
+def test_camera_mode_in_flight_on_px4_is_a_mission_item(tmp_path):
+    c = build(tmp_path, add_camera_step({"layout": "fullscreen", "blend_opacity": 30}), firmware="px4")
+    (it,) = [it for it in c.items if it.command == m.MAV_CMD_SET_CAMERA_MODE]
+    assert it.param1 == 101 and it.param2 == m.CAMERA_MODE_IMAGE
+    assert it.x == 3 and it.y == 0 and it.z == 30      # layout+1, main camera 0 = keep (manual §6.3.2.5)
+    assert c.lua is None
+
+
+def test_in_flight_changes_on_ardupilot_go_through_the_bridge(tmp_path):
+    settings = {"layout": "blended", "blend_opacity": 30, "range_mode": "manual", "range_min_c": 0,
+                "range_max_c": 90, "emissivity": 0.9, "palette": 4, "alarm_mode": "above", "alarm_above": 60,
+                "zoom": 2.0}
+    c = build(tmp_path, add_camera_step(settings))
+    assert c.lua and "mission_receive" in c.lua
+    assert ("SCR_ENABLE", 1.0) in [(n, v) for n, v, _ in c.params]
+    script = [it for it in c.items if it.command == m.MAV_CMD_DO_SEND_SCRIPT_MESSAGE]
+    cam = catalogue().get("wiris-pro")
+    values = [(k, cam.setting(k).check(v)) for k, v in settings.items()]
+    expected = [(cmd.command, 101, cmd.params) for cmd in commands_for(cam, values, {"layout": 2})]
+    assert [(b.command, b.component, b.params) for b in lua.decode(script)] == expected
+    # never more than the script queue holds between two NAV items
+    run = 0
+    for it in c.items:
+        if it.frame != m.MAV_FRAME_MISSION:
+            run = 0
+        elif it.command == m.MAV_CMD_DO_SEND_SCRIPT_MESSAGE:
+            run += 1
+            assert run <= lua.QUEUE_SIZE
+
+
+def test_capture_settings_cannot_change_in_flight(tmp_path):
+    with pytest.raises(PlanError, match="capture cannot change in flight"):
+        build(tmp_path, add_camera_step({"capture": ["radiometric_tiff"]}))
+
+
+def test_hover_shoots_once_per_stop(tmp_path):
+    c = build(tmp_path, lambda d: survey(d).update(trigger="hover"))
+    caps = [k for k, it in enumerate(c.items) if it.command == m.MAV_CMD_IMAGE_START_CAPTURE]
+    assert caps and not any(it.command == m.MAV_CMD_DO_SET_CAM_TRIGG_DIST for it in c.items)
+    for k in caps:
+        wp, cap = c.items[k - 1], c.items[k]
+        assert wp.command == m.MAV_CMD_NAV_WAYPOINT and wp.param1 >= 4
+        assert cap.param1 == 0 and cap.param3 == 1          # all cameras, one image
+
+
+def waypoint_capture(doc):
+    doc["mission"].insert(2, {"waypoint": {"lat": 50.111, "lon": 14.501, "alt_m": 30, "hold_s": 3,
+                                           "capture": "thermal"}})
+
+
+@pytest.mark.parametrize("fw,target", [("ardupilot", 1), ("px4", 101)])
+def test_waypoint_capture_target_per_firmware(tmp_path, fw, target):
+    c = build(tmp_path, waypoint_capture, firmware=fw)
+    (cap,) = [it for it in c.items if it.command == m.MAV_CMD_IMAGE_START_CAPTURE]
+    assert cap.param1 == target and cap.param3 == 1
+    k = c.items.index(cap)
+    assert c.items[k - 1].param1 == 3
+
+
+def with_rededge(doc, comp=None):
+    doc["payloads"]["ms"] = {"camera": "rededge-mx"}
+    if comp:
+        doc["payloads"]["ms"]["component_id"] = comp
+
+
+def test_rededge_capture_refused(tmp_path):
+    def ch(doc):
+        with_rededge(doc)
+        waypoint_capture(doc)
+        doc["mission"][2]["waypoint"]["capture"] = "ms"
+    with pytest.raises(PlanError, match="RedEdge"):
+        build(tmp_path, ch)
+
+
+def test_rededge_alongside_gets_overlap_mode_and_port(tmp_path):
+    def ch(doc):
+        with_rededge(doc)
+        survey(doc)["payloads"] = ["thermal", "ms"]
+    c = build(tmp_path, ch)
+    got = {s.param_id: s.value for s in c.setup if s.kind == "param_set"}
+    assert got["autoCapMode"] == 2 and got["operatingAlt"] == 40 and got["overlapAlongTrk"] == 80
+    params = {n: v for n, v, _ in c.params}
+    assert params["SERIAL4_PROTOCOL"] == 1 and params["SR4_EXT_STAT"] > 0 and params["CAM1_TYPE"] == 6
+    assert "CAM2_TYPE" not in params          # the RedEdge is not an AP_Camera instance
+
+
+def test_rededge_and_wiris_both_on_100(tmp_path):
+    def ch(doc):
+        with_rededge(doc, 100)
+        doc["payloads"]["thermal"]["component_id"] = 100
+    with pytest.raises(PlanError) as ei:
+        build(tmp_path, ch)
+    assert "101..105" in str(ei.value)
+
+
+def test_item_limit_splits_into_parts(tmp_path):
+    c = build(tmp_path, lambda d: d["vehicle"].update(max_mission_items=20))
+    assert c.item_limit == 20 and len(c.parts) > 1 and all(len(p) <= 20 for p in c.parts)
+    assert any(w.startswith("mission_split:") for w in c.warnings)
+
+
+def test_too_fast_for_the_camera_names_the_speed(tmp_path):
+    def ch(doc):
+        doc["vehicle"]["speed_mps"] = 15
+        survey(doc).update(altitude_m=10, overlap={"front": 90, "side": 70})
+    with pytest.raises(PlanError) as ei:
+        build(tmp_path, ch)
+    # along-track 8.704 mm × 10 m / 13 mm × 0.1 = 0.67 m per photo; 1 s minimum -> 0.6 m/s
+    assert "minimum capture interval of 1 s" in ei.value.message
+    assert "0.6 m/s" in ei.value.hint
+    assert ":" in ei.value.where
+
+
+def test_warnings_altitude_and_assumed_optics(tmp_path):
+    c = build(tmp_path, lambda d: survey(d).update(altitude_m=150))
+    codes = {w.split(":")[0] for w in c.warnings}
+    assert {"altitude_above_120m", "assumed_optics"} <= codes
+
+
+@pytest.mark.parametrize("frame,first,p1", [("plane", "NAV_TAKEOFF", 15.0), ("vtol", "NAV_VTOL_TAKEOFF", 0.0),
+                                            ("copter", "NAV_TAKEOFF", 0.0)])
+def test_takeoff_per_frame(tmp_path, frame, first, p1):
+    c = build(tmp_path, lambda d: d["vehicle"].update(frame=frame))
+    assert names(c.items)[0] == first and c.items[0].param1 == p1 and c.items[0].z == 30
+
+
+def test_self_intersecting_area_located(tmp_path):
+    bowtie = [[50.110, 14.500], [50.112, 14.503], [50.110, 14.503], [50.112, 14.500]]
+    with pytest.raises(PlanError) as ei:
+        build(tmp_path, lambda d: survey(d).update(area=bowtie))
+    assert "intersect" in ei.value.message.lower()
+    assert ei.value.where and str(tmp_path / "plan.yaml") in ei.value.where
+
+
+def test_zero_area_located(tmp_path):
+    line = [[50.110, 14.500], [50.111, 14.501], [50.112, 14.502]]
+    with pytest.raises(PlanError) as ei:
+        build(tmp_path, lambda d: survey(d).update(area=line))
+    assert "area" in ei.value.message.lower()
+    assert ei.value.where and str(tmp_path / "plan.yaml") in ei.value.where
+
+
+def test_unknown_optics_lead_refused_second_warned(tmp_path):
+    def lead(doc):
+        doc["payloads"]["agro"] = {"camera": "wiris-agro", "component_id": 102}
+        survey(doc)["payloads"] = ["agro"]
+    with pytest.raises(PlanError, match="optics"):
+        build(tmp_path, lead)
+
+    def second(doc):
+        doc["payloads"]["agro"] = {"camera": "wiris-agro", "component_id": 102}
+        survey(doc)["payloads"] = ["thermal", "agro"]
+    c = build(tmp_path, second)
+    assert any(w.startswith("no_optics:") for w in c.warnings)
+    assert [p.name for p in c.payloads] == ["thermal"]
+
+
+def test_corridor_compiles(tmp_path):
+    def ch(doc):
+        doc["mission"][1] = {"corridor": {"line": [[50.110, 14.500], [50.113, 14.504]], "width_m": 40,
+                                          "payloads": ["thermal"], "altitude_m": 40,
+                                          "overlap": {"front": 80, "side": 60}}}
+    c = build(tmp_path, ch)
+    assert c.areas[0].kind == "corridor"
+    assert any(it.command == m.MAV_CMD_DO_SET_CAM_TRIGG_DIST and it.param1 > 0 for it in c.items)
+
+
+def test_px4_params(tmp_path):
+    c = build(tmp_path, firmware="px4")
+    params = {n: v for n, v, _ in c.params}
+    assert params["TRIG_INTERFACE"] == 3 and params["TRIG_MODE"] == 4
+    assert params["MAV_1_FORWARD"] == 1 and params["SER_TEL2_BAUD"] == 57600
+    from missions.params import format_params
+    text = format_params(c)
+    assert "param set TRIG_MODE 4" in text and "# " in text
+
+
+def test_ardupilot_params_file_format(tmp_path):
+    from missions.params import format_params
+    c = build(tmp_path)
+    lines = format_params(c).splitlines()
+    assert "CAM1_TYPE,6" in lines and "SERIAL2_PROTOCOL,2" in lines and "SERIAL2_BAUD,57" in lines
+    assert all(l.startswith("#") or "," in l for l in lines)
