@@ -107,6 +107,8 @@ def schema_hits(root) -> list[Hit]:
             continue
         rule_id, message = mapped
         elem = err.elem
-        line = getattr(elem, "sourceline", None) if elem is not None else None
+        # for a misplaced child, point at the child, not at its parent
+        culprit = getattr(err, "invalid_child", None)
+        line = getattr(culprit if culprit is not None else elem, "sourceline", None) if elem is not None else None
         hits.append(Hit(rule_id, line, _param_of(elem) if elem is not None else None, message))
     return hits

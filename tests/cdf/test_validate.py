@@ -342,3 +342,11 @@ def test_cli_help_stays_light():
             "print(','.join(m for m in ('lxml', 'xmlschema') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=REPO)
     assert out.stdout.strip() == ""
+
+
+def test_misplaced_element_points_at_the_element_itself():
+    data = doc('<parameter name="X" type="uint8" default="0">\n<description>d</description>\n<options>\n'
+               '<option name="a" value="0">\n<exclusions>\n<exclusions><exclude>X</exclude></exclusions>\n'
+               "</exclusions>\n</option>\n</options>\n</parameter>")
+    (f,) = [f for f in findings(data) if f.rule == "CDF200"]
+    assert f.line == 10 and f.parameter == "X" and f.severity == "error"
