@@ -125,3 +125,27 @@ def test_variants_cover_every_hidden_parameter():
     published_visible = variants[0][1]
     assert "RANGE_MAX_C" not in published_visible   # automatic range hides the manual limits
     assert set().union(*(v for _, v in variants)) == {s.param for s in catalogue().get("wiris-pro").cdf_settings}
+
+
+@pytest.mark.parametrize("locale_name", ["de_DE", "cs_CZ"])
+def test_mavproxy_shows_the_translations(locale_name):
+    """MAVProxy maps descriptions and option names through the locale's strings (exact match): every one
+    of them must arrive translated, with parameter names and values untouched."""
+    from MAVProxy.modules.mavproxy_camera.definition import CameraDefinition
+
+    from cdf.generate import load_locales
+
+    table = dict(next(loc for loc in load_locales() if loc.name == locale_name).strings)
+    for cam_id in MODELS:
+        cam = catalogue().get(cam_id)
+        cd = CameraDefinition(definition_xml(cam), locale_name=locale_name)
+        assert list(cd.parameters) == [s.param for s in cam.cdf_settings]
+        for s in cam.cdf_settings:
+            p = cd.parameters[s.param]
+            assert p.description == table[s.label] + (f" ({s.unit})" if s.unit else "")
+            if s.options:
+                labels = [label for label, _value in p.options]
+                values = [int(value) for _label, value in p.options]
+                assert values == [o.value for o in s.options]
+                assert labels == [" + ".join(table[s.enum.by_key(k).name] for k in o.key.split("+")) if s.flags
+                                  else table[o.name] for o in s.options]
