@@ -242,3 +242,23 @@ def test_random_paths_never_leave_the_bundle(server, bundle):
             assert body in hosted and body != secret, path
 
     check()
+
+
+def test_every_manifest_uri_is_served_and_validates_over_http(tmp_path):
+    """End to end: build with the server's own base URL, then fetch every URI of the manifest with the
+    validator's HTTP client (strict profile) — what a ground station would download is valid."""
+    validation = pytest.importorskip("cdf.validation")
+    out = tmp_path / "cdf"
+    out.mkdir()
+    srv = make_server(out, "127.0.0.1", 0, prefix="/cdf", log=lambda _l: None)
+    thread = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
+    thread.start()
+    try:
+        result = build_bundle(out, all_models=True, base_url=server_url(srv).rstrip("/"))
+        assert result.entries
+        for entry in result.entries:
+            report = validation.validate_source(entry.uri, "strict")
+            assert report.valid and report.parameters > 0, entry.uri
+    finally:
+        srv.shutdown()
+        srv.server_close()
