@@ -25,7 +25,7 @@ NAN = math.nan
 
 @pytest.fixture
 def pro():
-    with start_emulator("wiris-pro", "udpin:127.0.0.1:0", storage_capacity_mib=(100.0, 100.0, 100.0),
+    with start_emulator("wiris-pro", "udpin:127.0.0.1:0", storage_capacity_mib=(30.0, 30.0, 30.0),
                         image_size_mib=10.0) as emu:
         yield emu
 
@@ -100,8 +100,8 @@ def test_capture_periodic_then_storage_full(client):
     shots = list(client.capture(interval_s=1, count=2))
     assert [s.index for s in shots] == [0, 1] and all(s.result == 1 for s in shots)
     with pytest.raises(LinkError, match="failed to capture"):
-        list(client.capture(interval_s=1, count=0, duration_s=20))       # 100 MiB, 10 MiB per image
-    assert client.capture_status()["image_count"] == 10
+        list(client.capture(interval_s=1, count=0, duration_s=20))       # 30 MiB, 10 MiB per image
+    assert client.capture_status()["image_count"] == 3
 
 
 def _setup_file(tmp_path, steps) -> str:

@@ -361,3 +361,9 @@ def test_reset_and_format_and_trigger(pro, gcs):
 def test_wiris_state_refuses_a_rededge():
     with pytest.raises(ValueError):
         WirisState(catalogue().get("rededge-mx"), parse_definition(definition_xml(catalogue().get("wiris-pro"))))
+
+
+def test_infinite_storage_id_is_denied_not_a_crash(pro, gcs):
+    """Found by the fuzzer: REQUEST_MESSAGE(STORAGE_INFORMATION, inf) raised OverflowError."""
+    out = pro.handle(gcs.cmd(m.MAV_CMD_REQUEST_MESSAGE, m.MAVLINK_MSG_ID_STORAGE_INFORMATION, math.inf), 0)
+    assert ack_of(out, m.MAV_CMD_REQUEST_MESSAGE) == DENIED

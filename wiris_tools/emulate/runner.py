@@ -79,7 +79,8 @@ class Emulator:
     _http: _DefinitionServer | None = None
     _stop: threading.Event = field(default_factory=threading.Event)
     _thread: threading.Thread | None = None
-    errors: int = 0
+    errors: int = 0           # exceptions inside the camera logic (a bug; tests assert there are none)
+    send_failures: int = 0    # nothing to send to yet (udpin before the first packet)
 
     def _send_all(self, out: list) -> None:
         system = getattr(self.state, "system_id", None)
@@ -89,7 +90,7 @@ class Emulator:
             try:
                 self.link.send(msg)
             except LinkError:
-                self.errors += 1   # nobody to send to yet (udpin before the first packet)
+                self.send_failures += 1
 
     def _on_message(self, msg: Any) -> None:
         with self.lock:

@@ -524,7 +524,7 @@ class WirisState:
         count = len(self.config.storage_capacity_mib)
         if math.isnan(wire):
             return [self.storage_information(i, now) for i in range(count)]
-        if wire != int(wire) or not 0 <= int(wire) < count:
+        if not math.isfinite(wire) or wire != int(wire) or not 0 <= int(wire) < count:
             raise CommandRefused
         return [self.storage_information(int(wire), now)]
 
