@@ -501,3 +501,163 @@ def compare_items(sent: Sequence[MissionItem], got: Sequence[MissionItem], *, wh
                 raise LinkError(f"item {i} differs in {name}: sent {va!r}, vehicle holds {vb!r}",
                                 where=f"{where}, item {i}",
                                 hint="the vehicle changed or lost the item; do not fly this mission - upload again")
+
+
+# -- files <-> vehicle (what `wiris mission upload/download` run) -------------------------------------
+
+PLAN_SUFFIXES = (".plan",)
+WPL_SUFFIXES = (".waypoints", ".wpl", ".txt")
+CAPTURE_SUFFIXES = (".yaml", ".yml")
+
+
+def load_for_upload(path: str, mission_type: int = MISSION_TYPE_MISSION, *, part: int | None = None,
+                    firmware: str | None = None) -> tuple[list[MissionItem], tuple[float, float, float] | None]:
+    """The items of `mission_type` in a .plan, a WPL 110 file or a capture plan (compiled on the fly),
+    without a home row, and the file's home. PlanError/LinkError for anything unusable."""
+    from pathlib import Path
+
+    from missions.errors import PlanError
+
+    p = Path(path)
+    suffix = p.suffix.lower()
+    kind = TYPE_NAMES.get(mission_type, str(mission_type))
+    if suffix in PLAN_SUFFIXES:
+        from missions.planfile import load_plan
+        items, fence, rally, home = load_plan(p)
+        chosen = {MISSION_TYPE_MISSION: items, mavlink2.MAV_MISSION_TYPE_FENCE: fence,
+                  mavlink2.MAV_MISSION_TYPE_RALLY: rally}[mission_type]
+    elif suffix in WPL_SUFFIXES:
+        if mission_type != MISSION_TYPE_MISSION:
+            raise PlanError(f"a WPL 110 file holds a mission, not a {kind} list", where=str(p),
+                            hint="upload fence and rally from a .plan file")
+        from missions.wpl import load_wpl
+        chosen, home = load_wpl(p)
+    elif suffix in CAPTURE_SUFFIXES:
+        if mission_type != MISSION_TYPE_MISSION:
+            raise PlanError(f"a capture plan compiles to a mission, not a {kind} list", where=str(p))
+        try:
+            from missions.compile import compile_plan
+        except ImportError:
+            raise PlanError("this installation cannot compile capture plans (missions.compile is missing)",
+                            where=str(p), hint="compile it elsewhere and upload the .plan file") from None
+        compiled = compile_plan(str(p), firmware=firmware)
+        try:
+            from missions.report import report
+            errors = report(compiled)["errors"]
+        except ImportError:
+            errors = []
+        if errors:
+            raise PlanError(f"the compiled mission has {len(errors)} error(s): {errors[0]}", where=str(p),
+                            hint="run `wiris mission check` and fix the plan before uploading")
+        parts = list(compiled.parts) if compiled.parts else [compiled.items]
+        if len(parts) > 1 and part is None:
+            raise PlanError(f"the mission is split into {len(parts)} parts to fit the vehicle's "
+                            f"{compiled.item_limit} items", where=str(p), hint="choose one with --part 1..N")
+        if part is not None and not 1 <= part <= len(parts):
+            raise PlanError(f"--part {part}: the mission has {len(parts)} part(s)", where=str(p))
+        chosen = list(parts[(part or 1) - 1])
+        home = compiled.home
+    else:
+        raise PlanError(f"unknown file type {suffix or '(no suffix)'!r}", where=str(p),
+                        hint="upload a .plan, a .waypoints (QGC WPL 110) or a capture plan .yaml")
+    chosen = [it.with_(mission_type=mission_type) for it in chosen]
+    if not chosen:
+        raise PlanError(f"the file holds no {kind} items", where=str(p))
+    return chosen, home
+
+
+def home_item(home: tuple[float, float, float] | None) -> MissionItem:
+    """ArduPilot's item 0: the home position (it replaces it with its own home on upload)."""
+    from missions.items import FRAME_GLOBAL, deg_to_e7
+    lat, lon, alt = home if home is not None else (0.0, 0.0, 0.0)
+    return MissionItem(command=mavlink2.MAV_CMD_NAV_WAYPOINT, frame=FRAME_GLOBAL, x=deg_to_e7(lat),
+                       y=deg_to_e7(lon), z=float(alt))
+
+
+def find_autopilot(link: Link, target_system: int | None, timeout: float):
+    """The HEARTBEAT of the vehicle's autopilot (MAV_AUTOPILOT set, not a GCS), else LinkError."""
+    deadline = time.monotonic() + timeout
+    while True:
+        for (s, _c), hb in sorted(link.heartbeats().items()):
+            if (target_system is None or s == target_system) and hb.autopilot != mavlink2.MAV_AUTOPILOT_INVALID \
+                    and hb.type != mavlink2.MAV_TYPE_GCS:
+                buf = hb.get_msgbuf()
+                if not link.signing and buf[0] == 0xFD and buf[2] & mavlink2.MAVLINK_IFLAG_SIGNED:
+                    # A signing autopilot drops our unsigned requests without a word.
+                    raise LinkError(f"system {s} signs its MAVLink 2 messages and this link has no key",
+                                    where=link.url, hint="give --signing-key FILE with the vehicle's key or "
+                                                         "passphrase")
+                return hb
+        if time.monotonic() >= deadline:
+            who = f"system {target_system}" if target_system is not None else "any autopilot"
+            raise LinkError(f"no autopilot HEARTBEAT from {who} within {timeout:g} s", where=link.url,
+                            hint="check --connect, that the vehicle is powered, --target-system and --signing-key")
+        time.sleep(0.05)
+
+
+def upload_file(link: Link, path: str, *, mission_type: int = MISSION_TYPE_MISSION, verify: bool = False,
+                target_system: int | None = None, target_component: int = 1, part: int | None = None,
+                firmware: str | None = None, timeout: float = 10.0,
+                progress: Progress | None = None) -> dict:
+    """Load `path`, upload it (ArduPilot: home as item 0), optionally verify; a summary dict."""
+    items, home = load_for_upload(path, mission_type, part=part, firmware=firmware)
+    hb = find_autopilot(link, target_system, timeout)
+    system = hb.get_srcSystem()
+    ardupilot = hb.autopilot == mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA
+    if ardupilot and mission_type == MISSION_TYPE_MISSION:
+        items = [home_item(home)] + items
+    client = MissionClient(link, system, target_component)
+    result = (client.upload_verified if verify else client.upload)(items, mission_type=mission_type,
+                                                                    progress=progress)
+    return {"file": str(path), "type": TYPE_NAMES[mission_type], "target_system": system,
+            "autopilot": "ardupilot" if ardupilot else "px4" if hb.autopilot == mavlink2.MAV_AUTOPILOT_PX4
+            else str(hb.autopilot), "items": len(items), "home_row": ardupilot and mission_type == 0,
+            "seconds": round(result.seconds, 3), "verified": "verified" in result.notes,
+            "opaque_id": result.opaque_id, "resent": result.resent, "nacks_tolerated": result.nacks_tolerated,
+            "notes": list(n for n in result.notes if n != "verified")}
+
+
+def download_file(link: Link, out: str, *, target_system: int | None = None, target_component: int = 1,
+                  timeout: float = 10.0, progress: Progress | None = None) -> dict:
+    """Download what the vehicle holds and write it to `out` (.plan: mission, fence and rally;
+    .waypoints: the mission) atomically; a summary dict."""
+    from pathlib import Path
+
+    from missions.errors import PlanError
+    from missions.planfile import atomic_write, write_plan
+    from missions.wpl import write_wpl
+
+    p = Path(out)
+    suffix = p.suffix.lower()
+    if suffix not in PLAN_SUFFIXES + WPL_SUFFIXES:
+        raise PlanError(f"unknown output type {suffix or '(no suffix)'!r}", where=str(p),
+                        hint="write a .plan or a .waypoints file")
+    if not p.parent.is_dir():
+        raise PlanError("the output directory does not exist", where=str(p.parent))
+    hb = find_autopilot(link, target_system, timeout)
+    system = hb.get_srcSystem()
+    ardupilot = hb.autopilot == mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA
+    client = MissionClient(link, system, target_component)
+    items, res = client.download(mission_type=MISSION_TYPE_MISSION, progress=progress)
+    home = None
+    if ardupilot and items:
+        h = items.pop(0)
+        home = (h.x / 1e7, h.y / 1e7, h.z)
+    lists = {"mission": len(items)}
+    notes: list[str] = []
+    if suffix in PLAN_SUFFIXES:
+        extra = {}
+        for kind in (mavlink2.MAV_MISSION_TYPE_FENCE, mavlink2.MAV_MISSION_TYPE_RALLY):
+            try:
+                extra[kind], _ = client.download(mission_type=kind)
+            except LinkError as err:
+                extra[kind] = []
+                notes.append(f"{TYPE_NAMES[kind]} not downloaded: {err.message}")
+            lists[TYPE_NAMES[kind]] = len(extra[kind])
+        text = write_plan(items, home, firmware=int(hb.autopilot), vehicle=int(hb.type),
+                          fence=extra[mavlink2.MAV_MISSION_TYPE_FENCE], rally=extra[mavlink2.MAV_MISSION_TYPE_RALLY])
+    else:
+        text = write_wpl(items, home)
+    atomic_write(p, text)
+    return {"file": str(p), "target_system": system, "items": lists, "home": list(home) if home else None,
+            "opaque_id": res.opaque_id, "seconds": round(res.seconds, 3), "notes": notes}

@@ -85,3 +85,10 @@ def preview_cmd(plan: str, out: str, firmware: str | None) -> None:
     click.echo(f"wrote {write_preview(_compile(plan, firmware), out)}")
 
 # --- end of the compiler's commands ----------------------------------------------------------------------------
+
+
+# --- upload / download (wiris_tools/cli/transfer_cmd.py) --------------------------------------------------------
+from wiris_tools.cli.transfer_cmd import download as _download_cmd, upload as _upload_cmd  # noqa: E402
+
+mission.add_command(_upload_cmd)
+mission.add_command(_download_cmd)

@@ -1,0 +1,170 @@
+"""`wiris mission upload` / `download` through click's CliRunner against vehicle_sim on 127.0.0.1:
+.plan, .waypoints and capture plans, fence lists, --verify, --json, signing, and every way it can
+go wrong (exit 1 with a located message, nothing written)."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from missions.items import MISSION_TYPE_FENCE, MissionItem
+from missions.planfile import load_plan, write_plan
+from missions.wpl import load_wpl, write_wpl
+from wiris_tools.cli import cli
+from wiris_tools.transfer import compare_items
+from wiris_tools.vehicle_sim import VehicleSim
+
+ROOT = Path(__file__).resolve().parents[2]
+CORPUS = ROOT.parent / "shared" / "corpus" / "plans"
+
+ITEMS = [MissionItem(command=22, param1=15, param4=math.nan, x=473977507, y=85456075, z=50),
+         MissionItem(command=16, param4=math.nan, x=473977711, y=85466122, z=50),
+         MissionItem(command=2000, frame=2, param3=1),
+         MissionItem(command=20, frame=2)]
+FENCE = [MissionItem(command=5003, frame=0, param1=300.0, x=473977507, y=85456075, mission_type=MISSION_TYPE_FENCE)]
+HOME = (47.3977507, 8.5456075, 488.9)
+
+
+def run(*args):
+    return CliRunner().invoke(cli, list(args))
+
+
+@pytest.fixture
+def plan_file(tmp_path):
+    p = tmp_path / "m.plan"
+    p.write_text(write_plan(ITEMS, HOME, firmware="px4", vehicle="copter", fence=FENCE))
+    return p
+
+
+@pytest.mark.parametrize("flavour", ["px4", "ardupilot"])
+def test_upload_plan_verified_json(plan_file, flavour):
+    with VehicleSim(flavour=flavour, heartbeat_s=0.2) as sim:
+        r = run("mission", "upload", str(plan_file), "--connect", f"udpout:127.0.0.1:{sim.port}", "--verify",
+                "--json")
+        assert r.exit_code == 0, r.output
+        summary = json.loads(r.output)
+        held = sim.items()
+    assert summary["verified"] is True and summary["target_system"] == 1
+    if flavour == "ardupilot":
+        # ArduPilot's item 0 is home: the plan's plannedHomePosition goes there.
+        assert summary["home_row"] and summary["items"] == 5
+        assert (held[0].x, held[0].y, held[0].z) == (473977507, 85456075, pytest.approx(488.9, abs=1e-4))
+        held = held[1:]
+    compare_items(ITEMS, held)
+
+
+def test_upload_fence_from_plan(plan_file):
+    with VehicleSim(flavour="px4") as sim:
+        r = run("mission", "upload", str(plan_file), "--type", "fence", "--connect", f"udpout:127.0.0.1:{sim.port}")
+        assert r.exit_code == 0, r.output
+        assert "uploaded 1 fence items" in r.output
+        compare_items(FENCE, sim.items(MISSION_TYPE_FENCE))
+        assert sim.items() == []
+
+
+@pytest.mark.parametrize("flavour", ["px4", "ardupilot"])
+def test_download_plan_and_waypoints(tmp_path, flavour):
+    with VehicleSim(flavour=flavour) as sim:
+        stored = ITEMS if flavour == "px4" else [ITEMS[1].with_(frame=0, z=488.9)] + ITEMS
+        sim.set_items(stored)
+        sim.set_items(FENCE, MISSION_TYPE_FENCE)
+        url = f"udpout:127.0.0.1:{sim.port}"
+        r1 = run("mission", "download", "--connect", url, "-o", str(tmp_path / "got.plan"))
+        r2 = run("mission", "download", "--connect", url, "-o", str(tmp_path / "got.waypoints"), "--json")
+    assert r1.exit_code == 0 and r2.exit_code == 0, r1.output + r2.output
+    items, fence, rally, home = load_plan(tmp_path / "got.plan")
+    compare_items(ITEMS, items)
+    compare_items(FENCE, fence)
+    assert rally == []
+    wp_items, wp_home = load_wpl(tmp_path / "got.waypoints")
+    compare_items(ITEMS, wp_items)
+    if flavour == "ardupilot":
+        assert home == wp_home == pytest.approx((47.3977711, 8.5466122, 488.9))
+    assert json.loads(r2.output)["items"] == {"mission": 4}
+
+
+def test_upload_waypoints_file(tmp_path):
+    f = tmp_path / "m.waypoints"
+    f.write_text(write_wpl(ITEMS, HOME))
+    with VehicleSim(flavour="px4") as sim:
+        r = run("mission", "upload", str(f), "--connect", f"udpout:127.0.0.1:{sim.port}")
+        assert r.exit_code == 0, r.output
+        compare_items(ITEMS, sim.items())
+
+
+def test_upload_capture_plan_compiles_on_the_fly():
+    from missions.compile import compile_plan
+
+    plan = ROOT / "examples" / "waypoint-inspection.yaml"      # an ArduPilot plan
+    compiled = compile_plan(str(plan))
+    with VehicleSim(flavour="ardupilot") as sim:
+        r = run("mission", "upload", str(plan), "--connect", f"udpout:127.0.0.1:{sim.port}", "--verify")
+        assert r.exit_code == 0, r.output
+        held = sim.items()
+    assert (held[0].x, held[0].y) == (round(compiled.home[0] * 1e7), round(compiled.home[1] * 1e7))
+    compare_items(list(compiled.items), held[1:])
+
+
+def test_capture_plan_with_errors_is_refused(tmp_path):
+    plan = ROOT / "examples" / "waypoint-inspection.yaml"
+    with VehicleSim(flavour="px4") as sim:
+        # the plan changes a camera setting in flight, which PX4 cannot do: a located PlanError
+        r = run("mission", "upload", str(plan), "--firmware", "px4", "--connect", f"udpout:127.0.0.1:{sim.port}")
+        assert r.exit_code == 1 and "waypoint-inspection.yaml:" in r.output and "Traceback" not in r.output
+        assert sim.stats["uploads"] == 0
+
+
+def test_broken_plan_is_refused_before_connecting():
+    with VehicleSim(flavour="px4") as sim:
+        r = run("mission", "upload", str(CORPUS / "qgroundcontrol_sample_wrong_mission_version.plan"),
+                "--connect", f"udpout:127.0.0.1:{sim.port}")
+        assert r.exit_code == 1
+        assert "mission.version" in r.output and "Traceback" not in r.output
+        assert sim.stats["uploads"] == 0
+
+
+def test_no_vehicle_is_exit_1_and_download_writes_nothing(tmp_path, plan_file):
+    r = run("mission", "upload", str(plan_file), "--connect", "udpout:127.0.0.1:9", "--timeout", "0.3")
+    assert r.exit_code == 1 and "no autopilot HEARTBEAT" in r.output
+    out = tmp_path / "nothing.plan"
+    r = run("mission", "download", "--connect", "udpout:127.0.0.1:9", "--timeout", "0.3", "-o", str(out))
+    assert r.exit_code == 1 and not out.exists()
+
+
+@pytest.mark.parametrize("args,code,text", [
+    (["mission", "upload", "m.kml", "--connect", "udpout:127.0.0.1:9"], 1, "unknown file type"),
+    (["mission", "upload", "missing.plan", "--connect", "udpout:127.0.0.1:9"], 2, "does not exist"),
+    (["mission", "download", "--connect", "udpout:127.0.0.1:9", "-o", "x.kml"], 2, ".plan or .waypoints"),
+    (["mission", "upload", "m.waypoints", "--type", "fence", "--connect", "udpout:127.0.0.1:9"], 1, "not a fence"),
+    (["mission", "upload", "m.plan", "--connect", "nonsense:1"], 1, "connection string"),
+])
+def test_usage_and_input_errors(tmp_path, monkeypatch, args, code, text):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "m.kml").write_text("<kml/>")
+    (tmp_path / "m.waypoints").write_text(write_wpl(ITEMS, HOME))
+    (tmp_path / "m.plan").write_text(write_plan(ITEMS, HOME, firmware="px4", vehicle="copter"))
+    r = run(*args)
+    assert r.exit_code == code, r.output
+    assert text in r.output
+
+
+def test_signed_vehicle_needs_the_key(tmp_path, plan_file):
+    key = tmp_path / "key.txt"
+    key.write_text("a passphrase for the link\n")
+    from wiris_tools.signing import load_signing_key
+
+    with VehicleSim(flavour="ardupilot", signing_key=load_signing_key(key), heartbeat_s=0.2) as sim:
+        url = f"udpout:127.0.0.1:{sim.port}"
+        r = run("mission", "upload", str(plan_file), "--connect", url, "--timeout", "0.6")
+        assert r.exit_code == 1 and "signs its MAVLink 2 messages" in r.output and "--signing-key" in r.output
+        wrong = tmp_path / "wrong.txt"
+        wrong.write_text("not the passphrase")
+        r = run("mission", "upload", str(plan_file), "--connect", url, "--timeout", "0.6", "--signing-key", str(wrong))
+        assert r.exit_code == 1 and "no autopilot HEARTBEAT" in r.output
+        r = run("mission", "upload", str(plan_file), "--connect", url, "--signing-key", str(key), "--verify")
+        assert r.exit_code == 0, r.output
+        assert sim.link.stats["rejected_signature"] > 0
