@@ -84,6 +84,7 @@ class _Params:
     def __init__(self, elements) -> None:
         self.elements = elements
         self.by_name: dict[str, object] = {}
+        self._typed: dict[str, frozenset | None] = {}
         for p in elements:
             n = p.get("name")
             if n is not None and n not in self.by_name:
@@ -92,6 +93,14 @@ class _Params:
     def type_of(self, name: str) -> str | None:
         p = self.by_name.get(name)
         return (p.get("type") or "").lower() if p is not None else None
+
+    def typed_option_values(self, name: str) -> frozenset | None:
+        """The target's option values parsed by its type (cached: many ranges point at one target)."""
+        if name not in self._typed:
+            ttype, values = self.type_of(name), self.option_values(name)
+            self._typed[name] = None if values is None else frozenset(
+                parse_typed(v, ttype)[0] for v in values) if ttype in NUMERIC_TYPES else frozenset()
+        return self._typed[name]
 
     def option_values(self, name: str) -> list[str] | None:
         p = self.by_name.get(name)
@@ -344,7 +353,7 @@ def _check_option_refs(o, p, name, ptype, params: _Params) -> Iterator[Hit]:
         tvalues = params.option_values(target)
         if tvalues is None:
             yield Hit("CDF204", _line(pr), name, f"range target {target} has no <options> to restrict")
-        typed_targets = {parse_typed(v, ttype)[0] for v in tvalues or []} if ttype in NUMERIC_TYPES else set()
+        typed_targets = params.typed_option_values(target) or frozenset()
         for r in pr.findall("roption"):
             rname, rval = r.get("name"), r.get("value")
             if rname is None or rval is None:
