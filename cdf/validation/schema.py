@@ -141,51 +141,46 @@ def conforms_fast(root) -> bool:
     """True only if the XSD would report nothing that _map keeps. False means "not sure": run xmlschema."""
     if root.tag != "mavlinkcamera":
         return True  # schema_hits does not run on other roots
-    for el in root.iter():
+    stack = [root]  # CDF elements in CDF content; unknown elements are skipped like the XSD wildcard does
+    while stack:
+        el = stack.pop()
         tag = el.tag
-        if not isinstance(tag, str):
-            if el.tail and el.tail.strip():
-                return False
-            continue  # comments; anything else (PIs, entities) fails below via its parent check
-        parent = el.getparent()
-        ptag = parent.tag if parent is not None else None
-        inside_cdf = ptag is None or ptag in _COMPLEX
-        if not inside_cdf:
-            continue  # content of unknown elements is skipped by the wildcard
         if tag in _SIMPLE:
             if len(el):
                 return False
-        elif tag in _COMPLEX:
-            if el.text and el.text.strip():
+            continue
+        if el.text and el.text.strip():
+            return False
+        allowed = _COMPLEX[tag]
+        counts: dict[str, int] = {}
+        for c in el:
+            if c.tail and c.tail.strip():
                 return False
-            counts: dict[str, int] = {}
-            allowed = _COMPLEX[tag]
-            for c in el:
-                ctag = c.tag
-                if c.tail and c.tail.strip():
+            ctag = c.tag
+            if not isinstance(ctag, str):
+                if type(c).__name__ != "_Comment":
+                    return False  # PIs, unexpanded entities: let xmlschema judge
+                continue
+            if ctag in _CDF_TAGS:
+                n = counts.get(ctag, 0) + 1
+                if n > allowed.get(ctag, 0):
                     return False
-                if not isinstance(ctag, str):
-                    if type(c).__name__ != "_Comment":
-                        return False
-                    continue
-                if ctag in _CDF_TAGS:
-                    n = counts.get(ctag, 0) + 1
-                    if n > allowed.get(ctag, 0):
-                        return False
-                    counts[ctag] = n
-            if tag == "parameter":
-                a = el.attrib
-                for flag in ("control", "readonly", "writeonly"):
-                    v = a.get(flag)
-                    if v is not None and v not in ("0", "1"):
-                        return False
-                dp = a.get("decimalPlaces")
-                if dp is not None and not dp.isdigit():
+                counts[ctag] = n
+                stack.append(c)
+        if tag == "parameter":
+            a = el.attrib
+            for flag in ("control", "readonly", "writeonly"):
+                v = a.get(flag)
+                if v is not None and v not in ("0", "1"):
                     return False
-                ptype = a.get("type")
+            dp = a.get("decimalPlaces")
+            if dp is not None and not (dp.isascii() and dp.isdigit()):
+                return False
+            ptype = a.get("type")
+            if ptype is not None:
                 for attr in ("default", "min", "max", "step"):
                     v = a.get(attr)
-                    if v is not None and ptype is not None and not _lexical_ok(v, ptype):
+                    if v is not None and not _lexical_ok(v, ptype):
                         return False
     return True
 
