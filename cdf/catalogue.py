@@ -16,7 +16,7 @@ import itertools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Callable, Iterable
 
 from cdf.errors import CdfError
 
@@ -279,8 +279,9 @@ def _fmt(v: float | None) -> str:
 def _read_yaml(path: Path) -> dict:
     import yaml
 
+    loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml when present: 10x faster, same result
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+        data = yaml.load(path.read_text(encoding="utf-8"), Loader=loader)
     except yaml.YAMLError as err:
         raise CdfError(f"cannot parse catalogue table: {err}", where=str(path)) from None
     if not isinstance(data, dict):
@@ -376,12 +377,12 @@ def _check_setting(s: Setting, where: str) -> None:
             raise CdfError(f"setting {s.key}: a value does not fit {s.type}", where=where)
 
 
-def _load_table(path: Path) -> list[Camera]:
-    raw = _read_yaml(path)
+def _load_table(path: Path, read: Callable[[Path], dict] = _read_yaml) -> list[Camera]:
+    raw = read(path)
     where = path.name
     base: dict = {}
     if "extends" in raw:
-        base = _read_yaml(path.parent / f"{raw['extends']}.yaml")
+        base = read(path.parent / f"{raw['extends']}.yaml")
     merged = {**base, **{k: v for k, v in raw.items() if k != "extends"}}
     enums = _enums({**(base.get("enums") or {}), **(raw.get("enums") or {})}, where)
     overrides = merged.get("overrides") or {}
@@ -443,11 +444,12 @@ def _load_table(path: Path) -> list[Camera]:
 def load_catalogue(tables_dir: Path | None = None) -> Catalogue:
     """Read and check every family table in `tables_dir` (vendor base tables are those without `models`)."""
     directory = tables_dir or TABLES_DIR
+    read = functools.lru_cache(maxsize=None)(_read_yaml)   # the vendor base table is shared by every family
     cameras: list[Camera] = []
     for path in sorted(directory.glob("*.yaml")):
-        if "models" not in _read_yaml(path):
+        if "models" not in read(path):
             continue
-        cameras.extend(_load_table(path))
+        cameras.extend(_load_table(path, read))
     ids = [c.id for c in cameras]
     dupes = {i for i in ids if ids.count(i) > 1}
     if dupes:
