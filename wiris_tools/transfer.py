@@ -19,7 +19,8 @@ Timing (all in `Timeouts`; the defaults are the spec's or tighter):
     vehicle's own re-request timer (1 s on ArduPilot): that is the fast retransmit. Duplicated
     requests within half an RTT of our last answer are not answered twice.
   * Download requests one item at a time (PX4 insists on order) and re-requests after the RTO,
-    capped at `item_s` = 250 ms, `retries` times per item.
+    capped at `item_s` = 250 ms, `retries` times per item. Only the item asked for is accepted, so
+    a late duplicate can never fill another slot.
   * Error NACKs: ArduPilot answers a duplicate or out-of-order item with MISSION_ACK
     INVALID_SEQUENCE and keeps going (Cockpit PR #2067: it "sends fail ACKs even if it intends to
     keep trying"). So a MISSION_ACK with an error is noted, not fatal: the upload fails with that
@@ -377,6 +378,10 @@ class MissionClient:
             # 1. the count
             wait = t.first_s
             count_msg = None
+            fatal: int | None = None
+            # Error acks are judged like on upload: a transient one (ERROR, INVALID_SEQUENCE - often a
+            # stale answer to a duplicated packet of the previous transfer) is ignored; any other
+            # ends the download when the wait it arrived in passes without an answer.
             for attempt in range(t.retries + 1):
                 self.link.send(self.link.mav.mission_request_list_encode(self.target_system, self.target_component,
                                                                          mission_type))
@@ -391,11 +396,13 @@ class MissionClient:
                         if attempt == 0:
                             self.rtt.sample(time.monotonic() - sent)
                         break
-                    if msg.get_type() == "MISSION_ACK" and msg.type != mavlink2.MAV_MISSION_ACCEPTED:
-                        raise LinkError(f"the vehicle answered {mission_result_name(msg.type)} to the list request",
-                                        where=where, hint=_NACK_HINTS.get(msg.type))
+                    if msg.get_type() == "MISSION_ACK" and msg.type in _FATAL_NACKS:
+                        fatal = msg.type
                 if count_msg is not None:
                     break
+                if fatal is not None:
+                    raise LinkError(f"the vehicle answered {mission_result_name(fatal)} to the list request",
+                                    where=where, hint=_NACK_HINTS.get(fatal))
                 resent += 1
                 wait = min(wait * 2, t.ack_s)
             if count_msg is None:
@@ -424,13 +431,13 @@ class MissionClient:
                                 got[seq] = item_from_msg(msg)
                                 if tries == 0:
                                     self.rtt.sample(time.monotonic() - sent)
-                        elif msg.get_type() == "MISSION_ACK" and msg.type not in (
-                                mavlink2.MAV_MISSION_ACCEPTED, mavlink2.MAV_MISSION_INVALID_SEQUENCE):
-                            raise LinkError(f"the vehicle answered {mission_result_name(msg.type)} "
-                                            f"to the request for item {seq}", where=where,
-                                            hint=_NACK_HINTS.get(msg.type))
+                        elif msg.get_type() == "MISSION_ACK" and msg.type in _FATAL_NACKS:
+                            fatal = msg.type
                     if seq in got:
                         break
+                    if fatal is not None:
+                        raise LinkError(f"the vehicle answered {mission_result_name(fatal)} "
+                                        f"to the request for item {seq}", where=where, hint=_NACK_HINTS.get(fatal))
                     tries += 1
                     resent += 1
                     if tries > t.retries:
