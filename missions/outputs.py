@@ -42,10 +42,9 @@ def _json_text(obj) -> str:
 
 
 def setup_document(compiled: Compiled) -> dict:
-    """NAME.setup.json: the ordered pre-flight steps, each with its target component and expected answer."""
-    return {"version": 1, "plan": compiled.name, "firmware": compiled.firmware,
-            "payloads": {p.name: {"camera": p.camera_id, "component_id": p.component_id} for p in compiled.payloads},
-            "steps": [s.to_json() for s in compiled.setup]}
+    """NAME.setup.json: the ordered pre-flight steps in missions.setup's format (what `wiris camera apply` reads)."""
+    from missions.setup import setup_json
+    return setup_json(compiled.name, compiled.setup)
 
 
 def _params_text(compiled: Compiled) -> str:
@@ -87,6 +86,12 @@ def _writers(compiled: Compiled, rep: dict, sim) -> list[tuple[str, Callable[[Pa
     return out
 
 
+def _file_mode() -> int:
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o666 & ~umask
+
+
 def _stale_parts(out_dir: Path, name: str, keep: set[str]) -> list[Path]:
     pat = re.compile(re.escape(name) + r"\.part\d+\.(plan|waypoints)$")
     if not out_dir.is_dir():
@@ -121,8 +126,10 @@ def write_outputs(compiled: Compiled, out_dir: str | Path, rep: dict | None = No
         old_dir = tmp / "old"
         new_dir.mkdir()
         old_dir.mkdir()
+        mode = _file_mode()
         for fname, write in writers:
             write(new_dir / fname)
+            os.chmod(new_dir / fname, mode)     # temp files are 0600; outputs are ordinary files
         if not out_dir.exists():
             out_dir.mkdir(parents=True)
             created_dir = True

@@ -223,8 +223,12 @@ def _arrows(path_px: Sequence[tuple[float, float]]) -> list[Shape]:
     return out
 
 
+# Pillow's built-in font has no en dash or multiplication sign: the legend sticks to ASCII.
+NONE = "n/a"
+
+
 def _pct(v: float | None) -> str:
-    return "–" if v is None else f"{100 * v:.1f} %"
+    return NONE if v is None else f"{100 * v:.1f} %"
 
 
 def _legend(compiled: Compiled, rep: dict, n_fp: int, n_ph: int, fp_stride: int) -> tuple[list[tuple[str, str]], list[Shape]]:
@@ -234,13 +238,13 @@ def _legend(compiled: Compiled, rep: dict, n_fp: int, n_ph: int, fp_stride: int)
                           f"{'s' if rep['parts'] != 1 else ''})"),
         ("path", f"{rep['path_length_m'] / 1000:.2f} km"),
         ("flight time", f"{_fmt_time(rep['flight_time_s'])} (QGC: {_fmt_time(rep.get('flight_time_qgc_s') or 0)})"),
-        ("area", f"{rep['area_m2'] / 10000:.2f} ha" if rep.get("area_m2") else "–"),
+        ("area", f"{rep['area_m2'] / 10000:.2f} ha" if rep.get("area_m2") else NONE),
     ]
     for name, n in rep["photos"].items():
         rows.append((f"photos {name}", str(n)))
         g = rep["gsd_cm"].get(name)
         if g:
-            rows.append((f"GSD {name}", f"{g[0]:.2f} cm/px" if abs(g[1] - g[0]) < 0.005 else f"{g[0]:.2f}–{g[1]:.2f} cm/px"))
+            rows.append((f"GSD {name}", f"{g[0]:.2f} cm/px" if abs(g[1] - g[0]) < 0.005 else f"{g[0]:.2f} to {g[1]:.2f} cm/px"))
     for name, c in rep.get("coverage", {}).items():
         ov = rep["overlap"].get(name, {})
         rows.append((f"coverage {name}", _pct(c)))
@@ -283,7 +287,7 @@ def _legend(compiled: Compiled, rep: dict, n_fp: int, n_ph: int, fp_stride: int)
             y += 18
             if y > MAP_H - 12:
                 break
-            shapes.append(Shape("text", ((x0 + 8, y),), text=f"{c}" + (f" ×{n}" if n > 1 else ""), size=12,
+            shapes.append(Shape("text", ((x0 + 8, y),), text=f"{c}" + (f" (x{n})" if n > 1 else ""), size=12,
                                 fill="#a05a00", layer="legend"))
     return rows, shapes
 

@@ -681,7 +681,7 @@ def _r(v: float | None, nd: int = 4) -> float | None:
 def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | None = None) -> dict:
     """The measured report (`wiris mission check --json`)."""
     sim = sim or simulate(compiled)
-    warnings: list[dict] = [{"code": "compiler", "message": m} for m in compiled.warnings]
+    warnings: list[dict] = [_compiler_warning(m) for m in compiled.warnings]
     errors: list[dict] = []
     names = [p.name for p in compiled.payloads]
     photos_of = {n: [p for p in sim.photos if n in p.payloads] for n in names}
@@ -776,7 +776,8 @@ def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | N
                                     + f"), faster than the camera's minimum of {pay.min_interval_s:g} s at "
                                       f"{compiled.speed_mps:g} m/s — photos will be lost; fly slower or reduce "
                                       "the front overlap"})
-    warnings.extend(_optics_warnings(compiled))
+    if not any(w["code"] == "assumed_optics" for w in warnings):
+        warnings.extend(_optics_warnings(compiled))
 
     return {
         "plan": plan_path or compiled.name,
@@ -801,6 +802,13 @@ def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | N
         "warnings": warnings,
         "errors": errors,
     }
+
+
+def _compiler_warning(text: str) -> dict:
+    """The compiler's warnings are "code: message" strings; keep its code."""
+    import re
+    m = re.match(r"([a-z][a-z0-9_]*): (.*)", text, re.S)
+    return {"code": m.group(1), "message": m.group(2)} if m else {"code": "compiler", "message": text}
 
 
 def _optics_warnings(compiled: Compiled) -> list[dict]:

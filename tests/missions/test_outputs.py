@@ -1,0 +1,140 @@
+"""write_outputs: every file, readable by its own reader and consistent with the report; all or nothing."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+import xml.etree.ElementTree as ET
+
+import pytest
+
+from mission_plans import small_plan
+from missions import outputs
+from missions.compile import compile_plan
+from missions.errors import PlanError
+from missions.outputs import write_outputs
+from missions.planfile import read_plan
+from missions.report import report
+from missions.wpl import read_wpl
+
+KML = "{http://www.opengis.net/kml/2.2}"
+
+
+@pytest.fixture(scope="module")
+def small(tmp_path_factory):
+    d = tmp_path_factory.mktemp("plan")
+    return compile_plan(small_plan(d))
+
+
+def _snapshot(d: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(d.iterdir())} if d.exists() else {}
+
+
+def test_every_output_is_written_and_reads_back(small, tmp_path):
+    out = tmp_path / "out"
+    paths = write_outputs(small, out)
+    names = sorted(p.name for p in paths)
+    assert names == sorted(f"small.{s}" for s in ("plan", "waypoints", "geojson", "kml", "setup.json", "params",
+                                                   "report.json", "lua"))
+    assert sorted(p.name for p in out.iterdir()) == names            # nothing else, no temp files
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]            # the temp dir next to it is gone
+    # the .plan and .waypoints hold exactly the compiled items
+    items, fence, rally, home = read_plan((out / "small.plan").read_text(), "small.plan")
+    assert len(items) == len(small.items) and all(a.same_on_wire(b) for a, b in zip(items, small.items))
+    w_items, w_home = read_wpl((out / "small.waypoints").read_text(), "small.waypoints")
+    assert len(w_items) == len(small.items) and all(a.same_on_wire(b) for a, b in zip(w_items, small.items))
+    assert w_home[0] == pytest.approx(small.home[0], abs=1e-7)
+    # the report file is the report
+    rep = json.loads((out / "small.report.json").read_text())
+    assert rep == json.loads(json.dumps(report(small)))
+    # GeoJSON: one photo feature per measured photo, footprints, area, path
+    fc = json.loads((out / "small.geojson").read_text())
+    kinds = [f["properties"]["kind"] for f in fc["features"]]
+    assert kinds.count("photo") == rep["photos"]["thermal"]
+    assert kinds.count("footprint") == rep["photos"]["thermal"]
+    assert kinds.count("area") == 1 and kinds.count("path") == 1 and kinds.count("home") == 1
+    path = next(f for f in fc["features"] if f["properties"]["kind"] == "path")
+    assert all(-180 <= c[0] <= 180 and -90 <= c[1] <= 90 for c in path["geometry"]["coordinates"])
+    assert path["geometry"]["coordinates"][0][:2] == pytest.approx([small.home[1], small.home[0]], abs=1e-7)
+    # KML: the same features
+    root = ET.fromstring((out / "small.kml").read_bytes())
+    assert len(list(root.iter(KML + "Placemark"))) == len(fc["features"])
+    # setup sequence and Lua bridge
+    setup = json.loads((out / "small.setup.json").read_text())
+    assert setup["plan"] == "small" and len(setup["steps"]) == len(small.setup)
+    assert (out / "small.lua").read_text() == small.lua
+    assert (out / "small.params").read_text().startswith("#")
+    assert oct((out / "small.plan").stat().st_mode & 0o777) == oct((out / "small.kml").stat().st_mode & 0o777)
+
+
+def test_split_mission_writes_one_file_pair_per_part(tmp_path):
+    c = compile_plan(small_plan(tmp_path, name="split", limit=10))
+    assert len(c.parts) > 1
+    out = tmp_path / "out"
+    write_outputs(c, out)
+    for k, part in enumerate(c.parts, start=1):
+        items, _f, _r, _h = read_plan((out / f"split.part{k}.plan").read_text(), "p")
+        assert len(items) == len(part) and all(a.same_on_wire(b) for a, b in zip(items, part))
+        w, _ = read_wpl((out / f"split.part{k}.waypoints").read_text(), "w")
+        assert len(w) == len(part)
+    assert not (out / f"split.part{len(c.parts) + 1}.plan").exists()
+    # a later compile without a split removes the stale part files (after success only)
+    one = compile_plan(small_plan(tmp_path, name="split", limit=700))
+    write_outputs(one, out)
+    assert not list(out.glob("split.part*"))
+
+
+def test_a_failing_writer_leaves_the_directory_untouched(small, tmp_path, monkeypatch):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "small.plan").write_text("old plan")
+    (out / "small.part2.plan").write_text("old part")
+    (out / "notes.txt").write_text("mine")
+    before = _snapshot(out)
+
+    def boom(fc):
+        raise RuntimeError("disk on fire")
+    monkeypatch.setattr("missions.kml_out.render_kml", boom)
+    with pytest.raises(RuntimeError):
+        write_outputs(small, out)
+    assert _snapshot(out) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+
+
+def test_a_failure_while_moving_rolls_back(small, tmp_path, monkeypatch):
+    out = tmp_path / "out"
+    write_outputs(small, out)
+    (out / "notes.txt").write_text("mine")
+    before = _snapshot(out)
+    real = os.replace
+    calls = {"n": 0}
+
+    def flaky(src, dst):
+        calls["n"] += 1
+        if calls["n"] == 9:             # past the set-aside of the old files, in the middle of moving new ones
+            raise OSError(28, "No space left on device")
+        return real(src, dst)
+    monkeypatch.setattr(outputs.os, "replace", flaky)
+    with pytest.raises(PlanError) as e:
+        write_outputs(small, out)
+    assert "No space left" in str(e.value)
+    monkeypatch.setattr(outputs.os, "replace", real)
+    assert _snapshot(out) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+
+
+def test_new_directory_is_not_left_behind_on_failure(small, tmp_path, monkeypatch):
+    monkeypatch.setattr("missions.geojson_out.feature_collection",
+                        lambda *a: (_ for _ in ()).throw(ValueError("bad geometry")))
+    with pytest.raises(ValueError):
+        write_outputs(small, tmp_path / "fresh")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_output_path_that_is_a_file_is_refused(small, tmp_path):
+    f = tmp_path / "file"
+    f.write_text("x")
+    with pytest.raises(PlanError):
+        write_outputs(small, f)
+    assert f.read_text() == "x"
