@@ -29,9 +29,14 @@ mission:
 """
 
 
-def small_plan(directory: Path, name: str = "small", firmware: str = "ardupilot", limit: int = 700) -> Path:
+def small_plan(directory: Path, name: str = "small", firmware: str = "ardupilot", limit: int = 700,
+               camera_change: bool = True) -> Path:
+    """A 1.6 ha survey, a hover capture, an in-flight camera change (unless camera_change=False), RTL."""
     path = Path(directory) / f"{name}.yaml"
-    path.write_text(SMALL.format(name=name, firmware=firmware, limit=limit), encoding="utf-8")
+    text = SMALL.format(name=name, firmware=firmware, limit=limit)
+    if not camera_change:
+        text = text.replace("  - camera: {payload: thermal, settings: {range_mode: auto}}\n", "")
+    path.write_text(text, encoding="utf-8")
     return path
 
 

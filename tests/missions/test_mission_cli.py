@@ -1,0 +1,110 @@
+"""`wiris mission schema|compile|check|preview` through click's CliRunner: outputs, exit codes, messages with
+locations, and nothing written for a bad plan."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from mission_plans import BAD_PLANS, bad_plan, small_plan
+from wiris_tools.cli import cli
+
+
+def run(*args):
+    return CliRunner().invoke(cli, list(map(str, args)))
+
+
+def test_schema_is_json_schema():
+    r = run("mission", "schema")
+    assert r.exit_code == 0
+    schema = json.loads(r.output)
+    assert schema["$schema"].startswith("https://json-schema.org/")
+    assert "mission" in schema["properties"]
+
+
+def test_compile_writes_and_lists_files(tmp_path):
+    plan = small_plan(tmp_path)
+    out = tmp_path / "out"
+    r = run("mission", "compile", plan, "-o", out)
+    assert r.exit_code == 0, r.output
+    listed = [line.strip() for line in r.output.splitlines() if line.startswith("  ") and "/" in line]
+    assert sorted(Path(p).name for p in listed) == sorted(p.name for p in out.iterdir())
+    assert (out / "small.plan").exists() and "photos" in r.output
+
+
+def test_compile_firmware_override(tmp_path):
+    # PX4 cannot carry the in-flight range_mode change: a located error, nothing written
+    r = run("mission", "compile", small_plan(tmp_path), "-o", tmp_path / "o", "--firmware", "px4")
+    assert r.exit_code == 1 and "small.yaml:" in r.output and "PX4" in r.output
+    assert not (tmp_path / "o").exists()
+    plan = small_plan(tmp_path, camera_change=False)
+    r = run("mission", "compile", plan, "-o", tmp_path / "o", "--firmware", "px4")
+    assert r.exit_code == 0, r.output
+    doc = json.loads((tmp_path / "o" / "small.plan").read_text())
+    assert doc["mission"]["firmwareType"] == 12          # MAV_AUTOPILOT_PX4
+    assert not (tmp_path / "o" / "small.lua").exists()   # the Lua bridge is ArduPilot's
+
+
+def test_check_json_has_the_binding_fields(tmp_path):
+    r = run("mission", "check", small_plan(tmp_path), "--json")
+    assert r.exit_code == 0, r.output
+    rep = json.loads(r.output)
+    for key in ("plan", "firmware", "mission_items", "item_limit", "parts", "photos", "path_length_m",
+                "flight_time_s", "area_m2", "gsd_cm", "coverage", "overlap", "warnings", "errors"):
+        assert key in rep
+    assert rep["coverage"]["thermal"] >= 0.995
+    assert rep["errors"] == []
+
+
+def test_check_text(tmp_path):
+    r = run("mission", "check", small_plan(tmp_path))
+    assert r.exit_code == 0
+    assert "coverage thermal" in r.output and "flight time" in r.output
+
+
+def test_preview_png(tmp_path):
+    r = run("mission", "preview", small_plan(tmp_path), "-o", tmp_path / "p.png")
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "p.png").read_bytes().startswith(b"\x89PNG")
+
+
+@pytest.mark.parametrize("key", sorted(BAD_PLANS))
+def test_bad_plans_exit_1_with_location_and_write_nothing(tmp_path, key):
+    plan, fragment = bad_plan(tmp_path, key)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "keep.txt").write_text("untouched")
+    before = sorted(p.name for p in tmp_path.iterdir())
+    r = run("mission", "compile", plan, "-o", out)
+    assert r.exit_code == 1
+    assert "Traceback" not in r.output
+    assert f"{plan.name}:" in r.output                 # file:line:col
+    assert fragment in r.output
+    assert "hint:" in r.output
+    assert [p.name for p in out.iterdir()] == ["keep.txt"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+    # check and preview answer the same way
+    c = run("mission", "check", plan)
+    assert c.exit_code == 1 and f"{plan.name}:" in c.output
+    assert run("mission", "check", plan, "--json").exit_code == 1
+    p = run("mission", "preview", plan, "-o", tmp_path / "x.svg")
+    assert p.exit_code == 1 and not (tmp_path / "x.svg").exists()
+
+
+def test_check_json_on_a_bad_plan_is_still_json(tmp_path):
+    plan, _ = bad_plan(tmp_path, "unknown_payload")
+    r = run("mission", "check", plan, "--json")
+    assert r.exit_code == 1
+    doc = json.loads(r.stdout)
+    assert doc["errors"] and doc["errors"][0]["where"].startswith(str(plan))
+    assert "thermall" in doc["errors"][0]["message"]
+
+
+def test_missing_plan_and_usage_errors(tmp_path):
+    r = run("mission", "check", tmp_path / "nope.yaml")
+    assert r.exit_code == 1 and "nope.yaml" in r.output and "Traceback" not in r.output
+    assert run("mission", "compile", small_plan(tmp_path)).exit_code == 2          # -o missing
+    assert run("mission", "preview", small_plan(tmp_path), "-o", tmp_path / "p.gif").exit_code == 1
