@@ -38,7 +38,9 @@ class MavsdkResult:
     accepted: bool  # the definition loaded (settings API answers)
     crashed: bool  # the process died while loading it (counts as a rejection)
     outcome: str  # accepted | rejected | crashed | timeout | no-system | harness-error
-    settings: dict[str, tuple[str, ...]] = field(default_factory=dict)  # visible settings -> option values
+    # visible settings (control != 0, not excluded at the defaults) -> option values as MAVSDK lists them
+    # (a min/max/step range appears as MAVSDK's pseudo-options)
+    settings: dict[str, tuple[str, ...]] = field(default_factory=dict)
     known: frozenset[str] = frozenset()  # file parameters MAVSDK answers get_setting for
     file_parameters: tuple[str, ...] = ()  # parameter names in the file (document order)
     requested: tuple[str, ...] = ()  # names MAVSDK asked the camera for (PARAM_EXT_REQUEST_READ)

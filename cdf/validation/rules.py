@@ -64,7 +64,7 @@ RULES: tuple[Rule, ...] = (
          "MAVProxy refuses any DTD (defusedxml forbid_dtd); DTDs enable billion-laughs and external-entity attacks.",
          "§C33, §D"),
     Rule("CDF006", "too-complex", E, E, E,
-         "Elements nest at most 64 deep and the file has at most 20000 nodes (real files: 8 deep, under 2000).",
+         "Elements nest at most 64 deep and the file has at most 5000 elements (real files: 8 deep, under 900).",
          "Deep nesting and huge sibling lists are resource attacks on recursive parsers and schema validators.",
          "DESIGN.md (untrusted input)"),
     Rule("CDF007", "encoding", I, I, W,
@@ -259,7 +259,7 @@ RULES: tuple[Rule, ...] = (
          "§C34"),
     Rule("CDF212", "parameter-count", E, E, E,
          "At most 65535 parameters (PARAM_EXT_VALUE.param_count is uint16).",
-         "The count cannot be represented on the wire. (Unreachable while CDF006 caps a file at 20000 nodes; "
+         "The count cannot be represented on the wire. (Unreachable while CDF006 caps a file at 5000 elements; "
          "kept for callers that raise the cap.)",
          "§C30"),
     Rule("CDF213", "readonly-control", W, W, W,

@@ -23,6 +23,8 @@ _UNEXPECTED = re.compile(r"Unexpected child with tag '([^']+)'")
 PLACEMENT_TAGS = {"exclusions", "exclude", "updates", "update", "parameterranges", "parameterrange", "roption"}
 # owned by semantic.py (see module docstring)
 PY_OWNED_ELEMENTS = {"mavlinkcamera", "definition", "model", "vendor"}
+# xmlschema's error objects are expensive; a file this broken gains nothing from more of them
+MAX_SCHEMA_HITS = 200
 
 
 @dataclass(frozen=True)
@@ -207,4 +209,8 @@ def xmlschema_hits(root) -> list[Hit]:
         culprit = getattr(err, "invalid_child", None)
         line = getattr(culprit if culprit is not None else elem, "sourceline", None) if elem is not None else None
         hits.append(Hit(rule_id, line, _param_of(elem) if elem is not None else None, message))
+        if len(hits) >= MAX_SCHEMA_HITS:
+            hits.append(Hit("CDF100", None, None, f"more than {MAX_SCHEMA_HITS} schema errors; "
+                                                  "the rest are not reported"))
+            break
     return hits

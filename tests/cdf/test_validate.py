@@ -350,3 +350,13 @@ def test_misplaced_element_points_at_the_element_itself():
                "</exclusions>\n</option>\n</options>\n</parameter>")
     (f,) = [f for f in findings(data) if f.rule == "CDF200"]
     assert f.line == 10 and f.parameter == "X" and f.severity == "error"
+
+
+def test_every_reference_rule_is_implemented_by_some_rule():
+    # ../shared/reference/camera-definition-files.md §C lists 35 rules; each maps to at least one rule id
+    import re
+
+    cited = set()
+    for r in RULES:
+        cited |= {int(n) for n in re.findall(r"§C(\d+)", r.ref)}
+    assert cited >= set(range(1, 36)), sorted(set(range(1, 36)) - cited)
