@@ -14,6 +14,7 @@ rejections and the interoperability warnings. Severity None = not reported in th
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from typing import Literal
 
@@ -323,7 +324,8 @@ def render_markdown() -> str:
     for r in RULES:
         cells = [r.id + (" (retired)" if r.retired else ""), r.name, r.qgc or "-", r.mavsdk or "-",
                  r.strict or "-", r.checks, r.why, r.ref]
-        out.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
+        # element names in backticks, or Markdown renders them as (invisible) HTML tags
+        out.append("| " + " | ".join(re.sub(r"(<[^<>|]+>)", r"`\1`", c).replace("|", "\\|") for c in cells) + " |")
     return "\n".join(out) + "\n"
 
 
