@@ -249,17 +249,29 @@ class CameraClient:
                             hint="its settings cannot be read through PARAM_EXT without one")
         scheme = uri.split("://", 1)[0].lower() if "://" in uri else ""
         if scheme in ("mftp", "mavlinkftp"):
-            raise LinkError("MAVLink FTP download is not implemented in this client", where=uri,
-                            hint="serve the definition over http(s), or fetch it with a GCS and validate it "
-                                 "with `wiris cdf validate`")
-        if scheme not in ("http", "https"):
+            from wiris_tools.mavftp import download
+
+            path = uri.split("://", 1)[1]
+            # MAVLink FTP URL scheme (devguide ftp.md): an optional "comp=ID:" or QGC's "[;comp=ID]" prefix
+            # names the component that serves the file; by default it is the camera itself.
+            component = self.component
+            if path.startswith("[;comp=") and "]" in path:
+                comp_text, path = path[len("[;comp="):].split("]", 1)
+                component = int(comp_text) if comp_text.isdigit() else component
+            elif path.startswith("comp=") and ":" in path:
+                comp_text, path = path[len("comp="):].split(":", 1)
+                component = int(comp_text) if comp_text.isdigit() else component
+            data = download(self.link, self.system, component, path, timeout_s=self.timeout_s,
+                            retries=max(self.retries, 3))
+        elif scheme in ("http", "https"):
+            try:
+                data = fetch_url(uri, timeout_s=timeout_s)
+            except CdfError as err:
+                raise LinkError(f"cannot download the camera definition: {err.message}",
+                                where=uri, hint="is the camera's web server reachable from here?") from None
+        else:
             raise LinkError(f"unsupported definition URI scheme {scheme or uri!r}", where=uri,
                             hint="cam_definition_uri must be http://, https:// or mftp://")
-        try:
-            data = fetch_url(uri, timeout_s=timeout_s)
-        except CdfError as err:
-            raise LinkError(f"cannot download the camera definition: {err.message}",
-                            where=uri, hint="is the camera's web server reachable from here?") from None
         report = validate_bytes(data, uri, "strict", camera_info=ValidationInfo(
             vendor_name=info.vendor, model_name=info.model, cam_definition_version=info.definition_version,
             cam_definition_uri=uri))

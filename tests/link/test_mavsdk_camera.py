@@ -22,15 +22,16 @@ MARK = "@@MODEL "
 
 
 # -- the subprocess ------------------------------------------------------------------------------
-def _run_model(model: str) -> dict:
+def _run_model(job: str) -> dict:
     from mavsdk import ComponentType, Configuration, Mavsdk
     from mavsdk.plugins.camera import Camera, CameraError, Option, Setting
 
     from wiris_tools.emulate.runner import start_emulator
 
-    emu = start_emulator(model, "udpin:127.0.0.1:0")
+    model, _, scheme = job.partition("@")
+    emu = start_emulator(model, "udpin:127.0.0.1:0", definition_scheme=scheme or "http")
     gcs = Mavsdk(Configuration.create_with_component_type(ComponentType.GROUND_STATION))
-    result: dict = {"model": model}
+    result: dict = {"model": job, "uri": emu.definition_uri}
     captured: list = []
     try:
         gcs.add_any_connection(f"udpout://127.0.0.1:{emu.link.local_port}")
@@ -135,8 +136,9 @@ def mavsdk_results(tmp_path_factory):
     (work / "home").mkdir()
     (work / "tmp").mkdir()
     env = dict(os.environ, HOME=str(work / "home"), TMPDIR=str(work / "tmp"))
-    proc = subprocess.run([sys.executable, str(Path(__file__).resolve()), *WORKSWELL], capture_output=True, text=True,
-                          env=env, timeout=60 * len(WORKSWELL))
+    jobs = [*WORKSWELL, f"{WORKSWELL[0]}@mftp"]      # one model with its definition over MAVLink FTP
+    proc = subprocess.run([sys.executable, str(Path(__file__).resolve()), *jobs], capture_output=True, text=True,
+                          env=env, timeout=60 * len(jobs))
     results = {}
     for line in proc.stdout.splitlines():
         if line.startswith(MARK):
@@ -148,14 +150,16 @@ def mavsdk_results(tmp_path_factory):
 
 @pytest.mark.peer
 @pytest.mark.slow
-@pytest.mark.parametrize("model", WORKSWELL)
-def test_mavsdk_camera_plugin_uses_the_emulator(mavsdk_results, model):
+@pytest.mark.parametrize("job", [*WORKSWELL, f"{WORKSWELL[0]}@mftp"])
+def test_mavsdk_camera_plugin_uses_the_emulator(mavsdk_results, job):
     from cdf.generate import definition_xml
     from wiris_tools.emulate.definition import parse_definition
 
-    r = mavsdk_results.get(model)
+    r = mavsdk_results.get(job)
     assert r is not None, "the MAVSDK subprocess died before this model"
     assert r["outcome"] == "ok", r
+    model, _, scheme = job.partition("@")
+    assert r["uri"].startswith(f"{scheme or 'http'}://")
     data = definition_xml(catalogue().get(model))
     d = parse_definition(data)
     defaults = {p.name: p.default for p in d.params}

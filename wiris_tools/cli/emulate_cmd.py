@@ -20,6 +20,8 @@ import click
               help="Capacity of each storage in MiB (WIRIS; small values let you test a full storage).")
 @click.option("--image-mib", type=click.FloatRange(0.001, None), default=None,
               help="Room one image of one format takes in MiB (WIRIS).")
+@click.option("--definition-over", "definition_scheme", type=click.Choice(["http", "mftp"]), default="http",
+              show_default=True, help="Transport named in cam_definition_uri (WIRIS; MAVLink FTP is always served too).")
 @click.option("--ethernet-sdk", is_flag=True, help="Emulate the Ethernet Stream SDK (RTSP streams).")
 @click.option("--no-licence", is_flag=True, help="Emulate a camera without the MAVLink licence (ignores commands).")
 @click.option("--signing-key", type=click.Path(dir_okay=False), default=None,
@@ -27,7 +29,8 @@ import click
 @click.option("--duration", type=click.FloatRange(0, None), default=0.0,
               help="Stop after this many seconds (0: run until Ctrl-C).")
 def emulate(model: str, url: str, component: int | None, system: int, http_port: int, http_host: str,
-            storage_mib: float | None, image_mib: float | None, ethernet_sdk: bool, no_licence: bool,
+            storage_mib: float | None, image_mib: float | None, definition_scheme: str, ethernet_sdk: bool,
+            no_licence: bool,
             signing_key: str | None, duration: float) -> None:
     """Run the emulator of catalogue camera MODEL (see `wiris cdf models`) until Ctrl-C.
 
@@ -41,7 +44,7 @@ def emulate(model: str, url: str, component: int | None, system: int, http_port:
     storage = (storage_mib,) * 3 if storage_mib is not None else None
     emu = start_emulator(model, url, component=component, system=system, http_port=http_port, http_host=http_host,
                          signing_key=key, storage_capacity_mib=storage, image_size_mib=image_mib,
-                         ethernet_sdk=ethernet_sdk, licensed=not no_licence)
+                         ethernet_sdk=ethernet_sdk, licensed=not no_licence, definition_scheme=definition_scheme)
     cam = emu.camera
     comp = getattr(emu.state, "config", None)
     comp_id = comp.component if comp is not None else emu.state.component

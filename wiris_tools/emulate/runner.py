@@ -134,7 +134,8 @@ class Emulator:
 def start_emulator(model: str, url: str, *, component: int | None = None, system: int = 1,
                    http_port: int = 0, http_host: str = "127.0.0.1", signing_key: bytes | None = None,
                    storage_capacity_mib: tuple[float, float, float] | None = None, image_size_mib: float | None = None,
-                   ethernet_sdk: bool = False, licensed: bool = True, definition: bytes | None = None) -> Emulator:
+                   ethernet_sdk: bool = False, licensed: bool = True, definition: bytes | None = None,
+                   definition_scheme: str = "http") -> Emulator:
     """Start the emulator of catalogue camera `model` on connection `url` (see the module docstring)."""
     from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
@@ -164,25 +165,29 @@ def start_emulator(model: str, url: str, *, component: int | None = None, system
                            where=model, hint=f"choose one of {', '.join(map(str, camera.component_ids))} (§3.2)")
         body = definition if definition is not None else definition_xml(camera)
         parsed = parse_definition(body, model)
-        http = _DefinitionServer(body, definition_file_name(camera), http_host, http_port)
+        if definition_scheme not in ("http", "mftp"):
+            raise CdfError(f"unknown definition transport {definition_scheme!r}", hint="use http or mftp")
+        file_name = definition_file_name(camera)
+        http = _DefinitionServer(body, file_name, http_host, http_port)
+        uri = http.uri if definition_scheme == "http" else f"mftp://{file_name}"
         try:
-            if len(http.uri) > 139:
-                raise CdfError(f"definition URI is {len(http.uri)} characters; CAMERA_INFORMATION holds 139",
-                               where=http.uri, hint="use a shorter --http-host")
+            if len(uri) > 139:
+                raise CdfError(f"definition URI is {len(uri)} characters; CAMERA_INFORMATION holds 139",
+                               where=uri, hint="use a shorter --http-host")
             kw: dict[str, Any] = {}
             if storage_capacity_mib is not None:
                 kw["storage_capacity_mib"] = tuple(storage_capacity_mib)
             if image_size_mib is not None:
                 kw["image_size_mib"] = image_size_mib
-            config = WirisConfig(system=system, component=comp, definition_uri=http.uri, licensed=licensed,
+            config = WirisConfig(system=system, component=comp, definition_uri=uri, licensed=licensed,
                                  ethernet_sdk=ethernet_sdk, stream_host=http_host, **kw)
-            state = WirisState(camera, parsed, config, now=now, utc_offset_s=utc_offset)
+            state = WirisState(camera, parsed, config, now=now, utc_offset_s=utc_offset, ftp_files={file_name: body})
             link = Link(url, system=system, component=comp, mav_type=mavlink2.MAV_TYPE_CAMERA, heartbeat_s=0,
                         signing_key=signing_key)
         except BaseException:
             http.close()
             raise
-        emu = Emulator(camera, state, link, threading.Lock(), http.uri, body, http)
+        emu = Emulator(camera, state, link, threading.Lock(), uri, body, http)
     link.subscribe(emu._on_message)
     emu._thread = threading.Thread(target=emu._tick_loop, name=f"emulator {model}", daemon=True)
     emu._thread.start()

@@ -106,7 +106,7 @@ class WirisState:
     """One WIRIS camera (see the module docstring)."""
 
     def __init__(self, camera: Camera, definition: Definition, config: WirisConfig | None = None,
-                 *, now: float = 0.0, utc_offset_s: float = 0.0) -> None:
+                 *, now: float = 0.0, utc_offset_s: float = 0.0, ftp_files: dict[str, bytes] | None = None) -> None:
         if camera.protocol != "workswell-mavlink":
             raise ValueError(f"{camera.id} is not a Workswell MAVLink camera")
         self.camera = camera
@@ -135,6 +135,13 @@ class WirisState:
         self.menu_actions: list[int] = []
         self.ignored = 0                  # messages dropped by the component rule (§3.2)
         self._next_heartbeat = now
+        # Not in the Workswell manual: the emulator can also serve its definition over MAVLink FTP (mftp://),
+        # the other transport common.xml allows for cam_definition_uri.
+        self.ftp = None
+        if ftp_files:
+            from wiris_tools.mavftp import FtpServer
+
+            self.ftp = FtpServer(ftp_files, self.mav)
         self.reset_settings()
 
     # -- values --------------------------------------------------------------------------------
@@ -200,6 +207,8 @@ class WirisState:
             return [self._ack(msg, mavlink2.MAV_RESULT_UNSUPPORTED)]
         if mtype in PARAM_EXT_MESSAGES:
             return self._param_ext(msg, mtype)
+        if mtype == "FILE_TRANSFER_PROTOCOL" and self.ftp is not None:
+            return self.ftp.handle(msg)
         return []
 
     # -- the command protocol ------------------------------------------------------------------
@@ -637,8 +646,11 @@ def new_wiris(camera: Camera, config: WirisConfig | None = None, *, now: float =
     from cdf.generate import definition_xml
     from wiris_tools.emulate.definition import parse_definition
 
+    from cdf.generate import definition_file_name
+
     data = definition_bytes if definition_bytes is not None else definition_xml(camera)
-    return WirisState(camera, parse_definition(data, camera.id), config, now=now, utc_offset_s=utc_offset_s)
+    return WirisState(camera, parse_definition(data, camera.id), config, now=now, utc_offset_s=utc_offset_s,
+                      ftp_files={definition_file_name(camera): data})
 
 
 __all__ = ["WirisConfig", "WirisState", "new_wiris", "Captured", "Position"]
