@@ -16,6 +16,9 @@ $(VENV)/.installed: requirements.lock pyproject.toml
 examples: $(VENV)/.installed
 	$(BIN)/wiris cdf build --all -o $(OUT)/cdf --base-url http://127.0.0.1:8000/cdf
 	$(BIN)/wiris cdf validate $(OUT)/cdf/*.xml
+	for f in examples/*.yaml; do $(BIN)/wiris mission compile $$f -o $(OUT)/missions || exit 1; done
+	$(BIN)/wiris mission preview examples/solar-park.yaml -o $(OUT)/missions/solar-park.png
+	$(BIN)/wiris mission preview examples/solar-park.yaml -o $(OUT)/missions/solar-park.html
 
 test: $(VENV)/.installed
 	$(BIN)/python -m pytest -q
