@@ -107,7 +107,8 @@ _COMPLEX: dict[str, dict[str, int]] = {  # element -> allowed CDF children and t
     "mavlinkcamera": {"definition": 1, "parameters": 1, "localization": 1},
     "definition": {"model": 1, "vendor": 1},
     "parameters": {"parameter": 1 << 30},
-    "parameter": {"description": 1, "updates": 1, "options": 1},
+    # <option> directly under <parameter> is an XSD error that _map drops (CDF122 is semantic.py's)
+    "parameter": {"description": 1, "updates": 1, "options": 1, "option": 1 << 30},
     "updates": {"update": 1 << 30},
     "options": {"option": 1 << 30},
     "option": {"exclusions": 1, "parameterranges": 1},
