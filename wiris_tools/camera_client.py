@@ -144,6 +144,7 @@ class CameraClient:
         self.timeout_s = timeout_s
         self.retries = retries
         self.system, self.component = self._find(component, system, find_timeout_s)
+        self.reported_types: dict[str, str] = {}     # parameter -> CDF type of the PARAM_EXT type it came with
 
     # -- discovery -----------------------------------------------------------------------------
     def _find(self, component: int | None, system: int | None, timeout_s: float) -> tuple[int, int]:
@@ -310,15 +311,27 @@ class CameraClient:
                             self._store(definition, values, m)
         return values
 
-    @staticmethod
-    def _store(definition: Definition, values: dict, m: Any) -> None:
+    def _store(self, definition: Definition, values: dict, m: Any) -> None:
         name = paramext.param_id(m)
         p = definition.param(name)
         if p is None:
             return
+        wt = paramext.BY_EXT.get(m.param_type)
+        self.reported_types[name] = wt.cdf if wt is not None else "custom"
         v = paramext.decode_ext(paramext.raw_value(m), m.param_type)
         if v is not None:
             values[name] = v
+
+    def check_against_camera(self, loaded: LoadedDefinition, info: CameraInfo) -> Any:
+        """Validate the definition again with what the camera answered (types, parameters it never
+        answered: the validator's CDF3xx rules). Call after read_settings."""
+        from cdf.validation import CameraInfo as ValidationInfo
+        from cdf.validation import validate_bytes
+
+        return validate_bytes(loaded.data, loaded.uri, "strict", camera_info=ValidationInfo(
+            vendor_name=info.vendor, model_name=info.model, cam_definition_version=info.definition_version,
+            cam_definition_uri=loaded.uri, param_types=dict(self.reported_types),
+            answered=frozenset(self.reported_types)))
 
     @staticmethod
     def parse_value(p: DefParam, text: str) -> float | int:

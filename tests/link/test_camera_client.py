@@ -252,3 +252,21 @@ def test_emulate_command_runs_and_stops():
     assert bad.exit_code == 1 and "100" in bad.output
     unknown = CliRunner().invoke(cli, ["emulate", "wiris-pr", "--connect", "udpin:127.0.0.1:0"])
     assert unknown.exit_code == 1 and "did you mean" in unknown.output
+
+
+def test_settings_report_a_camera_that_disagrees_with_its_definition(pro):
+    """A camera answering another type than its file says, or not answering a parameter, is reported
+    (the validator's CDF303/CDF304) by `wiris camera settings`."""
+    import dataclasses
+
+    with pro.lock:
+        d = pro.state.definition
+        params = tuple(dataclasses.replace(p, type="int32") if p.name == "LAYOUT" else p
+                       for p in d.params if p.name != "PALETTE")
+        pro.state.definition = dataclasses.replace(d, params=params)
+    result = CliRunner().invoke(cli, ["camera", "settings", "--connect", _url(pro), "--json", "--timeout", "0.3"])
+    assert result.exit_code == 0, result.output
+    doc = json.loads(result.output)
+    found = {(f["rule"], f["parameter"]) for f in doc["definition"]["findings"]}
+    assert ("CDF303", "LAYOUT") in found and ("CDF304", "PALETTE") in found
+    assert next(s for s in doc["settings"] if s["name"] == "PALETTE")["value"] is None

@@ -101,18 +101,19 @@ def settings(url, component, system, signing_key, mavlink1, timeout, find_s, as_
         information = cam.information()
         loaded = cam.definition(information)
         values = cam.read_settings(loaded.definition)
+        report = cam.check_against_camera(loaded, information)
     d = loaded.definition
     rows = [{"name": p.name, "description": p.description, "type": p.type, "value": values.get(p.name),
              "option": p.label_of(values.get(p.name)), "options": [{"value": o.value, "name": o.label} for o in p.options],
              "min": p.min, "max": p.max} for p in d.params]
     if as_json:
-        _echo_json({"camera": information.to_json(), "definition": {"uri": loaded.uri, "valid": loaded.report.valid,
-                    "findings": [f.to_json() for f in loaded.report.findings]}, "settings": rows})
+        _echo_json({"camera": information.to_json(), "definition": {"uri": loaded.uri, "valid": report.valid,
+                    "findings": [f.to_json() for f in report.findings]}, "settings": rows})
         return
-    state = "valid" if loaded.report.valid else "INVALID"
+    state = "valid" if report.valid else "INVALID"
     click.echo(f"{information.vendor} {information.model}: definition v{d.version} ({state}, "
-               f"{len(loaded.report.findings)} findings) from {loaded.uri}")
-    _findings(loaded.report, as_json)
+               f"{len(report.findings)} findings) from {loaded.uri}")
+    _findings(report, as_json)
     width = max((len(r["name"]) for r in rows), default=4)
     for r in rows:
         shown = _num(r["value"]) + (f"  {r['option']}" if r["option"] else "")
