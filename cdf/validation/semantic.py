@@ -46,6 +46,7 @@ VOCABULARY: dict[str, tuple[frozenset[str], frozenset[str]]] = {
     "strings": (frozenset(), frozenset({"original", "translated"})),
 }
 CDF_TAGS = frozenset(VOCABULARY)
+TEXT_ELEMENTS = frozenset({"model", "vendor", "description", "update", "exclude"})
 
 _NAME_OK = re.compile(r"[ -~]{1,16}")
 _NAME_STYLE = re.compile(r"[A-Z0-9_]+")
@@ -474,7 +475,14 @@ def _check_vocabulary(root) -> Iterator[Hit]:
                 reported_attrs.add((el.tag, a))
                 yield Hit("CDF211", _line(el), _param_name(el), f"attribute {el.tag}@{a} is not part of the format "
                                                                 "(ignored by QGC and MAVSDK)")
+        simple = el.tag in TEXT_ELEMENTS
+        if not simple and el.text and el.text.strip():
+            yield Hit("CDF211", _line(el), _param_name(el), f"stray text {el.text.strip()[:30]!r} inside <{el.tag}> "
+                                                            "(ignored by all parsers)")
         for c in el:
+            if not simple and c.tail and c.tail.strip():
+                yield Hit("CDF211", _line(c), _param_name(el), f"stray text {c.tail.strip()[:30]!r} inside "
+                                                               f"<{el.tag}> (ignored by all parsers)")
             if not isinstance(c.tag, str):
                 continue  # comments, processing instructions
             if c.tag in CDF_TAGS:

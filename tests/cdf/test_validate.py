@@ -360,3 +360,9 @@ def test_every_reference_rule_is_implemented_by_some_rule():
     for r in RULES:
         cited |= {int(n) for n in re.findall(r"§C(\d+)", r.ref)}
     assert cited >= set(range(1, 36)), sorted(set(range(1, 36)) - cited)
+
+
+def test_stray_text_is_info_with_its_line():
+    data = doc(GOOD_PARAMS.replace("<options><option name=\"Photo\"", "<options>oops\n<option name=\"Photo\"", 1))
+    (f,) = [f for f in findings(data) if f.rule == "CDF211"]
+    assert f.severity == "info" and f.line == 7 and f.parameter == "CAM_MODE" and "oops" in f.message
