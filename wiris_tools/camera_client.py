@@ -206,8 +206,17 @@ class CameraClient:
             return got
 
     def information(self) -> CameraInfo:
-        m = self.request("CAMERA_INFORMATION", fallback=mavlink2.MAV_CMD_REQUEST_CAMERA_INFORMATION,
-                         fallback_param1=1)[0]
+        try:
+            m = self.request("CAMERA_INFORMATION", fallback=mavlink2.MAV_CMD_REQUEST_CAMERA_INFORMATION,
+                             fallback_param1=1)[0]
+        except LinkError as err:
+            hb = self.link.heartbeats().get((self.system, self.component))
+            if hb is not None and hb.type != mavlink2.MAV_TYPE_CAMERA and "no answer" in err.message:
+                raise LinkError(f"{err.message}; component {self.component} announces MAV_TYPE {hb.type}, not "
+                                "MAV_TYPE_CAMERA", where=err.where,
+                                hint="a MicaSense RedEdge speaks only its serial API (no camera protocol): set its "
+                                     "parameters with `wiris camera apply` param_set steps (--mavlink1)") from None
+            raise
         return CameraInfo(
             system=self.system, component=self.component, vendor=_text(m.vendor_name), model=_text(m.model_name),
             firmware_version=m.firmware_version, focal_length_mm=m.focal_length,

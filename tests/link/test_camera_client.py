@@ -270,3 +270,9 @@ def test_settings_report_a_camera_that_disagrees_with_its_definition(pro):
     found = {(f["rule"], f["parameter"]) for f in doc["definition"]["findings"]}
     assert ("CDF303", "LAYOUT") in found and ("CDF304", "PALETTE") in found
     assert next(s for s in doc["settings"] if s["name"] == "PALETTE")["value"] is None
+
+
+def test_info_on_a_rededge_says_what_it_is():
+    with start_emulator("rededge-mx", "udpin:127.0.0.1:0") as emu:
+        r = CliRunner().invoke(cli, ["camera", "info", "--connect", _url(emu), "--mavlink1", "--timeout", "0.2"])
+    assert r.exit_code == 1 and "not MAV_TYPE_CAMERA" in r.output and "serial API" in r.output

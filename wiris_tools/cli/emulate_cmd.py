@@ -48,7 +48,9 @@ def emulate(model: str, url: str, component: int | None, system: int, http_port:
     cam = emu.camera
     comp = getattr(emu.state, "config", None)
     comp_id = comp.component if comp is not None else emu.state.component
-    click.echo(f"emulating {cam.vendor} {cam.model} as component {comp_id} on {url}"
+    port = emu.link.local_port
+    shown = url if not url.startswith("udpin:") or port is None else f"{url.rsplit(':', 1)[0]}:{port}"
+    click.echo(f"emulating {cam.vendor} {cam.model} as component {comp_id} on {shown}"
                + (" (MAVLink 1)" if cam.mavlink_version == 1 else ""), err=True)
     if emu.definition_uri:
         click.echo(f"camera definition: {emu.definition_uri}", err=True)
