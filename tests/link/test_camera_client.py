@@ -276,3 +276,31 @@ def test_info_on_a_rededge_says_what_it_is():
     with start_emulator("rededge-mx", "udpin:127.0.0.1:0") as emu:
         r = CliRunner().invoke(cli, ["camera", "info", "--connect", _url(emu), "--mavlink1", "--timeout", "0.2"])
     assert r.exit_code == 1 and "not MAV_TYPE_CAMERA" in r.output and "serial API" in r.output
+
+
+def test_falls_back_to_request_camera_information_for_an_older_camera():
+    """A camera that answers REQUEST_MESSAGE with UNSUPPORTED gets MAV_CMD_REQUEST_CAMERA_INFORMATION (521)."""
+    from pymavlink.dialects.v20 import ardupilotmega as m
+
+    cam = Link("udpin:127.0.0.1:0", system=2, component=101, mav_type=m.MAV_TYPE_CAMERA, heartbeat_s=0.2)
+    seen = []
+
+    def on_cmd(msg):
+        seen.append(msg.command)
+        ok = msg.command == m.MAV_CMD_REQUEST_CAMERA_INFORMATION
+        cam.send(cam.mav.command_ack_encode(msg.command, m.MAV_RESULT_ACCEPTED if ok else m.MAV_RESULT_UNSUPPORTED,
+                                            0, 0, msg.get_srcSystem(), msg.get_srcComponent()))
+        if ok:
+            cam.send(cam.mav.camera_information_encode(0, b"Old".ljust(32, b"\0"), b"Cam".ljust(32, b"\0"), 0, 4.0,
+                                                       0, 0, 320, 240, 0, m.CAMERA_CAP_FLAGS_CAPTURE_IMAGE, 0, b""))
+
+    cam.subscribe(on_cmd, "COMMAND_LONG", to_me=True)
+    try:
+        with Link(f"udpout:127.0.0.1:{cam.local_port}", heartbeat_s=0.2) as link:
+            info = CameraClient(link, timeout_s=0.5).information()
+            assert (info.vendor, info.model, info.system, info.component) == ("Old", "Cam", 2, 101)
+            assert seen[:2] == [m.MAV_CMD_REQUEST_MESSAGE, m.MAV_CMD_REQUEST_CAMERA_INFORMATION]
+            with pytest.raises(LinkError, match="names no camera definition"):
+                CameraClient(link, timeout_s=0.5).definition(info)
+    finally:
+        cam.close()
