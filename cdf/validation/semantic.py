@@ -8,6 +8,7 @@ measured with MAVSDK 4.1.0 and MAVProxy 1.8.75 where §D says so.
 from __future__ import annotations
 
 import re
+from collections import Counter
 from dataclasses import dataclass
 from typing import Iterator, Mapping
 
@@ -260,11 +261,12 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
         typed_options.append((o, v))
 
     values = [v for _o, v in typed_options if v is not None]
-    dups = sorted({repr(v) for v in values if values.count(v) > 1})
+    counted = Counter(values)
+    dups = sorted(repr(v) for v, n in counted.items() if n > 1)
     if dups:
         yield Hit("CDF124", _line(options_el), name, f"option value(s) {', '.join(dups)} appear more than once")
     if numeric and default is not None and options_el is not None:
-        hits = values.count(default)
+        hits = counted[default]
         if hits != 1:
             listed = ", ".join(o.get("value") or "?" for o in options)
             yield Hit("CDF125", line, name,
@@ -331,6 +333,8 @@ def _check_updates(p, name, params: _Params) -> Iterator[Hit]:
 
 
 def _check_option_refs(o, p, name, ptype, params: _Params) -> Iterator[Hit]:
+    if not len(o):
+        return  # most options have no exclusions or ranges
     is_trigger = False
     for ex in o.iter("exclude"):  # recursive like QGC; nesting itself is CDF200 (XSD)
         is_trigger = True
