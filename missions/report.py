@@ -179,8 +179,12 @@ def _trigger_payloads(compiled: Compiled) -> tuple[str, ...]:
 
 
 def _projection(compiled: Compiled):
+    """The first area's own projection when there is one (so photos and area share one plane: runs of photos
+    stay exactly collinear for the overlap measurement); else one centred on home and every item."""
     from missions.geo import LocalProjection
 
+    if compiled.areas:
+        return compiled.areas[0].area.projection
     lats = [compiled.home[0]]
     lons = [compiled.home[1]]
     for it in compiled.items:
@@ -188,6 +192,23 @@ def _projection(compiled: Compiled):
             lats.append(it.lat)
             lons.append(it.lon)
     return LocalProjection.centred_on(lats, lons)
+
+
+def area_geometry(area: Any, proj: Any) -> Any:
+    """`area` (missions.area.Area) as a shapely geometry in projection `proj` (re-projected through lat/lon when
+    it was built in another plane; its edges are short enough to stay straight in both)."""
+    from shapely.geometry import MultiPolygon, Polygon
+
+    if area.projection == proj:
+        return area.geometry
+    polys = []
+    for rings in area.latlon_rings():
+        xy = []
+        for ring in rings:
+            x, y = proj.to_xy([p[0] for p in ring], [p[1] for p in ring])
+            xy.append(list(zip(x.tolist(), y.tolist())))
+        polys.append(Polygon(xy[0], xy[1:]))
+    return polys[0] if len(polys) == 1 else MultiPolygon(polys)
 
 
 @dataclass
@@ -534,26 +555,40 @@ def _vertex_heading(verts: Sequence[Vertex], k: int, fallback: float | None) -> 
 
 def _locate(xy: np.ndarray, s0: int, s1: int, pts: Sequence[Any]) -> tuple[list[int], list[float]]:
     """Segment index and fraction along it of each photo of a span (photos come in path order)."""
+    if not pts:
+        return [], []
+    last = max(min(s1, len(xy) - 1), s0 + 1) if len(xy) > 1 else 0
+    if len(xy) < 2:
+        return [0] * len(pts), [0.0] * len(pts)
+    segs = np.arange(s0, min(last, len(xy) - 1))
+    P = np.array([(p.x, p.y) for p in pts], dtype=float)
+    if len(segs) <= 64:
+        # photos × segments at once: distance to each segment, the nearest wins (ties: the earliest)
+        A = xy[segs]
+        D = xy[segs + 1] - A
+        L2 = np.maximum((D * D).sum(1), 1e-18)
+        W = P[:, None, :] - A[None, :, :]
+        f = np.clip((W * D[None]).sum(2) / L2[None], 0.0, 1.0)
+        dist = np.hypot(*(W - f[..., None] * D[None]).transpose(2, 0, 1))
+        j = np.argmin(dist + 1e-9 * np.arange(len(segs))[None, :], axis=1)
+        return segs[j].tolist(), f[np.arange(len(P)), j].tolist()
     seg_idx, frac = [], []
-    k = s0
-    for p in pts:
+    k = 0
+    for p in P:
         best = None
-        j = k
-        while j < max(s1, s0 + 1) and j < len(xy) - 1:
-            a, b = xy[j], xy[j + 1]
+        while k < len(segs):
+            a, b = xy[segs[k]], xy[segs[k] + 1]
             d = b - a
             L2 = float(d @ d)
-            f = 0.0 if L2 < 1e-18 else min(1.0, max(0.0, float((np.array([p.x, p.y]) - a) @ d) / L2))
-            dist = float(np.hypot(*(a + f * d - np.array([p.x, p.y]))))
+            f = 0.0 if L2 < 1e-18 else min(1.0, max(0.0, float((p - a) @ d) / L2))
+            dist = float(np.hypot(*(a + f * d - p)))
+            if best is None or dist < best[2] - 1e-9:
+                best = (int(segs[k]), f, dist)
             if dist < 1e-6:
-                best = (j, f)
                 break
-            if best is None or dist < best[2]:
-                best = (j, f, dist)
-            j += 1
-        if best is None:
-            best = (min(s0, len(xy) - 1), 0.0)
-        k = best[0]
+            k += 1
+        if k >= len(segs):
+            k = len(segs) - 1 if best is None else segs.tolist().index(best[0])
         seg_idx.append(best[0])
         frac.append(best[1])
     return seg_idx, frac
@@ -623,16 +658,15 @@ def _measure_area(area_info: Any, payload: PayloadInfo, photos: Sequence[Photo],
     from missions.footprint import Footprint
     from missions.triggers import PhotoPoint
 
-    geom = area_info.area.geometry
-    proj = area_info.area.projection
+    proj = sim.projection
+    geom = area_geometry(area_info.area, proj)
     result: dict[str, Any] = {"coverage": 0.0, "front_min": None, "side_min": None, "photos": 0}
     if photos:
-        lat = np.array([p.lat for p in photos])
-        lon = np.array([p.lon for p in photos])
-        x, y = proj.to_xy(lat, lon)
+        x = np.array([p.x for p in photos])
+        y = np.array([p.y for p in photos])
         alts = np.array([max(p.alt_m, 0.0) for p in photos])
         # photos whose footprint can reach the area (others belong to another step)
-        reach = np.array([max(payload.footprint_m(a)) for a in alts])
+        reach = max(payload.footprint_m(1.0)) * alts        # footprints scale with altitude
         near = shapely.dwithin(shapely.points(x, y), geom, reach)
         idx = np.nonzero(near)[0]
     else:
@@ -667,10 +701,7 @@ def _measure_area(area_info: Any, payload: PayloadInfo, photos: Sequence[Photo],
             result["coverage"] = float(shapely.intersection(geom, union).area / geom.area) if geom.area > 0 else 0.0
         result["front_min"] = min(fronts) if fronts else None
         result["side_min"] = min(sides) if sides else None
-    vlat = np.array([ll[0] for ll in sim.latlon])
-    vlon = np.array([ll[1] for ll in sim.latlon])
-    px, py = proj.to_xy(vlat, vlon)
-    result["outside_m"] = outside_length_m(np.column_stack([px, py]), geom)
+    result["outside_m"] = outside_length_m(sim.xy, geom)
     return result
 
 

@@ -1,0 +1,134 @@
+"""Compile time per 1000 emitted mission items, square survey areas from 1 ha to 100 km², in one run.
+
+    .venv/bin/python bench/bench_compile_scaling.py [--quick] [--report]
+
+Each size is a square area north-east of home, flown by a WIRIS Pro 13 mm at 60 m with 75/70 % overlap
+(a realistic thermal mapping set-up), the item limit raised to 65535 so nothing is split. Every size is
+compiled REPEAT times after one warm-up compile (imports, the camera catalogue); the best time counts.
+Printed: emitted items, seconds, ms per 1000 items, and two ratios of the largest to the smallest per-item
+cost — raw, and with the fixed cost of compiling a plan (a takeoff/waypoint/RTL plan, measured here) taken
+off, which is the one that shows whether a stage grows faster than the mission. Target: ≤ 2×.
+Peak Python memory (tracemalloc) is measured in a second pass, per size, because tracing slows the code.
+`--report` also times `missions.report.report` (simulation + coverage measurement) the same way.
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import math
+from pathlib import Path
+import sys
+import tempfile
+import time
+import tracemalloc
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+SIZES_M2 = (1e4, 1e5, 1e6, 1e7, 1e8)       # 1 ha, 10 ha, 1 km², 10 km², 100 km²
+REPEAT = 3
+HOME = (50.0000, 14.5000)
+
+PLAN = """\
+version: 1
+name: bench-{tag}
+vehicle: {{firmware: ardupilot, frame: copter, speed_mps: 8, max_mission_items: 65535}}
+home: {{lat: {lat}, lon: {lon}, alt_amsl_m: 300}}
+payloads:
+  thermal: {{camera: wiris-pro, imager: thermal, lens_mm: 13, component_id: 100}}
+mission:
+  - takeoff: {{alt_m: 60}}
+{body}
+  - rtl: {{}}
+"""
+
+
+def square_plan(directory: Path, area_m2: float) -> Path:
+    side = math.sqrt(area_m2)
+    dlat = side / 111_320.0
+    dlon = side / (111_320.0 * math.cos(math.radians(HOME[0])))
+    lat0, lon0 = HOME[0] + 0.0005, HOME[1] + 0.0005
+    ring = [[lat0, lon0], [lat0, lon0 + dlon], [lat0 + dlat, lon0 + dlon], [lat0 + dlat, lon0]]
+    body = (f"  - survey:\n      area: {ring}\n      payloads: [thermal]\n      altitude_m: 60\n"
+            f"      overlap: {{front: 75, side: 70}}\n      angle_deg: 0\n")
+    path = directory / f"sq{int(area_m2)}.yaml"
+    path.write_text(PLAN.format(tag=int(area_m2), lat=HOME[0], lon=HOME[1], body=body), encoding="utf-8")
+    return path
+
+
+def trivial_plan(directory: Path) -> Path:
+    body = f"  - waypoint: {{lat: {HOME[0] + 0.001}, lon: {HOME[1] + 0.001}, alt_m: 60}}\n"
+    path = directory / "trivial.yaml"
+    path.write_text(PLAN.format(tag="trivial", lat=HOME[0], lon=HOME[1], body=body), encoding="utf-8")
+    return path
+
+
+def best_time(fn, repeat: int) -> tuple[float, object]:
+    best, result = math.inf, None
+    for _ in range(repeat):
+        gc.collect()
+        t0 = time.perf_counter()
+        result = fn()
+        best = min(best, time.perf_counter() - t0)
+    return best, result
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="stop at 10 km² (for a fast look)")
+    ap.add_argument("--report", action="store_true", help="also time the measured report")
+    args = ap.parse_args()
+    from missions.compile import compile_plan
+    from missions.report import report
+
+    sizes = SIZES_M2[:-1] if args.quick else SIZES_M2
+    with tempfile.TemporaryDirectory() as tmp:
+        d = Path(tmp)
+        plans = {a: square_plan(d, a) for a in sizes}
+        compile_plan(trivial_plan(d))                            # warm-up: imports, catalogue
+        fixed, _ = best_time(lambda: compile_plan(trivial_plan(d)), 5)
+        rows = []
+        for a in sizes:
+            secs, c = best_time(lambda: compile_plan(plans[a]), REPEAT if a < 1e8 else 1)
+            n = len(c.items)
+            rsecs = None
+            if args.report:
+                rsecs, _ = best_time(lambda: report(c), 1)
+            rows.append((a, n, secs, rsecs))
+        mem = []
+        for a in sizes:
+            gc.collect()
+            tracemalloc.start()
+            compile_plan(plans[a])
+            _cur, peak = tracemalloc.get_traced_memory()
+            tracemalloc.stop()
+            mem.append(peak)
+
+    def label(a: float) -> str:
+        return f"{a / 1e4:g} ha" if a < 1e6 else f"{a / 1e6:g} km²"
+
+    print(f"fixed cost of compiling a plan (takeoff, waypoint, RTL): {fixed * 1000:.1f} ms")
+    head = f"{'area':>9} {'items':>7} {'compile s':>10} {'ms/1000 items':>14} {'marginal ms/1000':>17} {'peak MB':>8}"
+    if args.report:
+        head += f" {'report s':>9}"
+    print(head)
+    per, marginal = [], []
+    for (a, n, secs, rsecs), peak in zip(rows, mem):
+        p = 1000 * secs / n * 1000
+        m = 1000 * max(secs - fixed, 0.0) / n * 1000
+        per.append(p)
+        marginal.append(m)
+        line = f"{label(a):>9} {n:>7} {secs:>10.3f} {p:>14.1f} {m:>17.1f} {peak / 2**20:>8.1f}"
+        if args.report:
+            line += f" {rsecs:>9.2f}"
+        print(line)
+    print(f"largest / smallest per-item cost: raw {max(per) / min(per):.2f}x "
+          f"(largest area vs smallest: {per[-1] / per[0]:.2f}x); "
+          f"marginal {max(marginal) / min(marginal):.2f}x (largest area vs smallest: {marginal[-1] / marginal[0]:.2f}x)")
+    print("target: <= 2x; the raw ratio includes the fixed cost, which small missions cannot spread")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
