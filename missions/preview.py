@@ -153,8 +153,13 @@ def build_picture(compiled: Compiled, sim: Any = None, rep: dict | None = None) 
         shapes.append(Shape("polyline", tuple(px(*q) for q in path), stroke=COLOURS["path"], stroke_width=2,
                             layer="path"))
         shapes.extend(_arrows([px(*q) for q in path]))
+    # dots sized to the photo spacing on screen, so that a dense line of photos does not hide the path
     dot_stride = max(1, math.ceil(len(photos) / MAX_PHOTO_DOTS))
-    r_dot = 2.2 if len(photos) < 2000 else 1.4
+    gaps = [math.hypot(b.x - a.x, b.y - a.y) for a, b in zip(photos, photos[1:]) if a.span == b.span]
+    gap_px = float(np.median(gaps)) * scale if gaps else 10.0
+    if gap_px * dot_stride < 2.5:
+        dot_stride = max(dot_stride, math.ceil(2.5 / max(gap_px, 1e-6)))
+    r_dot = min(2.2, max(0.6, 0.3 * gap_px * dot_stride))
     for p in photos[::dot_stride]:
         shapes.append(Shape("circle", (px(p.x, p.y),), fill=COLOURS["photo"], radius=r_dot, layer="photos"))
     # numbered NAV waypoints, when few enough to read
