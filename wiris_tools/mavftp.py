@@ -17,7 +17,6 @@ import time
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from wiris_tools.errors import LinkError
 

@@ -6,7 +6,6 @@ from __future__ import annotations
 import struct
 
 import pytest
-from pymavlink.dialects.v20 import ardupilotmega as m
 
 from cdf.catalogue import catalogue
 from cdf.generate import definition_file_name, definition_xml

@@ -568,7 +568,8 @@ class WirisState:
             # §6.4.6 count "2, 0": no RTSP stream without the Ethernet Stream SDK
             return [self.mav.video_stream_information_encode(0, 0, mavlink2.VIDEO_STREAM_TYPE_RTSP, 0, 0.0, 0, 0,
                                                              0, 0, 0, b"", b"")]
-        if _finite(wire) and wire != 0:
+        count = len(options)
+        if _finite(wire) and wire != 0:       # param2: 0 all streams, 1 the first, 2 the second (§6.4.6)
             options = [o for o in options if o.value == wire]
             if not options:
                 raise CommandRefused
@@ -582,7 +583,7 @@ class WirisState:
             uri = f"rtsp://{self.config.stream_host}:8554/{o.key}".encode()
             # frame rate, bitrate and field of view are in no source read: 0 (hfov "not implemented", §6.4.6)
             out.append(self.mav.video_stream_information_encode(
-                o.value, len(options) if not _finite(wire) or wire == 0 else 2, mavlink2.VIDEO_STREAM_TYPE_RTSP,
+                o.value, count, mavlink2.VIDEO_STREAM_TYPE_RTSP,
                 flags, 0.0, res[0], res[1], 0, 0, 0, o.name.encode()[:32], uri))
         return out
 
