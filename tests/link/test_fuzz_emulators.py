@@ -8,6 +8,7 @@ import random
 import socket
 import time
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from pymavlink.dialects.v20 import ardupilotmega as m
@@ -152,3 +153,53 @@ def test_flood_over_udp_keeps_the_emulator_answering():
         assert emu.errors == 0
         with emu.lock:
             assert emu.state.ignored > 0            # the messages to component 101 were ignored
+
+
+SETTING_COMMANDS = sorted({getattr(m, s.command.cmd) for s in catalogue().get("wiris-pro").settings
+                           if s.command is not None and s.command.cmd})
+PARAMS = [p.name for p in PRO.definition.params]
+action = st.one_of(
+    st.tuples(st.just("cmd"), st.sampled_from(SETTING_COMMANDS), st.lists(floats, min_size=7, max_size=7)),
+    st.tuples(st.just("set"), st.sampled_from(PARAMS), st.floats(-2000, 2000, width=32)))
+
+
+@settings(max_examples=80, deadline=None)
+@given(actions=st.lists(action, min_size=1, max_size=25))
+def test_commands_and_param_ext_share_one_consistent_state(actions):
+    """Any sequence of setting commands and PARAM_EXT sets: a refusal changes nothing, every value stays
+    allowed, and PARAM_EXT reads back exactly what the commands report."""
+    from wiris_tools.emulate import paramext
+
+    state = _fresh_wiris()
+    g = Wire()
+    for kind, what, value in actions:
+        before = dict(state.values)
+        if kind == "cmd":
+            out = state.handle(g.cmd(what, *value), 0.0)
+            refused = any(o.get_type() == "COMMAND_ACK" and o.result != m.MAV_RESULT_ACCEPTED for o in out)
+        else:
+            p = state.definition.param(what)
+            v = int(value) if p.integer else value
+            try:
+                raw = paramext.encode(v, p.type)
+            except paramext.WireValueError:
+                continue
+            out = state.handle(g(g.mav.param_ext_set_encode(1, 100, what.encode(), raw,
+                                                            paramext.wire_type(p.type).ext_type)), 0.0)
+            refused = out[0].param_result != m.PARAM_ACK_ACCEPTED
+        if refused:
+            assert state.values == before
+        for s in state.camera.settings:
+            v = state.values.get(s.param)
+            if v is None:
+                continue
+            if s.options:
+                assert any(o.value == v for o in s.options), s.param
+            elif s.min is not None:
+                assert s.min <= v <= s.max, s.param
+    listed = state.handle(g(g.mav.param_ext_request_list_encode(1, 100)), 0.0)
+    for msg, p in zip(listed, state.definition.params):
+        assert paramext.decode(paramext.raw_value(msg), p.type) == pytest.approx(state.values[p.name],
+                                                                                               rel=1e-6, abs=1e-6)
+    zoom = state.camera_settings(0.0).zoomLevel
+    assert zoom == pytest.approx(state.value("zoom"), rel=1e-6)
