@@ -18,10 +18,12 @@ How the items are flown (the model, stated so it can be checked):
   camera_trigger do (straight-line distance from the last photo). IMAGE_START_CAPTURE with one image,
   DO_DIGICAM_CONTROL(shoot) and a trigger-once take one photo there; IMAGE_START_CAPTURE with an interval
   (or DO_SET_CAM_TRIGG_INTERVAL) takes photos by time along the simulated timeline until IMAGE_STOP_CAPTURE.
-* Which camera: a photo from the autopilot's trigger (distance, interval, DIGICAM) fires every payload the
-  plan surveys with (they are wired to the trigger output; "others trigger alongside"); IMAGE_START_CAPTURE
-  addresses param1: 0 = all payloads, 100..105 = the payload with that component id, 1..6 = the n-th
-  payload of the plan.
+* Which camera: a photo from the autopilot's trigger (distance, interval, DIGICAM) fires the payloads the
+  plan surveys with that the trigger reaches — on ArduPilot its camera instances (every payload but a RedEdge,
+  which is no AP_Camera backend), on PX4 every camera component (camera_trigger over MAVLink).
+  IMAGE_START_CAPTURE addresses param1: 0 = all reached payloads, 100..105 = the payload with that component
+  id, 1..6 = camera instance n (the n-th non-RedEdge payload, as the compiler numbers them). A RedEdge that
+  the setup puts in its own overlap mode shoots by itself (see `self_triggering`).
 * Footprint: nadir, centred on the photo position, at the photo's altitude, rotated to the vehicle's heading
   — the direction of travel (ArduPilot's WP_YAW_BEHAVIOR default and PX4's MPC_YAW_MODE default) or the yaw of
   a NAV_WAYPOINT's param4 when it sets one (a hover photo keeps the heading the vehicle arrived with).
@@ -141,13 +143,38 @@ def _heading(dx: float, dy: float) -> float:
     return math.degrees(math.atan2(dx, dy)) % 360.0
 
 
+def _protocol(camera_id: str) -> str:
+    try:
+        from cdf.catalogue import catalogue
+        return catalogue().get(camera_id).protocol
+    except Exception:   # an id the catalogue does not know cannot come out of the compiler; stay neutral
+        return ""
+
+
+def _mavlink_cameras(compiled: Compiled) -> list[str]:
+    """Payloads the autopilot drives as camera instances 1..n (ArduPilot CAMn): every one but the RedEdge,
+    which is not an AP_Camera backend (it listens to the serial API only)."""
+    return [p.name for p in compiled.payloads if _protocol(p.camera_id) != "rededge-serial"]
+
+
 def _payload_for_target(compiled: Compiled, target: float) -> tuple[str, ...]:
     t = int(target) if math.isfinite(target) else 0
     if t == 0:
-        return tuple(p.name for p in compiled.payloads)
+        return tuple(_reached_by_trigger(compiled, [p.name for p in compiled.payloads]))
     if 1 <= t <= 6:
-        return (compiled.payloads[t - 1].name,) if t <= len(compiled.payloads) else ()
+        cams = _mavlink_cameras(compiled)
+        return (cams[t - 1],) if t <= len(cams) else ()
     return tuple(p.name for p in compiled.payloads if p.component_id == t)
+
+
+def _reached_by_trigger(compiled: Compiled, names: Sequence[str]) -> list[str]:
+    """Which of `names` the autopilot's own triggering reaches. ArduPilot triggers its camera instances only;
+    PX4's camera_trigger with TRIG_INTERFACE 3 sends IMAGE_START_CAPTURE and DO_DIGICAM_CONTROL to every
+    component 100..105, the RedEdge included."""
+    if compiled.firmware == "ardupilot":
+        cams = set(_mavlink_cameras(compiled))
+        return [n for n in names if n in cams]
+    return list(names)
 
 
 def self_triggering(compiled: Compiled) -> dict[str, tuple[float, float, float]]:
@@ -175,7 +202,9 @@ def _trigger_payloads(compiled: Compiled) -> tuple[str, ...]:
         for n in a.payloads:
             if n not in names and n not in own:
                 names.append(n)
-    return tuple(names) if names or compiled.areas else tuple(p.name for p in compiled.payloads if p.name not in own)
+    if not compiled.areas:
+        names = [p.name for p in compiled.payloads if p.name not in own]
+    return tuple(_reached_by_trigger(compiled, names))
 
 
 def _projection(compiled: Compiled):
@@ -529,10 +558,31 @@ def _photos(compiled: Compiled, verts: Sequence[Vertex], times: np.ndarray, w: _
                 k += 1
     if not raw:
         return []
+    raw = _split_at_turns(raw)
     arr = np.array([(r[0], r[1]) for r in raw])
     lat, lon = proj.to_latlon(arr[:, 0], arr[:, 1])
     return [Photo(r[0], r[1], float(la), float(lo), r[2], r[3], r[4], r[5], r[6], r[7])
             for r, la, lo in zip(raw, lat.tolist(), lon.tolist())]
+
+
+# Consecutive photos more than this far apart in heading are not a front-overlap pair: the vehicle turned onto
+# another line (a turnaround, a RedEdge shooting through the turn). Gentler bends (a corridor following a
+# power line) stay pairs, and their lower overlap is real and reported.
+TURN_SPLIT_DEG = 45.0
+
+
+def _split_at_turns(raw: list[tuple]) -> list[tuple]:
+    """Give photos after a sharp turn a span of their own (span ids stay unique and in order)."""
+    out = []
+    new_id = -1
+    prev_span = prev_hd = None
+    for r in raw:
+        span, hd = r[5], r[3]
+        if span != prev_span or abs(((hd - prev_hd) + 180.0) % 360.0 - 180.0) > TURN_SPLIT_DEG:
+            new_id += 1
+        prev_span, prev_hd = span, hd
+        out.append(r[:5] + (new_id,) + r[6:])
+    return out
 
 
 def _vertex_heading(verts: Sequence[Vertex], k: int, fallback: float | None) -> float:
