@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import pytest
 
@@ -110,3 +111,43 @@ def test_item_limit_error_when_a_part_is_too_long():
                      c.payloads, c.areas, c.setup)
     rep = report(small)
     assert any(e["code"] == "item_limit" for e in rep["errors"])
+
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+
+def _field_variant(tmp_path, external: bool):
+    import shutil
+    shutil.copytree(EXAMPLES / "areas", tmp_path / "areas")
+    text = (EXAMPLES / "field-multispectral.yaml").read_text()
+    if external:
+        text = text.replace("    component_id: 100          # fixed",
+                            "    settings: {auto_capture: external}\n    component_id: 100          # fixed")
+    p = tmp_path / "field.yaml"
+    p.write_text(text)
+    return p
+
+
+def test_rededge_in_overlap_mode_shoots_by_itself(tmp_path):
+    from missions.compile import compile_plan
+    c = compile_plan(_field_variant(tmp_path, external=False))
+    sim = simulate(c)
+    own = [p for p in sim.photos if "multispectral" in p.payloads]
+    wiris = [p for p in sim.photos if "thermal" in p.payloads]
+    assert own and all(p.cause == -1 for p in own)          # no mission item takes them
+    assert wiris and all(p.cause >= 0 for p in wiris)
+    # it shoots wherever it is at the survey altitude (in the turns too), never while climbing
+    assert all(abs(p.alt_m - c.areas[0].altitude_m) <= 5.0 for p in own)
+    assert report(c, sim)["coverage"]["multispectral"] >= 0.995
+
+
+def test_rededge_on_external_trigger_is_not_reached_by_ardupilot(tmp_path):
+    from missions.compile import compile_plan
+    plan = _field_variant(tmp_path, external=True)
+    ap = report(compile_plan(plan))
+    # ArduPilot's DO_SET_CAM_TRIGG_DIST drives its camera instances; the RedEdge is none of them
+    assert ap["photos"]["multispectral"] == 0 and ap["coverage"]["multispectral"] == 0.0
+    assert any(w["code"] == "coverage_low" and "multispectral" in w["message"] for w in ap["warnings"])
+    # PX4's camera_trigger sends to every camera component: the same photos as the WIRIS
+    px4 = report(compile_plan(plan, firmware="px4"))
+    assert px4["photos"]["multispectral"] == px4["photos"]["thermal"] > 0
