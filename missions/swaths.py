@@ -11,9 +11,10 @@ the boundary on both sides (QGroundControl starts its grid at an arbitrary offse
 
 Legs: each line is cut into the segments that lie inside the area (concave parts and holes give several
 legs per line; QGroundControl keeps one segment from the first to the last crossing and flies over the gap).
-A leg's outer ends (where the line leaves the area for good) are extended along-track to cover every part
-of the area in the line's band (u within half a spacing of the line, to the boundary for the outermost
-lines) — the slanted-edge corners QGC leaves uncovered. Ends facing a gap (hole, exclusion, notch) are not
+A leg's outer ends (where the line leaves the area for good) are extended along-track far enough that the
+end photo's footprint (half a footprint beyond it, less the edge margin) covers every part of the area in
+the line's band (u within half a spacing of the line, to the boundary for the outermost lines) — the
+slanted-edge corners that fall between lines at low overlap. Ends facing a gap (hole, exclusion, notch) are not
 extended into it. Band pieces the line misses entirely (a sharp tip between lines) get a short leg of their
 own. So a leg never leaves the area and re-enters it: any part of a leg outside the area touches its end.
 
@@ -188,6 +189,14 @@ def part_legs(poly_uv: Any, part: int, across_m: float, spacing_m: float, trigge
     cores = shapely.intersection(lines, poly_uv)
     bandparts = shapely.intersection(bands, poly_uv)
     inward_ok = along_m is not None and trigger_m is not None and along_m / 2.0 >= trigger_m - _EPS
+    # a photo covers half a footprint beyond itself along-track: band corners beyond a leg end need the
+    # leg (its last photo) to reach within that distance of them, not all the way
+    reach = max(0.0, along_m / 2.0 - edge_margin_m) if along_m else 0.0
+    along_reach = along_m if along_m else 0.0
+    # Outer leg ends are snapped outward to the photo grid; starting the requirement half a trigger step
+    # inside the boundary makes the end photo land, on average, on the boundary instead of d/2 beyond it
+    # (QGC's photo is at the boundary too). Its footprint still reaches past the boundary by the margin.
+    s_in = min(trigger_m / 2.0, reach) if trigger_m and along_m else 0.0
     out = []
     for k in range(nl):
         u = float(us[k])
@@ -199,31 +208,49 @@ def part_legs(poly_uv: Any, part: int, across_m: float, spacing_m: float, trigge
             first, last = i == 0, i == len(ivs) - 1
             na, nb = a, b
             if first or last:
+                # the first/last photo may sit up to s_in inside the boundary; the band's far corners
+                # must stay within `reach` of it
+                if first:
+                    na = a + s_in
+                if last:
+                    nb = b - s_in
                 mid = shapely.Point(u, (a + b) / 2.0)
                 for cv0, cv1, c in comp_ranges:
                     if c.distance(mid) < 1e-6:
                         if first:
-                            na = min(na, cv0)
+                            na = min(na, cv0 + reach)
                         if last:
-                            nb = max(nb, cv1)
+                            nb = max(nb, cv1 - reach)
                         break
+                if na > nb:
+                    na = nb = (na + nb) / 2.0
             legs.append([na, nb, first, last])
-        # band pieces the line never crosses (tips between lines): a short leg of their own, but only
-        # beyond the outermost legs — pieces beside a gap are left to the neighbouring lines.
-        covered_lo = legs[0][0] if legs else math.inf
-        covered_hi = legs[-1][1] if legs else -math.inf
+        # band pieces the line never crosses (tips between lines): covered by stretching the outermost
+        # leg when they are near it, else by a short leg of their own; pieces beside a gap are left to
+        # the neighbouring lines.
         extra = []
         for cv0, cv1, c in comp_ranges:
             if any(c.distance(shapely.Point(u, (a + b) / 2.0)) < 1e-6 for a, b in ivs):
                 continue
+            lo_need, hi_need = cv0 + reach, cv1 - reach
+            if lo_need > hi_need:
+                lo_need = hi_need = (cv0 + cv1) / 2.0
             if not legs:
-                extra.append([cv0, cv1, True, True])
-            elif cv1 <= covered_lo + _EPS or cv0 >= covered_hi - _EPS:
-                extra.append([cv0, cv1, True, True])
-            elif cv0 < covered_lo:
-                extra.append([cv0, covered_lo, True, True])
-            elif cv1 > covered_hi:
-                extra.append([covered_hi, cv1, True, True])
+                extra.append([lo_need, hi_need, True, True])
+            elif cv1 <= legs[0][0] + _EPS:
+                if legs[0][0] - cv1 > along_reach:
+                    extra.append([lo_need, hi_need, True, True])
+                else:
+                    legs[0][0] = min(legs[0][0], lo_need)
+            elif cv0 >= legs[-1][1] - _EPS:
+                if cv0 - legs[-1][1] > along_reach:
+                    extra.append([lo_need, hi_need, True, True])
+                else:
+                    legs[-1][1] = max(legs[-1][1], hi_need)
+            elif cv0 < legs[0][0]:
+                legs[0][0] = min(legs[0][0], lo_need)
+            elif cv1 > legs[-1][1]:
+                legs[-1][1] = max(legs[-1][1], hi_need)
         allv = sorted(legs + extra, key=lambda t: t[0])
         merged: list[list[Any]] = []
         for leg in allv:
