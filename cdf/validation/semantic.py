@@ -187,7 +187,8 @@ def _check_definition(d) -> Iterator[Hit]:
 
 
 def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
-    name, ptype_raw = p.get("name"), p.get("type")
+    a = dict(p.attrib)  # one C call; lxml attribute lookups one by one cost more
+    name, ptype_raw = a.get("name"), a.get("type")
     line = _line(p)
     if name is None or ptype_raw is None:
         missing = " and ".join(a for a, v in (("name", name), ("type", ptype_raw)) if v is None)
@@ -220,22 +221,23 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
     elif _text_empty(desc):
         yield Hit("CDF105", _line(desc), name, "<description> is empty (MAVSDK crashes on empty text)")
 
-    flags = {a: p.get(a) for a in ("control", "readonly", "writeonly")}
+    flags = {f: a.get(f) for f in ("control", "readonly", "writeonly")}
     if flags["readonly"] == "1" and flags["writeonly"] == "1":
         yield Hit("CDF131", line, name, 'readonly="1" and writeonly="1" together (MAVSDK rejects the file)')
     if ptype in ("custom", "string") and flags["control"] != "0":
         yield Hit("CDF132", line, name, f'{ptype} parameter without control="0"')
-    if any(k.lower() == "decimalplaces" and k != "decimalPlaces" for k in p.attrib):
+    if any(k.lower() == "decimalplaces" and k != "decimalPlaces" for k in a):
         yield Hit("CDF207", line, name, "attribute must be spelled decimalPlaces (QGC ignores other spellings)")
 
     numeric = ptype in NUMERIC_TYPES and ptype_raw == ptype
-    default_text = p.get("default")
+    default_text = a.get("default")
     if default_text is None and ptype in NUMERIC_TYPES:
         yield Hit("CDF119", line, name, "no default (MAVSDK silently skips the parameter: 'Default missing')")
-    default = parse_typed(default_text, ptype)[0] if numeric and default_text is not None else None
+    # typed default/min/max/step, None when absent or invalid (invalid ones are the XSD's CDF120)
+    typed = {k: parse_typed(a[k], ptype)[0] for k in ("default", "min", "max", "step") if k in a} if numeric else {}
+    default = typed.get("default")
     if numeric and ptype in STOI_TYPES:
-        for attr in ("default", "min", "max", "step"):
-            v = parse_typed(p.get(attr), ptype)[0] if p.get(attr) is not None else None
+        for attr, v in typed.items():
             if isinstance(v, int) and v > STOI_MAX:
                 yield Hit("CDF121", line, name, f"{attr}={v} exceeds 2147483647 (MAVSDK's std::stoi throws: crash)")
 
@@ -281,13 +283,11 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
 
     # ranges (min/max/step) for parameters without options
     if numeric and ptype != "bool":
-        lo_t, hi_t, st_t = p.get("min"), p.get("max"), p.get("step")
+        lo_t, hi_t, st_t = a.get("min"), a.get("max"), a.get("step")
         if options_el is None and (lo_t is None or hi_t is None):
             yield Hit("CDF127", line, name, "no options and no min/max range "
                                             "(MAVSDK silently skips the parameter: 'Range not found')")
-        lo = parse_typed(lo_t, ptype)[0] if lo_t is not None else None
-        hi = parse_typed(hi_t, ptype)[0] if hi_t is not None else None
-        st = parse_typed(st_t, ptype)[0] if st_t is not None else None
+        lo, hi, st = typed.get("min"), typed.get("max"), typed.get("step")
         if lo is not None and hi is not None and lo > hi:
             yield Hit("CDF128", line, name, f"min {lo_t} > max {hi_t} (MAVProxy rejects the file)")
         if st is not None and st <= 0:
