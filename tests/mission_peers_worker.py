@@ -71,7 +71,7 @@ def do_import(autopilot: str) -> None:
         out({"ok": True, "mission": [to_dict(i) for i in r.mission_items],
              "fence": [to_dict(i) for i in r.geofence_items], "rally": [to_dict(i) for i in r.rally_items]})
     except MissionRawError as err:
-        out({"ok": False, "error": str(err)})
+        out({"ok": False, "error": getattr(getattr(err, "result", None), "name", None) or str(err)[:200]})
     m.destroy()
 
 
@@ -118,7 +118,8 @@ def do_client(port: int, timeout: float | None) -> None:
                 out({"op": "download", "ok": True, "seconds": time.monotonic() - t0,
                      "items": [to_dict(i) for i in got]})
         except MissionRawError as err:
-            out({"op": cmd["op"], "ok": False, "seconds": time.monotonic() - t0, "error": str(err)})
+            out({"op": cmd["op"], "ok": False, "seconds": time.monotonic() - t0,
+                 "error": getattr(getattr(err, "result", None), "name", None) or str(err)[:200]})
     m.destroy()
 
 

@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import math
 import struct
+import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -197,10 +198,13 @@ class MissionClient:
             return False
         return not self.target_component or msg.get_srcComponent() == self.target_component
 
-    def _inbox(self, types: list[str], mission_type: int):
+    def _mission_filter(self, mission_type: int):
         def ok(msg) -> bool:
             return self._from_vehicle(msg) and getattr(msg, "mission_type", 0) == mission_type
-        return self.link.inbox(types, to_me=True, predicate=ok)
+        return ok
+
+    def _inbox(self, types: list[str], mission_type: int):
+        return self.link.inbox(types, to_me=True, predicate=self._mission_filter(mission_type))
 
     def _encode_item(self, seq: int, item: MissionItem, mission_type: int):
         return self.link.mav.mission_item_int_encode(
@@ -218,153 +222,13 @@ class MissionClient:
     def upload(self, items: Sequence[MissionItem], *, mission_type: int = MISSION_TYPE_MISSION,
                progress: Progress | None = None) -> TransferResult:
         """Send `items` to the vehicle; returns when it acknowledged them (LinkError otherwise)."""
-        t = self.timeouts
-        count = len(items)
         where = self._where(mission_type)
-        if count == 0:
+        if not items:
             raise LinkError("nothing to upload: the list is empty", where=where,
                             hint="an empty upload would clear the vehicle's list; clear it from the ground station")
-        if count > 65535:
-            raise LinkError(f"{count} items do not fit the protocol's 16-bit count", where=where)
-        start = time.monotonic()
-        resent = nacks = 0
-        fatal_nack: tuple[int, int] | None = None     # (result, item sent last) awaiting the grace period
-        fatal_at = 0.0
-        last_nack: int | None = None
-        sent_at: dict[int, float] = {}                # last transmission time per seq
-        first_sent_at: dict[int, float] = {}          # only first transmissions give RTT samples (Karn)
-        retransmitted: set[int] = set()
-        pushed: dict[int, int] = {}                 # unsolicited sends per seq
-        requested_max = -1
-        last_item: int | None = None                  # the item we sent last
-        tries = 0
-        count_wait = t.first_s
-        # A vehicle that keeps asking for the same item forever must not keep us here forever.
-        stall_s = (t.retries + 1) * t.ack_s + t.nack_grace_s
-        last_progress = start
-
-        def send_count() -> None:
-            self.link.send(self.link.mav.mission_count_encode(self.target_system, self.target_component, count,
-                                                              mission_type))
-
-        def send_item(seq: int) -> None:
-            now = time.monotonic()
-            if seq in sent_at:
-                retransmitted.add(seq)
-            else:
-                first_sent_at[seq] = now
-            sent_at[seq] = now
-            self.link.send(self._encode_item(seq, items[seq], mission_type))
-
-        def rto() -> float:
-            return self.rtt.rto(t.min_rto_s, t.ack_s, t.item_s)
-
-        def unconfirmed(why: str) -> UploadUnconfirmed:
-            return UploadUnconfirmed(f"all {count} items were sent but {why}", where=where,
-                                     hint="the vehicle probably holds the mission: download it, or upload with "
-                                          "--verify, which reads it back and compares")
-
-        with self._inbox(["MISSION_REQUEST_INT", "MISSION_REQUEST", "MISSION_ACK"], mission_type) as box:
-            send_count()
-            deadline = time.monotonic() + count_wait
-            while True:
-                now = time.monotonic()
-                if fatal_nack is not None:
-                    deadline = min(deadline, fatal_at + t.nack_grace_s)
-                msg = box.get(max(0.0, deadline - now))
-                now = time.monotonic()
-                if fatal_nack is not None and (now - fatal_at >= t.nack_grace_s
-                                               or (msg is None and tries >= t.retries)):
-                    result, seq = fatal_nack
-                    raise LinkError(f"the vehicle answered {mission_result_name(result)}"
-                                    + (f" to item {seq} ({_describe(items[seq])})" if seq >= 0 else
-                                       f" to MISSION_COUNT ({count} items)"), where=where,
-                                    hint=_NACK_HINTS.get(result, "check the item the error names"))
-                if now - last_progress > stall_s:
-                    if (count - 1) in sent_at:
-                        raise unconfirmed(f"no MISSION_ACK came within {stall_s:g} s")
-                    raise LinkError(f"no progress for {stall_s:g} s: stuck at item {max(requested_max, 0)} of "
-                                    f"{count}" + (f" (last answer: {mission_result_name(last_nack)})"
-                                                  if last_nack is not None else ""), where=where,
-                                    hint="the link is too lossy or was lost; retry the upload")
-                if msg is None:
-                    if tries >= t.retries:
-                        if last_item is None:
-                            raise LinkError(f"no request after MISSION_COUNT ({count} items), "
-                                            f"{t.retries + 1} tries", where=where,
-                                            hint="check the connection, the target system/component, and that "
-                                                 "the vehicle supports this mission type")
-                        if (count - 1) in sent_at:
-                            raise unconfirmed("the vehicle never acknowledged the upload")
-                        raise LinkError(f"the vehicle stopped requesting after item {last_item} of {count}"
-                                        + (f" (last answer: {mission_result_name(last_nack)})"
-                                           if last_nack is not None else ""),
-                                        where=where, hint="the link is too lossy or was lost; retry the upload")
-                    tries += 1
-                    resent += 1
-                    if last_item is None:
-                        send_count()
-                        count_wait = min(count_wait * 2, t.ack_s)
-                        deadline = now + count_wait
-                    else:
-                        # Fast retransmit: the vehicle's next request is overdue.
-                        send_item(last_item)
-                        deadline = now + min(rto() * (2 ** tries), t.ack_s)
-                    continue
-                if msg.get_type() == "MISSION_ACK":
-                    if msg.type == mavlink2.MAV_MISSION_ACCEPTED:
-                        if (count - 1) in sent_at:
-                            if progress:
-                                progress(count, count)
-                            return TransferResult(mission_type, count, time.monotonic() - start,
-                                                  opaque_id_of(msg), resent, nacks)
-                        continue  # stale: an ack from an earlier transfer
-                    nacks += 1
-                    last_nack = msg.type
-                    if msg.type in _FATAL_NACKS:
-                        # Still not believed at once (a stale ack of an earlier transfer looks the
-                        # same): fatal only if the vehicle asks for nothing more.
-                        if fatal_nack is None:
-                            fatal_nack = (msg.type, last_item if last_item is not None else -1)
-                            fatal_at = now
-                        continue
-                    if msg.type == mavlink2.MAV_MISSION_INVALID_SEQUENCE and last_item is not None \
-                            and last_item == requested_max:
-                        # ArduPilot answers an item it no longer expects this way: it already has
-                        # `last_item` and its request for the next one was lost.
-                        if last_item == count - 1 and last_item in retransmitted:
-                            raise unconfirmed("the final MISSION_ACK was lost (the vehicle no longer expects "
-                                              "items)")
-                        nxt = last_item + 1
-                        if nxt < count and pushed.get(nxt, 0) < 3 and (nxt not in sent_at or nxt in pushed):
-                            # Push the next item rather than wait for the vehicle's re-request
-                            # timer (1 s on ArduPilot); if we guessed wrong it answers with one
-                            # more INVALID_SEQUENCE, and nothing else changes.
-                            pushed[nxt] = pushed.get(nxt, 0) + 1
-                            send_item(nxt)
-                            retransmitted.add(nxt)  # no RTT sample from an unsolicited item
-                    continue
-                seq = msg.seq
-                if seq >= count:
-                    continue  # not ours to answer (another transfer, or a broken vehicle)
-                fatal_nack = None
-                if seq > requested_max:
-                    prev = seq - 1
-                    if prev in first_sent_at and prev not in retransmitted:
-                        self.rtt.sample(now - first_sent_at[prev])
-                    requested_max = seq
-                    last_progress = now
-                    if progress:
-                        progress(seq, count)
-                tries = 0
-                srtt = self.rtt.srtt or 0.0
-                if seq == last_item and now - sent_at.get(seq, 0.0) < 0.5 * srtt:
-                    continue  # a duplicated request: the answer is already on its way
-                if seq in sent_at:
-                    resent += 1
-                last_item = seq
-                send_item(seq)
-                deadline = now + rto()
+        if len(items) > 65535:
+            raise LinkError(f"{len(items)} items do not fit the protocol's 16-bit count", where=where)
+        return _Upload(self, list(items), mission_type, where, progress).run()
 
     # -- download ------------------------------------------------------------------------------
     def download(self, *, mission_type: int = MISSION_TYPE_MISSION,
@@ -473,6 +337,200 @@ class MissionClient:
                             hint="someone else changed the mission meanwhile; upload again")
         return TransferResult(mission_type, len(items), up.seconds + down.seconds, up.opaque_id or down.opaque_id,
                               up.resent + down.resent, up.nacks_tolerated, up.notes + note + ("verified",))
+
+
+class _Upload:
+    """One upload. Requests are answered on the link's receive thread (no thread hand-off between a
+    request and its item: on a slow radio every round trip counts); timers, acks and progress
+    are handled by the calling thread, polling at least every `_POLL_S`."""
+
+    _POLL_S = 0.02
+
+    def __init__(self, client: "MissionClient", items: list[MissionItem], mission_type: int, where: str,
+                 progress: Progress | None) -> None:
+        self.c = client
+        self.t = client.timeouts
+        self.items = items
+        self.count = len(items)
+        self.mission_type = mission_type
+        self.where = where
+        self.progress = progress
+        self.lock = threading.Lock()
+        self.start = time.monotonic()
+        self.resent = 0
+        self.nacks = 0
+        self.fatal_nack: tuple[int, int] | None = None   # (result, item sent last) awaiting the grace period
+        self.fatal_at = 0.0
+        self.last_nack: int | None = None
+        self.sent_at: dict[int, float] = {}              # last transmission time per seq
+        self.first_sent_at: dict[int, float] = {}        # only first transmissions give RTT samples (Karn)
+        self.retransmitted: set[int] = set()
+        self.pushed: dict[int, int] = {}                 # unsolicited sends per seq
+        self.requested_max = -1
+        self.last_item: int | None = None                # the item we sent last
+        self.tries = 0
+        self.count_wait = self.t.first_s
+        self.deadline = 0.0
+        # A vehicle that keeps asking for the same item forever must not keep us here forever.
+        self.stall_s = (self.t.retries + 1) * self.t.ack_s + self.t.nack_grace_s
+        self.last_progress = self.start
+
+    # -- sending (callers hold the lock) -------------------------------------------------------
+    def send_count(self) -> None:
+        c = self.c
+        c.link.send(c.link.mav.mission_count_encode(c.target_system, c.target_component, self.count,
+                                                    self.mission_type))
+
+    def send_item(self, seq: int) -> None:
+        now = time.monotonic()
+        if seq in self.sent_at:
+            self.retransmitted.add(seq)
+        else:
+            self.first_sent_at[seq] = now
+        self.sent_at[seq] = now
+        self.c.link.send(self.c._encode_item(seq, self.items[seq], self.mission_type))
+
+    def rto(self) -> float:
+        return self.c.rtt.rto(self.t.min_rto_s, self.t.ack_s, self.t.item_s)
+
+    def unconfirmed(self, why: str) -> UploadUnconfirmed:
+        return UploadUnconfirmed(f"all {self.count} items were sent but {why}", where=self.where,
+                                 hint="the vehicle probably holds the mission: download it, or upload with "
+                                      "--verify, which reads it back and compares")
+
+    # -- the receive thread: requests ----------------------------------------------------------
+    def on_request(self, msg) -> None:
+        seq = msg.seq
+        if seq >= self.count:
+            return  # not ours to answer (another transfer, or a broken vehicle)
+        with self.lock:
+            now = time.monotonic()
+            self.fatal_nack = None
+            if seq > self.requested_max:
+                prev = seq - 1
+                if prev in self.first_sent_at and prev not in self.retransmitted:
+                    self.c.rtt.sample(now - self.first_sent_at[prev])
+                self.requested_max = seq
+                self.last_progress = now
+            self.tries = 0
+            srtt = self.c.rtt.srtt or 0.0
+            if seq == self.last_item and now - self.sent_at.get(seq, 0.0) < 0.5 * srtt:
+                return  # a duplicated request: the answer is already on its way
+            if seq in self.sent_at:
+                self.resent += 1
+            self.last_item = seq
+            self.send_item(seq)
+            self.deadline = now + self.rto()
+
+    # -- the calling thread: acks, timers, progress --------------------------------------------
+    def on_ack(self, msg, now: float) -> TransferResult | None:
+        count = self.count
+        if msg.type == mavlink2.MAV_MISSION_ACCEPTED:
+            if (count - 1) in self.sent_at:
+                return TransferResult(self.mission_type, count, time.monotonic() - self.start, opaque_id_of(msg),
+                                      self.resent, self.nacks)
+            return None  # stale: an ack from an earlier transfer
+        self.nacks += 1
+        self.last_nack = msg.type
+        if msg.type in _FATAL_NACKS:
+            # Still not believed at once (a stale ack of an earlier transfer looks the same):
+            # fatal only if the vehicle asks for nothing more.
+            if self.fatal_nack is None:
+                self.fatal_nack = (msg.type, self.last_item if self.last_item is not None else -1)
+                self.fatal_at = now
+            return None
+        last = self.last_item
+        if msg.type == mavlink2.MAV_MISSION_INVALID_SEQUENCE and last is not None and last == self.requested_max:
+            # ArduPilot answers an item it no longer expects this way: it already has `last` and
+            # its request for the next one was lost.
+            if last == count - 1 and last in self.retransmitted:
+                raise self.unconfirmed("the final MISSION_ACK was lost (the vehicle no longer expects items)")
+            nxt = last + 1
+            if nxt < count and self.pushed.get(nxt, 0) < 3 and (nxt not in self.sent_at or nxt in self.pushed):
+                # Push the next item rather than wait for the vehicle's re-request timer (1 s on
+                # ArduPilot); if we guessed wrong it answers with one more INVALID_SEQUENCE.
+                self.pushed[nxt] = self.pushed.get(nxt, 0) + 1
+                self.send_item(nxt)
+                self.retransmitted.add(nxt)  # no RTT sample from an unsolicited item
+        return None
+
+    def on_timeout(self, now: float) -> None:
+        t = self.t
+        if self.tries >= t.retries:
+            if self.last_item is None:
+                raise LinkError(f"no request after MISSION_COUNT ({self.count} items), {t.retries + 1} tries",
+                                where=self.where, hint="check the connection, the target system/component, and "
+                                                       "that the vehicle supports this mission type")
+            if (self.count - 1) in self.sent_at:
+                raise self.unconfirmed("the vehicle never acknowledged the upload")
+            raise LinkError(f"the vehicle stopped requesting after item {self.last_item} of {self.count}"
+                            + self._last_answer(), where=self.where,
+                            hint="the link is too lossy or was lost; retry the upload")
+        self.tries += 1
+        self.resent += 1
+        if self.last_item is None:
+            self.send_count()
+            self.count_wait = min(self.count_wait * 2, t.ack_s)
+            self.deadline = now + self.count_wait
+        else:
+            # Fast retransmit: the vehicle's next request is overdue.
+            self.send_item(self.last_item)
+            self.deadline = now + min(self.rto() * (2 ** self.tries), t.ack_s)
+
+    def _last_answer(self) -> str:
+        return f" (last answer: {mission_result_name(self.last_nack)})" if self.last_nack is not None else ""
+
+    def check(self, now: float, waited_out: bool) -> None:
+        t = self.t
+        if self.fatal_nack is not None and (now - self.fatal_at >= t.nack_grace_s
+                                            or (waited_out and self.tries >= t.retries)):
+            result, seq = self.fatal_nack
+            raise LinkError(f"the vehicle answered {mission_result_name(result)}"
+                            + (f" to item {seq} ({_describe(self.items[seq])})" if seq >= 0 else
+                               f" to MISSION_COUNT ({self.count} items)"), where=self.where,
+                            hint=_NACK_HINTS.get(result, "check the item the error names"))
+        if now - self.last_progress > self.stall_s:
+            if (self.count - 1) in self.sent_at:
+                raise self.unconfirmed(f"no MISSION_ACK came within {self.stall_s:g} s")
+            raise LinkError(f"no progress for {self.stall_s:g} s: stuck at item {max(self.requested_max, 0)} of "
+                            f"{self.count}" + self._last_answer(), where=self.where,
+                            hint="the link is too lossy or was lost; retry the upload")
+
+    def run(self) -> TransferResult:
+        c = self.c
+        ok = c._mission_filter(self.mission_type)
+        reported = -1
+        with c.link.inbox("MISSION_ACK", to_me=True, predicate=ok) as acks:
+            sub = c.link.subscribe(self.on_request, ["MISSION_REQUEST_INT", "MISSION_REQUEST"], to_me=True,
+                                   predicate=ok)
+            try:
+                with self.lock:
+                    self.send_count()
+                    self.deadline = time.monotonic() + self.count_wait
+                while True:
+                    with self.lock:
+                        wait = self.deadline - time.monotonic()
+                        if self.fatal_nack is not None:
+                            wait = min(wait, self.fatal_at + self.t.nack_grace_s - time.monotonic())
+                    msg = acks.get(min(max(wait, 0.0), self._POLL_S))
+                    with self.lock:
+                        now = time.monotonic()
+                        if msg is not None:
+                            done = self.on_ack(msg, now)
+                            if done is not None:
+                                if self.progress:
+                                    self.progress(self.count, self.count)
+                                return done
+                        waited_out = msg is None and now >= self.deadline
+                        self.check(now, waited_out)
+                        if waited_out:
+                            self.on_timeout(now)
+                        progressed = self.requested_max
+                    if self.progress and progressed > reported:
+                        reported = progressed
+                        self.progress(progressed, self.count)
+            finally:
+                c.link.unsubscribe(sub)
 
 
 _COMPARED = ("command", "frame", "param1", "param2", "param3", "param4", "x", "y", "z", "autocontinue",
