@@ -832,7 +832,7 @@ def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | N
     if compiled.items and not sim.ends_on_ground:
         warnings.append({"code": "no_landing", "message": "the mission ends in the air (no RTL or LAND): the "
                                                            "vehicle will hold at the last waypoint"})
-    if len(compiled.parts) > 1:
+    if len(compiled.parts) > 1 and not any(w["code"] == "mission_split" for w in warnings):
         warnings.append({"code": "mission_split",
                          "message": f"{len(compiled.items)} items exceed the limit of {compiled.item_limit}: "
                                     f"split into {len(compiled.parts)} parts, flown one after another"})

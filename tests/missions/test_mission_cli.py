@@ -108,3 +108,19 @@ def test_missing_plan_and_usage_errors(tmp_path):
     assert r.exit_code == 1 and "nope.yaml" in r.output and "Traceback" not in r.output
     assert run("mission", "compile", small_plan(tmp_path)).exit_code == 2          # -o missing
     assert run("mission", "preview", small_plan(tmp_path), "-o", tmp_path / "p.gif").exit_code == 1
+
+
+def test_report_json_is_check_json(tmp_path):
+    plan = small_plan(tmp_path)
+    run("mission", "compile", plan, "-o", tmp_path / "o")
+    written = json.loads((tmp_path / "o" / "small.report.json").read_text())
+    printed = json.loads(run("mission", "check", plan, "--json").output)
+    assert written == printed
+
+
+def test_split_mission_is_a_warning_not_an_error(tmp_path):
+    r = run("mission", "check", small_plan(tmp_path, limit=10), "--json")
+    assert r.exit_code == 0
+    rep = json.loads(r.output)
+    assert rep["parts"] > 1 and all(n <= 10 for n in rep["part_items"])
+    assert [w["code"] for w in rep["warnings"]].count("mission_split") == 1
