@@ -197,6 +197,8 @@ def part_legs(poly_uv: Any, part: int, across_m: float, spacing_m: float, trigge
     # inside the boundary makes the end photo land, on average, on the boundary instead of d/2 beyond it
     # (QGC's photo is at the boundary too). Its footprint still reaches past the boundary by the margin.
     s_in = min(trigger_m / 2.0, reach) if trigger_m and along_m else 0.0
+    # half-width of the strip around a line that no neighbouring line's footprint reaches (side < 50 %)
+    excl = max(0.0, spacing_m - across_m / 2.0 + edge_margin_m)
     out = []
     for k in range(nl):
         u = float(us[k])
@@ -224,7 +226,29 @@ def part_legs(poly_uv: Any, part: int, across_m: float, spacing_m: float, trigge
                         break
                 if na > nb:
                     na = nb = (na + nb) / 2.0
-            legs.append([na, nb, first, last])
+            # [start, end, snap start outward, snap end outward, lowest start, highest end, outer0, outer1]
+            leg = [na, nb, first, last, -math.inf, math.inf, first, last]
+            if not first:
+                leg[4] = (ivs[i - 1][1] + a) / 2.0 + 0.5
+            if not last:
+                leg[5] = (b + ivs[i + 1][0]) / 2.0 - 0.5
+            if excl > 0:
+                # at low side overlap the strip beside a gap, closer to this line than its neighbours'
+                # footprints reach, can only be photographed from this line: reach into the gap as far as
+                # that needs, never past the middle of the gap (so two legs never join across it)
+                if not last:
+                    slab = shapely.intersection(poly_uv, shapely.box(u - excl, b, u + excl, ivs[i + 1][0]))
+                    tops = [q.bounds[3] for q in _polys(slab) if q.bounds[1] <= b + 1e-6]
+                    if tops and min(max(tops) - reach, leg[5]) > leg[1]:
+                        leg[1] = min(max(tops) - reach, leg[5])
+                        leg[3] = True
+                if not first:
+                    slab = shapely.intersection(poly_uv, shapely.box(u - excl, ivs[i - 1][1], u + excl, a))
+                    bots = [q.bounds[1] for q in _polys(slab) if q.bounds[3] >= a - 1e-6]
+                    if bots and max(min(bots) + reach, leg[4]) < leg[0]:
+                        leg[0] = max(min(bots) + reach, leg[4])
+                        leg[2] = True
+            legs.append(leg)
         # band pieces the line never crosses (tips between lines): covered by stretching the outermost
         # leg when they are near it, else by a short leg of their own; pieces beside a gap are left to
         # the neighbouring lines.
@@ -236,15 +260,15 @@ def part_legs(poly_uv: Any, part: int, across_m: float, spacing_m: float, trigge
             if lo_need > hi_need:
                 lo_need = hi_need = (cv0 + cv1) / 2.0
             if not legs:
-                extra.append([lo_need, hi_need, True, True])
+                extra.append([lo_need, hi_need, True, True, -math.inf, math.inf, True, True])
             elif cv1 <= legs[0][0] + _EPS:
                 if legs[0][0] - cv1 > along_reach:
-                    extra.append([lo_need, hi_need, True, True])
+                    extra.append([lo_need, hi_need, True, True, -math.inf, math.inf, True, True])
                 else:
                     legs[0][0] = min(legs[0][0], lo_need)
             elif cv0 >= legs[-1][1] - _EPS:
                 if cv0 - legs[-1][1] > along_reach:
-                    extra.append([lo_need, hi_need, True, True])
+                    extra.append([lo_need, hi_need, True, True, -math.inf, math.inf, True, True])
                 else:
                     legs[-1][1] = max(legs[-1][1], hi_need)
             elif cv0 < legs[0][0]:
@@ -255,13 +279,18 @@ def part_legs(poly_uv: Any, part: int, across_m: float, spacing_m: float, trigge
         merged: list[list[Any]] = []
         for leg in allv:
             if merged and leg[0] <= merged[-1][1] + _EPS:
-                merged[-1][1] = max(merged[-1][1], leg[1])
-                merged[-1][3] = leg[3]
+                m = merged[-1]
+                if leg[1] >= m[1]:
+                    m[1], m[3], m[5], m[7] = leg[1], leg[3], leg[5], leg[7]
             else:
                 merged.append(list(leg))
-        for a, b, oa, ob in merged:
+        for a, b, sa, sb, lim_a, lim_b, oa, ob in merged:
             if trigger_m:
-                a, b = _snap(a, b, oa, ob, trigger_m, inward_ok)
+                a, b = _snap(a, b, sa, sb, trigger_m, inward_ok)
+                # an outward snap must not carry a gap end past the middle of the gap
+                a, b = max(a, lim_a), min(b, lim_b)
+                if a > b:
+                    a = b = (a + b) / 2.0
             out.append((k, u, a, b, bool(oa), bool(ob)))
     # snapping inward can make neighbouring legs on one line overlap; they never cross a gap, so keep them
     return out
