@@ -19,6 +19,8 @@ from pathlib import Path
 import pytest
 
 MARK = "@@MODEL "
+SETS_A = (("CAM_EXPMODE", "3"), ("LAYOUT", "3"), ("ALARM_MODE", "4"), ("RANGE_MODE", "1"), ("MAIN_CAMERA", "1"))
+SETS_B = (("RANGE_MODE", "2"),)
 
 
 # -- the subprocess ------------------------------------------------------------------------------
@@ -59,18 +61,32 @@ def _run_model(job: str) -> dict:
                               for so in cam.get_possible_setting_options(100)}
         result["current"] = {s.setting_id: s.option.option_id for s in cam.get_current_settings(100)}
         sets = {}
-        for name, option in (("RANGE_MODE", "1"), ("LAYOUT", "3"), ("MAIN_CAMERA", "1")):
-            if name not in result["settings"]:
-                continue
-            try:
-                cam.set_setting(100, Setting(setting_id=name, option=Option(option_id=option)))
-                sets[name] = "ok"
-            except CameraError as err:
-                sets[name] = f"error {err}"
-        time.sleep(0.3)
+
+        def set_all(pairs) -> None:
+            for name, option in pairs:
+                if name not in {so.setting_id for so in cam.get_possible_setting_options(100)}:
+                    continue
+                try:
+                    cam.set_setting(100, Setting(setting_id=name, option=Option(option_id=option)))
+                    sets[name] = "ok"
+                except CameraError as err:
+                    sets[name] = f"error {err}"
+            time.sleep(0.5)
+
+        # options that reveal the settings their defaults hide (the definition's exclusions)
+        set_all(SETS_A)
         with emu.lock:
             result["state_after_set"] = {n: emu.state.values.get(n) for n in sets}
             result["camera_settings_mode_id"] = emu.state.camera_settings(time.monotonic()).mode_id
+        result["snapshots"] = [{"values": {k: result["current"][k] for k in result["current"]},
+                                "settings": result["settings"]}]
+        result["snapshots"].append({"values": {s.setting_id: s.option.option_id for s in cam.get_current_settings(100)},
+                                    "settings": {so.setting_id: [o.option_id for o in so.options]
+                                                 for so in cam.get_possible_setting_options(100)}})
+        set_all(SETS_B)
+        result["snapshots"].append({"values": {s.setting_id: s.option.option_id for s in cam.get_current_settings(100)},
+                                    "settings": {so.setting_id: [o.option_id for o in so.options]
+                                                 for so in cam.get_possible_setting_options(100)}})
         result["sets"] = sets
         before = emu.state.image_count
         try:
@@ -163,19 +179,27 @@ def test_mavsdk_camera_plugin_uses_the_emulator(mavsdk_results, job):
     data = definition_xml(catalogue().get(model))
     d = parse_definition(data)
     defaults = {p.name: p.default for p in d.params}
-    expected_visible = {p.name for p in d.params if p.control} - _hidden(data, defaults)
-    assert set(r["settings"]) == expected_visible
-    for p in d.params:
-        if p.name in r["settings"] and p.options:
-            assert [float(x) for x in r["settings"][p.name]] == [float(o.value) for o in p.options], p.name
-        elif p.name in r["settings"]:
-            assert [float(x) for x in r["settings"][p.name]][:2] == [p.min, p.max], p.name
     for name, value in r["current"].items():
         assert float(value) == pytest.approx(float(defaults[name]), rel=1e-6), name
+    seen = set()
+    values = dict(defaults)
+    for snap in r["snapshots"]:
+        # MAVSDK lists exactly the settings the definition's exclusions leave visible for the current values
+        values.update({k: float(v) for k, v in snap["values"].items()})
+        expected_visible = {p.name for p in d.params if p.control} - _hidden(data, values)
+        assert set(snap["settings"]) == expected_visible
+        seen |= expected_visible
+        for p in d.params:
+            if p.name in snap["settings"] and p.options:
+                assert [float(x) for x in snap["settings"][p.name]] == [float(o.value) for o in p.options], p.name
+            elif p.name in snap["settings"]:
+                assert [float(x) for x in snap["settings"][p.name]][:2] == [p.min, p.max], p.name
+    assert seen == {p.name for p in d.params if p.control}       # every setting was listed at some point
     # set_setting reached the camera's one state, and the command side reports it
     assert set(r["sets"].values()) == {"ok"}, r["sets"]
-    expected = {"RANGE_MODE": 1, "LAYOUT": 3, "MAIN_CAMERA": 1}
-    assert r["state_after_set"] == {k: expected[k] for k in r["sets"]}
+    expected = dict((k, int(v)) for k, v in SETS_A)
+    assert r["state_after_set"] == {k: expected[k] for k in r["state_after_set"]}
+    assert "LAYOUT" in r["sets"] and "MAIN_CAMERA" in r["sets"]
     assert r["camera_settings_mode_id"] == 1          # CAMERA_SETTINGS reports the main camera (§6.4.2)
     assert r["take_photo"] == "ok" and r["emulator_images"] == 1 and r["captured"] == [[0, True]]
     assert r["emulator_errors"] == 0
