@@ -27,7 +27,7 @@ from missions.compiled import Compiled
 from missions.errors import PlanError
 
 MAP_W, MAP_H = 1000, 800          # map area in pixels
-PANEL_W = 360                     # legend panel to the right
+PANEL_W = 430                     # legend panel to the right
 PAD = 40
 # Beyond these counts the picture is a solid smear: draw a regular subset and say so in the legend.
 MAX_FOOTPRINTS = 4000
@@ -44,6 +44,7 @@ COLOURS = {
     "photo": "#202020",
     "waypoint": "#6a1bb0",
     "home": "#000000",
+    "photo2": "#0a8f88", "photo3": "#b5179e",
     "text": "#111111",
     "muted": "#555555",
 }
@@ -161,7 +162,8 @@ def build_picture(compiled: Compiled, sim: Any = None, rep: dict | None = None) 
         dot_stride = max(dot_stride, math.ceil(2.5 / max(gap_px, 1e-6)))
     r_dot = min(2.2, max(0.6, 0.3 * gap_px * dot_stride))
     for p in photos[::dot_stride]:
-        shapes.append(Shape("circle", (px(p.x, p.y),), fill=COLOURS["photo"], radius=r_dot, layer="photos"))
+        shapes.append(Shape("circle", (px(p.x, p.y),), fill=_photo_colour(compiled, p.payloads), radius=r_dot,
+                            layer="photos"))
     # numbered NAV waypoints, when few enough to read
     nav = []
     seen: set[int] = set()
@@ -205,6 +207,13 @@ def build_picture(compiled: Compiled, sim: Any = None, rep: dict | None = None) 
     shapes.extend(legend)
     warn = tuple(w["message"] if isinstance(w, dict) else str(w) for w in rep.get("warnings", []))
     return Picture(MAP_W + PANEL_W, MAP_H, tuple(shapes), compiled.name, tuple(rows), warn)
+
+
+def _photo_colour(compiled: Compiled, payloads: Sequence[str]) -> str:
+    """Photos are coloured by the first payload that takes them (plan order), so two cameras can be told apart."""
+    names = [p.name for p in compiled.payloads]
+    k = min((names.index(n) for n in payloads if n in names), default=0)
+    return (COLOURS["photo"], COLOURS["photo2"], COLOURS["photo3"])[min(k, 2)]
 
 
 def _arrows(path_px: Sequence[tuple[float, float]]) -> list[Shape]:
@@ -263,7 +272,10 @@ def _legend(compiled: Compiled, rep: dict, n_fp: int, n_ph: int, fp_stride: int)
     y = 62
     keys = [("area", COLOURS["area_fill"], "area to cover"), ("gap", COLOURS["gap_fill"], "hole / exclusion"),
             ("fp", COLOURS["footprint_fill"], "photo footprint" + (f" (every {fp_stride}th)" if fp_stride > 1 else "")),
-            ("path", COLOURS["path"], "flight path, arrows = direction"), ("photo", COLOURS["photo"], "photo position"),
+            ("path", COLOURS["path"], "flight path, arrows = direction"),
+            *[("photo", _photo_colour(compiled, (p.name,)),
+               "photo position" + (f" ({p.name})" if len(compiled.payloads) > 1 else ""))
+              for p in compiled.payloads[:3]],
             ("wp", COLOURS["waypoint"], "waypoint (mission seq)"), ("home", COLOURS["home"], "home (H)")]
     for kind, colour, label in keys:
         if kind == "path":
@@ -277,9 +289,11 @@ def _legend(compiled: Compiled, rep: dict, n_fp: int, n_ph: int, fp_stride: int)
         shapes.append(Shape("text", ((x0 + 32, y),), text=label, size=13, fill=COLOURS["text"], layer="legend"))
         y += 21
     y += 12
+    # value column after the longest key (the built-in font is ~7 px per character at 13 px)
+    col = max(128, 7 * max(len(k) for k, _ in rows) + 14)
     for k, v in rows:
         shapes.append(Shape("text", ((x0, y),), text=k, size=13, fill=COLOURS["muted"], layer="legend"))
-        shapes.append(Shape("text", ((x0 + 128, y),), text=v, size=13, fill=COLOURS["text"], bold=True, layer="legend"))
+        shapes.append(Shape("text", ((x0 + col, y),), text=v, size=13, fill=COLOURS["text"], bold=True, layer="legend"))
         y += 20
     codes: dict[str, int] = {}
     for w in rep["warnings"]:
