@@ -207,6 +207,10 @@ RULES: tuple[Rule, ...] = (
          "custom and string parameters carry control=\"0\".",
          "QGC and MAVSDK force control off for custom; say so explicitly.",
          "§C20"),
+    Rule("CDF133", "type-qgc-only", I, E, E,
+         "No QGC-only types (elapsedSeconds).",
+         "QGC's FactMetaData accepts ElapsedSeconds; MAVSDK rejects the file (unknown type), MAVProxy rejects it too.",
+         "§3.2 (5), §4.2"),
     # --- cross-references and semantics ----------------------------------------------------------------
     Rule("CDF200", "misplaced-element", W, E, E,
          "<exclusions> is a direct child of <option>, <updates> of <parameter>, <parameterranges> of <option>; "

@@ -205,7 +205,10 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
             seen[name] = line
     ptype = (ptype_raw or "").lower()
     if ptype_raw is not None:
-        if ptype not in KNOWN_TYPES:
+        if ptype == "elapsedseconds":
+            yield Hit("CDF133", line, name, f"type {ptype_raw!r} is known to QGC only (MAVSDK and MAVProxy reject "
+                                            "the file); use uint32 with unit=\"s\"")
+        elif ptype not in KNOWN_TYPES:
             yield Hit("CDF110", line, name, f"unknown type {ptype_raw!r} (QGC and MAVSDK reject the file)")
         elif ptype_raw != ptype:
             yield Hit("CDF111", line, name, f"type {ptype_raw!r} is not lower case (MAVSDK rejects the file)")

@@ -149,6 +149,8 @@ CASES = [
     ("CDF131", p('<parameter name="X" type="uint8" default="0" min="0" max="3" readonly="1" writeonly="1">'
                  '<description>d</description></parameter>'), "X", {"mavsdk", "strict"}),
     ("CDF132", p('<parameter name="X" type="custom"><description>d</description></parameter>'), "X", set()),
+    ("CDF133", p('<parameter name="X" type="elapsedSeconds" default="0" min="0" max="9"><description>d</description>'
+                 '</parameter>'), "X", {"mavsdk", "strict"}),
     ("CDF200", p('<parameter name="X" type="uint8" default="0"><description>d</description><options>'
                  '<option name="a" value="0"><exclusions><exclusions><exclude>WW_LAYOUT</exclude></exclusions>'
                  '</exclusions></option></options></parameter>'), "X", {"mavsdk", "strict"}),

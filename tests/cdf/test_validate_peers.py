@@ -46,6 +46,8 @@ BAD = {
     "default-not-an-option": (cdf(base=BASE.replace('default="2"', 'default="7"')), None),
     "wrong-case-type": (cdf('<parameter name="WW_X" type="Uint8" default="0" min="0" max="3">'
                             "<description>x</description></parameter>"), "WW_X"),
+    "qgc-only-type": (cdf('<parameter name="WW_X" type="elapsedSeconds" default="0" min="0" max="9">'
+                          "<description>x</description></parameter>"), "WW_X"),
     "readonly-writeonly": (cdf('<parameter name="WW_X" type="uint8" default="0" min="0" max="3" readonly="1" '
                                'writeonly="1"><description>x</description></parameter>'), "WW_X"),
     "no-default": (cdf('<parameter name="WW_X" type="uint8" min="0" max="3"><description>x</description>'
@@ -106,6 +108,8 @@ MAVPROXY_REJECTS = {
                         "<description>x</description></parameter>"),
     "dtd": cdf().replace(b"<mavlinkcamera>", b"<!DOCTYPE mavlinkcamera []>\n<mavlinkcamera>", 1),
     "string-type": cdf('<parameter name="WW_X" type="string" control="0"><description>x</description></parameter>'),
+    "qgc-only-type": cdf('<parameter name="WW_X" type="elapsedSeconds" default="0" min="0" max="9">'
+                         "<description>x</description></parameter>"),
     "value-out-of-range": cdf('<parameter name="WW_X" type="uint8" default="300" min="0" max="400">'
                               "<description>x</description></parameter>"),
 }
