@@ -17,7 +17,8 @@ How the items are flown (the model, stated so it can be checked):
   `missions.triggers.simulate_distance_trigger`, which fires as ArduPilot's AP_Camera and PX4's
   camera_trigger do (straight-line distance from the last photo). IMAGE_START_CAPTURE with one image,
   DO_DIGICAM_CONTROL(shoot) and a trigger-once take one photo there; IMAGE_START_CAPTURE with an interval
-  (or DO_SET_CAM_TRIGG_INTERVAL) takes photos by time along the simulated timeline until IMAGE_STOP_CAPTURE.
+  takes photos by time along the simulated timeline until IMAGE_STOP_CAPTURE; so does PX4's interval trigger
+  (DO_SET_CAM_TRIGG_INTERVAL sets the interval, DO_TRIGGER_CONTROL starts/pauses/stops it).
 * Which camera: a photo from the autopilot's trigger (distance, interval, DIGICAM) fires the payloads the
   plan surveys with that the trigger reaches — on ArduPilot its camera instances (every payload but a RedEdge,
   which is no AP_Camera backend), on PX4 every camera component (camera_trigger over MAVLink).
@@ -266,6 +267,8 @@ def simulate(compiled: Compiled) -> Simulation:
     dist_on: tuple[int, float, bool, int] | None = None          # start vertex, distance, shoot at start, item
     time_on: tuple[int, float, tuple[str, ...], int, int] | None = None  # start vertex, interval, payloads, count, item
     jumps: dict[int, int] = {}
+    has_trigger_control = any(it.command == C.MAV_CMD_DO_TRIGGER_CONTROL for it in items)
+    trig_interval_s = 0.0
     terrain_items: list[int] = []
     ended = False
     on_ground = False
@@ -365,13 +368,28 @@ def simulate(compiled: Compiled) -> Simulation:
                     w.time_spans.append((s0, vi, iv, pl, n, src))
                 time_on = (vi, float(interval), targets, count, i)
         elif cmd == C.MAV_CMD_DO_SET_CAM_TRIGG_INTERVAL:
+            # PX4 (TRIG_MODE 1 "time based, on command"): this sets the interval; DO_TRIGGER_CONTROL starts and
+            # stops it. A mission without DO_TRIGGER_CONTROL is taken to start shooting here.
             vi = len(w.verts) - 1
-            if time_on is not None:
+            if it.param1 > 0:
+                trig_interval_s = it.param1 / 1000.0
+            if not has_trigger_control:
+                if time_on is not None:
+                    s0, iv, pl, n, src = time_on
+                    w.time_spans.append((s0, vi, iv, pl, n, src))
+                    time_on = None
+                if it.param1 > 0:
+                    time_on = (vi, trig_interval_s, trig_payloads, 0, i)
+        elif cmd == C.MAV_CMD_DO_TRIGGER_CONTROL:
+            vi = len(w.verts) - 1
+            start = it.param1 == 1 or (it.param1 < 0 and it.param3 == 0)
+            stop = it.param1 == 0 or it.param3 == 1
+            if stop and time_on is not None:
                 s0, iv, pl, n, src = time_on
                 w.time_spans.append((s0, vi, iv, pl, n, src))
                 time_on = None
-            if it.param1 > 0:
-                time_on = (vi, it.param1 / 1000.0, trig_payloads, 0, i)
+            elif start and time_on is None and trig_interval_s > 0:
+                time_on = (vi, trig_interval_s, trig_payloads, 0, i)
         elif cmd == C.MAV_CMD_IMAGE_STOP_CAPTURE:
             if time_on is not None:
                 s0, iv, pl, n, src = time_on

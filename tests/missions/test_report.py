@@ -151,3 +151,62 @@ def test_rededge_on_external_trigger_is_not_reached_by_ardupilot(tmp_path):
     # PX4's camera_trigger sends to every camera component: the same photos as the WIRIS
     px4 = report(compile_plan(plan, firmware="px4"))
     assert px4["photos"]["multispectral"] == px4["photos"]["thermal"] > 0
+
+
+INTERVAL_PLAN = """\
+version: 1
+name: iv
+vehicle: {firmware: px4, frame: copter, speed_mps: 5}
+home: {lat: 50.1102, lon: 14.5031, alt_amsl_m: 262}
+payloads:
+  thermal: {camera: wiris-pro, imager: thermal, lens_mm: 13, component_id: 100}
+mission:
+  - takeoff: {alt_m: 40}
+  - survey:
+      area: [[50.1110, 14.5040], [50.1110, 14.5060], [50.1120, 14.5060], [50.1120, 14.5040]]
+      payloads: [thermal]
+      altitude_m: 40
+      overlap: {front: 70, side: 60}
+      trigger: interval
+  - rtl: {}
+"""
+
+
+def test_px4_interval_trigger_shoots_only_while_enabled(tmp_path):
+    from missions.compile import compile_plan
+    p = tmp_path / "iv.yaml"
+    p.write_text(INTERVAL_PLAN)
+    c = compile_plan(p)
+    assert any(it.command == mavlink.MAV_CMD_DO_TRIGGER_CONTROL for it in c.items)
+    sim = simulate(c)
+    rep = report(c, sim)
+    # no photo on the climb, the transit or the way home: all at survey altitude, inside the legs' spans
+    assert sim.photos and all(abs(p.alt_m - 40.0) < 1e-6 for p in sim.photos)
+    assert rep["coverage"]["thermal"] >= 0.995
+    # on a straight leg at cruise speed, consecutive photos are speed x interval apart
+    interval = next(it.param1 for it in c.items if it.command == mavlink.MAV_CMD_DO_SET_CAM_TRIGG_INTERVAL) / 1000
+    gaps = [math.hypot(b.x - a.x, b.y - a.y) for a, b in zip(sim.photos, sim.photos[1:]) if a.span == b.span]
+    assert max(gaps) == pytest.approx(5.0 * interval, rel=0.02)
+
+
+def test_flight_time_of_one_leg_follows_the_stated_model():
+    from missions.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem, deg_to_e7
+    from missions.geo import LocalProjection
+    from missions.report import ACCEL_MPS2, CLIMB_MPS, DESCENT_MPS, LAND_FINAL_M, LAND_MPS
+    home = (50.0, 14.0, 300.0)
+    lat, lon = LocalProjection(home[0], home[1]).point_to_latlon(0.0, 600.0)
+    items = (MissionItem(mavlink.MAV_CMD_NAV_TAKEOFF, FRAME_GLOBAL_RELATIVE_ALT, z=30.0),
+             MissionItem(mavlink.MAV_CMD_NAV_WAYPOINT, FRAME_GLOBAL_RELATIVE_ALT, 10.0, x=deg_to_e7(lat),
+                         y=deg_to_e7(lon), z=30.0),
+             MissionItem(mavlink.MAV_CMD_NAV_LAND, FRAME_GLOBAL_RELATIVE_ALT))
+    c = Compiled("leg", "ardupilot", "copter", home, 6.0, items, (items,), 700, (THERMAL,), (), ())
+    rep = report(c)
+    v, a = 6.0, ACCEL_MPS2
+    expected = (30 / CLIMB_MPS                       # vertical take-off
+                + 600 / v + v / a                    # accelerate, cruise, stop: v/a more than at constant speed
+                + 10.0                               # hold
+                + (30 - LAND_FINAL_M) / DESCENT_MPS + LAND_FINAL_M / LAND_MPS)
+    assert rep["flight_time_s"] == pytest.approx(expected, rel=0.01)
+    assert rep["flight_time_qgc_s"] == pytest.approx(600 / v + 10.0, rel=0.01)
+    assert rep["path_length_m"] == pytest.approx(600.0, abs=0.5)
+    assert not any(w["code"] == "no_landing" for w in rep["warnings"])
