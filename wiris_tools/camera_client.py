@@ -246,8 +246,10 @@ class CameraClient:
                 "image_count": m.image_count}
 
     # -- the definition ------------------------------------------------------------------------
-    def definition(self, info: CameraInfo, *, timeout_s: float = 10.0) -> LoadedDefinition:
-        """Download the definition the camera names and validate it (strict profile)."""
+    def definition(self, info: CameraInfo, *, timeout_s: float = 10.0,
+                   progress: Callable[[int, int], None] | None = None) -> LoadedDefinition:
+        """Download the definition the camera names and validate it (strict profile). `progress(done, total)`
+        is called during a MAVLink FTP download (slow on a 57600 baud serial link)."""
         from cdf.validation import CameraInfo as ValidationInfo
         from cdf.validation import validate_bytes
         from cdf.xmlsafe import fetch_url
@@ -272,7 +274,7 @@ class CameraClient:
                 comp_text, path = path[len("comp="):].split(":", 1)
                 component = int(comp_text) if comp_text.isdigit() else component
             data = download(self.link, self.system, component, path, timeout_s=self.timeout_s,
-                            retries=max(self.retries, 3))
+                            retries=max(self.retries, 3), progress=progress)
         elif scheme in ("http", "https"):
             try:
                 data = fetch_url(uri, timeout_s=timeout_s)

@@ -304,3 +304,12 @@ def test_falls_back_to_request_camera_information_for_an_older_camera():
                 CameraClient(link, timeout_s=0.5).definition(info)
     finally:
         cam.close()
+
+
+def test_cli_set_json_and_mftp_definition():
+    with start_emulator("wiris-security", "udpin:127.0.0.1:0", definition_scheme="mftp") as emu:
+        r = CliRunner().invoke(cli, ["camera", "set", "AGC_HOT_REJ", "12.5", "--connect", _url(emu), "--json"])
+        assert r.exit_code == 0, r.output
+        assert json.loads(r.output) == {"name": "AGC_HOT_REJ", "value": 12.5, "option": None, "acknowledged": True}
+        with emu.lock:
+            assert emu.state.value("hot_rejection_pct") == 12.5

@@ -6,6 +6,7 @@ import contextlib
 import functools
 import json
 import math
+import sys
 
 import click
 
@@ -56,6 +57,17 @@ def _num(v) -> str:
     return str(v)
 
 
+def _progress(as_json: bool):
+    """A download progress line on a terminal; nothing when piped or with --json."""
+    if as_json or not sys.stderr.isatty():
+        return None
+
+    def show(done: int, total: int) -> None:
+        click.echo(f"\rdownloading the camera definition: {done}/{total} bytes", err=True, nl=done >= total)
+
+    return show
+
+
 def _findings(report, as_json: bool) -> None:
     if as_json or not report.findings:
         return
@@ -99,7 +111,7 @@ def settings(url, component, system, signing_key, mavlink1, timeout, find_s, as_
     """Every setting of the camera's definition with its current value."""
     with _camera(url, component, system, signing_key, mavlink1, timeout, find_s) as cam:
         information = cam.information()
-        loaded = cam.definition(information)
+        loaded = cam.definition(information, progress=_progress(as_json))
         values = cam.read_settings(loaded.definition)
         report = cam.check_against_camera(loaded, information)
     d = loaded.definition
@@ -133,16 +145,20 @@ def settings(url, component, system, signing_key, mavlink1, timeout, find_s, as_
 @click.argument("name")
 @click.argument("value")
 @_link_options
-def set_(name, value, url, component, system, signing_key, mavlink1, timeout, find_s) -> None:
+@click.option("--json", "as_json", is_flag=True, help="Print the acknowledged value as JSON.")
+def set_(name, value, url, component, system, signing_key, mavlink1, timeout, find_s, as_json) -> None:
     """Set NAME (a definition parameter) to VALUE (an option name or a number): PARAM_EXT_SET, waits for the ACK."""
     with _camera(url, component, system, signing_key, mavlink1, timeout, find_s) as cam:
         information = cam.information()
-        loaded = cam.definition(information)
+        loaded = cam.definition(information, progress=_progress(as_json))
         if not loaded.report.valid:
-            _findings(loaded.report, False)
+            _findings(loaded.report, as_json)
         held = cam.set_setting(loaded.definition, name, value)
     p = loaded.definition.param(name)
     label = p.label_of(held) if p is not None else None
+    if as_json:
+        _echo_json({"name": name, "value": held, "option": label, "acknowledged": True})
+        return
     click.echo(f"{name} = {_num(held)}" + (f" ({label})" if label else "") + " (acknowledged)")
 
 
