@@ -42,7 +42,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import math
-from typing import Any, Sequence
+from typing import Any, NamedTuple, Sequence
 
 import numpy as np
 
@@ -92,8 +92,10 @@ class Vertex:
     speed_mps: float = 0.0    # cruise speed of the segment that ends here
 
 
-@dataclass(frozen=True)
-class Photo:
+class Photo(NamedTuple):
+    """One re-derived photo. A NamedTuple (immutable, ~10x cheaper to build than a frozen dataclass): a 100 km²
+    survey has ~10^6 of them."""
+
     x: float
     y: float
     lat: float
@@ -520,16 +522,25 @@ def _photos(compiled: Compiled, verts: Sequence[Vertex], times: np.ndarray, w: _
 
     xy = np.array([(v.x, v.y) for v in verts], dtype=float).reshape(-1, 2)
     alts = np.array([v.alt_m for v in verts], dtype=float)
+    holds = np.array([v.hold_s for v in verts], dtype=float)
     raw: list[tuple[float, float, float, float, tuple[str, ...], int, int, float]] = []  # x y alt hd payloads span item t
     span_id = 0
     # distance triggering
     for s0, s1, d, at_start, at_stop, src in w.dist_spans:
         pts = simulate_distance_trigger(xy, [TriggerSpan(s0, s1, d, at_start, at_stop)])
+        if not pts:
+            span_id += 1
+            continue
         seg_idx, frac = _locate(xy, s0, s1, pts)
-        for p, k, f in zip(pts, seg_idx, frac):
-            alt = alts[k] + f * (alts[min(k + 1, len(alts) - 1)] - alts[k])
-            hd = _vertex_heading(verts, k, p.heading_deg) if s0 == s1 else p.heading_deg
-            raw.append((p.x, p.y, float(alt), hd, trig_payloads, span_id, src, _time_at(times, verts, k, f)))
+        k = np.asarray(seg_idx, dtype=int)
+        f = np.asarray(frac, dtype=float)
+        k1 = np.minimum(k + 1, len(alts) - 1)
+        alt = (alts[k] + f * (alts[k1] - alts[k])).tolist()
+        depart = times[k] + holds[k]
+        tt = np.where(k >= len(times) - 1, times[-1], depart + f * (times[k1] - depart)).tolist()
+        for j, p in enumerate(pts):
+            hd = _vertex_heading(verts, seg_idx[j], p.heading_deg) if s0 == s1 else p.heading_deg
+            raw.append((p.x, p.y, alt[j], hd, trig_payloads, span_id, src, tt[j]))
         span_id += 1
     # interval triggering: photos at start + k·interval along the timeline
     for s0, s1, iv, pl, count, src in w.time_spans:
