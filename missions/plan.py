@@ -398,8 +398,8 @@ def _translate(err: Any, conv: _Yaml) -> list[Problem]:
                    f"{MIN_ALTITUDE_M if low else MAX_ALTITUDE_M:g} m {'minimum' if low else 'maximum'}")
             return [Problem(where, msg, hint)]
         if path and path[-2:-1] == ("overlap",) and v == "exclusiveMaximum":
-            return [Problem(where, f"{last} overlap {inst} % must be below 100 % (at 100 % the photos never "
-                            "move on)", hint or "overlap in percent, e.g. 80")]
+            return [Problem(where, f"{last} overlap {inst} %: overlap must be below 100 % (at 100 % the photos "
+                            "never move on)", hint or "overlap in percent, e.g. 80")]
         if "minimum" in v.lower() or "maximum" in v.lower():
             sep = " of" if v in ("minimum", "maximum") else ""
             return [Problem(where, f"{name} {inst} is {rel}{sep} {err.validator_value}", hint)]
