@@ -199,7 +199,34 @@ def main(argv: list[str]) -> int:
               f"path/LB ≤ 1.10 on {ratio_ok}/{len(ratios)} convex (mean {np.mean(ratios):.3f}), "
               f"photos {sum(r['photos'] for r in rs)}, outside {sum(r['out'] for r in rs):.0f} m "
               f"(camera on {sum(r['cam_out'] for r in rs):.0f} m), plan time {sum(r['secs'] for r in rs):.2f} s")
+    low_overlap_section()
     return 0
+
+
+def low_overlap_section() -> None:
+    """Edge coverage when the overlaps leave little slack (QGC #5193): coverage % per planner."""
+    from missions.coverage import coverage_fraction
+    configs = ((60.0, 20.0), (40.0, 10.0))
+    print("\ncoverage % at low overlap (front/side): QGC's arbitrary first-line offset and one segment per "
+          "line against ours")
+    head = ["area"] + [f"{p} {f:.0f}/{s:.0f}" for f, s in configs for p in ("qgc@0", "ours@0", "ours@auto")]
+    print("  ".join(h.rjust(16) if i else h.ljust(20) for i, h in enumerate(head)))
+    mins = [100.0] * (3 * len(configs))
+    for a in bench_areas():
+        area = build_area(to_latlon_polygons(a), source=a.name)
+        geom = area.geometry
+        vals = []
+        for front, side in configs:
+            spacing = transect_spacing_m(FP, side)
+            trig = trigger_distance_m(FP, front)
+            _, _, photos = qgc_plan(geom, 0.0, spacing, trig, TURNAROUND_M)
+            vals.append(100 * coverage_fraction(geom, photos, FP)[1])
+            for ang in (0.0, "auto"):
+                p = plan_survey(area, FP, front, side, angle_deg=ang, turnaround_m=TURNAROUND_M, speed_mps=SPEED_MPS)
+                vals.append(100 * coverage_fraction(geom, p.photos, FP)[1])
+        mins = [min(m, v) for m, v in zip(mins, vals)]
+        print(a.name.ljust(20) + "  " + "  ".join(f"{v:16.2f}" for v in vals))
+    print("minimum".ljust(20) + "  " + "  ".join(f"{v:16.2f}" for v in mins))
 
 
 if __name__ == "__main__":

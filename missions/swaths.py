@@ -188,6 +188,16 @@ def part_legs(poly_uv: Any, part: int, across_m: float, spacing_m: float, trigge
     shapely.prepare(poly_uv)
     cores = shapely.intersection(lines, poly_uv)
     bandparts = shapely.intersection(bands, poly_uv)
+    # Only the strip that no neighbouring line's footprint reaches (half-width `excl`, which is 0 at side
+    # overlap ≥ 50 %) needs this line's leg ends stretched; for the outermost lines that strip runs to
+    # the boundary. A monotone slanted edge's far corner in the rest of the band lies beside the
+    # neighbour's longer leg, inside its footprint.
+    excl = max(0.0, spacing_m - across_m / 2.0 + edge_margin_m)
+    ex_lo = us - max(excl, 1e-3)
+    ex_hi = us + max(excl, 1e-3)
+    ex_lo[0] = umin - 1.0
+    ex_hi[-1] = umax + 1.0
+    exparts = shapely.intersection(shapely.box(ex_lo, lo_v, ex_hi, hi_v), poly_uv)
     inward_ok = along_m is not None and trigger_m is not None and along_m / 2.0 >= trigger_m - _EPS
     # a photo covers half a footprint beyond itself along-track: band corners beyond a leg end need the
     # leg (its last photo) to reach within that distance of them, not all the way
@@ -197,14 +207,14 @@ def part_legs(poly_uv: Any, part: int, across_m: float, spacing_m: float, trigge
     # inside the boundary makes the end photo land, on average, on the boundary instead of d/2 beyond it
     # (QGC's photo is at the boundary too). Its footprint still reaches past the boundary by the margin.
     s_in = min(trigger_m / 2.0, reach) if trigger_m and along_m else 0.0
-    # half-width of the strip around a line that no neighbouring line's footprint reaches (side < 50 %)
-    excl = max(0.0, spacing_m - across_m / 2.0 + edge_margin_m)
+
     out = []
     for k in range(nl):
         u = float(us[k])
         ivs = _intervals(cores[k])
         comps = _polys(bandparts[k])
         comp_ranges = [(c.bounds[1], c.bounds[3], c) for c in comps]
+        ex_ranges = [(c.bounds[1], c.bounds[3], c) for c in _polys(exparts[k])]
         legs: list[list[Any]] = []
         for i, (a, b) in enumerate(ivs):
             first, last = i == 0, i == len(ivs) - 1
@@ -217,7 +227,7 @@ def part_legs(poly_uv: Any, part: int, across_m: float, spacing_m: float, trigge
                 if last:
                     nb = b - s_in
                 mid = shapely.Point(u, (a + b) / 2.0)
-                for cv0, cv1, c in comp_ranges:
+                for cv0, cv1, c in ex_ranges:
                     if c.distance(mid) < 1e-6:
                         if first:
                             na = min(na, cv0 + reach)
@@ -291,9 +301,60 @@ def part_legs(poly_uv: Any, part: int, across_m: float, spacing_m: float, trigge
                 a, b = max(a, lim_a), min(b, lim_b)
                 if a > b:
                     a = b = (a + b) / 2.0
-            out.append((k, u, a, b, bool(oa), bool(ob)))
-    # snapping inward can make neighbouring legs on one line overlap; they never cross a gap, so keep them
-    return out
+            out.append([k, u, a, b, bool(oa), bool(ob), lim_a, lim_b])
+    out = _repair(poly_uv, out, us, across_m, reach, trigger_m, edge_margin_m, along_reach)
+    return [(k, u, a, b, oa, ob) for k, u, a, b, oa, ob, _la, _lb in out]
+
+
+def _repair(poly_uv: Any, legs: list[list[Any]], us: np.ndarray, across_m: float, reach: float,
+            trigger_m: float | None, edge_margin_m: float, far_m: float) -> list[list[Any]]:
+    """Measure what the legs leave uncovered (each leg's strip: its photos' footprints less the margins)
+    and cover every remaining piece from its nearest line: stretch a leg on that line when the piece lies
+    just beyond its end (never past a gap's middle), else add a short leg. Catches the cases the band
+    rules above do not foresee (spikes between lines, narrow necks) at the cost of one polygon union."""
+    import shapely
+
+    if not legs:
+        return legs
+    hw = max(across_m / 2.0 - edge_margin_m, 1e-3)
+    d = trigger_m or 0.0
+
+    def down(v: float) -> float:
+        return math.floor(v / d + 1e-9) * d if d else v
+
+    def up(v: float) -> float:
+        return math.ceil(v / d - 1e-9) * d if d else v
+
+    min_piece = max(0.5, 1e-7 * poly_uv.area)
+    for _round in range(2):
+        rects = shapely.box([l[1] - hw for l in legs], [l[2] - reach for l in legs],
+                            [l[1] + hw for l in legs], [l[3] + reach for l in legs])
+        rest = poly_uv.difference(shapely.union_all(rects))
+        pieces = [q for q in _polys(rest) if q.area > min_piece]
+        if not pieces:
+            break
+        for q in pieces:
+            pu0, pv0, pu1, pv1 = q.bounds
+            k = int(np.argmin(np.abs(us - (pu0 + pu1) / 2.0)))
+            lo, hi = pv0 + reach, pv1 - reach
+            if lo > hi:
+                lo = hi = (pv0 + pv1) / 2.0
+            done = False
+            for l in sorted((l for l in legs if l[0] == k), key=lambda l: min(abs(l[2] - pv1), abs(l[3] - pv0))):
+                if l[2] <= lo and hi <= l[3]:
+                    done = True            # covered along-track already: the piece is a margin artefact
+                elif pv0 >= l[2] and hi > l[3] and hi - l[3] <= far_m and hi <= l[7]:
+                    l[3] = min(up(hi), l[7])
+                    done = True
+                elif pv1 <= l[3] and lo < l[2] and l[2] - lo <= far_m and lo >= l[6]:
+                    l[2] = max(down(lo), l[6])
+                    done = True
+                if done:
+                    break
+            if not done:
+                legs.append([k, float(us[k]), down(lo), up(hi), True, True, -math.inf, math.inf])
+    legs.sort(key=lambda l: (l[0], l[2]))
+    return legs
 
 
 def generate_swaths(geometry: Any, angle_deg: float, footprint_across_m: float, spacing_m: float,
