@@ -714,7 +714,8 @@ def _build(data: dict, comp: dict[str, int], path: str, base_dir: Path, notes: l
                                       float(b.get("hold_s", 0.0)), b.get("capture")))
         elif kind == "camera":
             cam = cat.get(data["payloads"][b["payload"]]["camera"])
-            steps.append(CameraStep(i, b["payload"], tuple(b["settings"].items()),
+            steps.append(CameraStep(i, b["payload"], tuple((k, tuple(x) if isinstance(x, list) else x)
+                                                           for k, x in b["settings"].items()),
                                     tuple((k, cam.setting(k).check(val)) for k, val in b["settings"].items())))
         elif kind == "rtl":
             steps.append(RtlStep(i))
