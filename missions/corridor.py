@@ -70,7 +70,7 @@ def plan_corridor(line: Sequence[Sequence[float]], width_m: float, footprint: Fo
                   side_pct: float, turnaround_m: float = 10.0, speed_mps: float = 5.0,
                   min_interval_s: float | None = None, where: str = "corridor.line",
                   exit_margin_m: float = DEFAULT_EXIT_MARGIN_M) -> CorridorPlan:
-    from shapely.geometry import LineString, Polygon
+    from shapely.geometry import LineString
     from shapely.geometry.polygon import orient
 
     poly_in: LatLonPolygon = _inline_polygon(line, where)      # reuses the [lat, lon] checks

@@ -253,7 +253,6 @@ def plan_survey(area: Area, footprint: Footprint, front_pct: float, side_pct: fl
 
 
 def _leg_heading(route: Route, k: int) -> float:
-    from missions.triggers import heading_deg
     leg = route.legs[k]
     h = leg.angle_deg % 360.0
     return (h + 180.0) % 360.0 if route.reversed_legs[k] else h

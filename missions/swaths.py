@@ -11,18 +11,25 @@ the boundary on both sides (QGroundControl starts its grid at an arbitrary offse
 
 Legs: each line is cut into the segments that lie inside the area (concave parts and holes give several
 legs per line; QGroundControl keeps one segment from the first to the last crossing and flies over the gap).
-A leg's outer ends (where the line leaves the area for good) are extended along-track far enough that the
-end photo's footprint (half a footprint beyond it, less the edge margin) covers every part of the area in
-the line's band (u within half a spacing of the line, to the boundary for the outermost lines) — the
-slanted-edge corners that fall between lines at low overlap. Ends facing a gap (hole, exclusion, notch) are not
-extended into it. Band pieces the line misses entirely (a sharp tip between lines) get a short leg of their
-own. So a leg never leaves the area and re-enters it: any part of a leg outside the area touches its end.
+Leg ends are then set by what the photos must cover, not by where the line meets the boundary:
+  * an outer end (the line leaves the area for good) is snapped outward to the photo grid from half a
+    trigger step inside the boundary, so the end photo sits on the boundary on average (QGC's too);
+  * it is stretched further only for the strip no neighbouring line's footprint reaches (zero at side
+    overlap ≥ 50 %; to the boundary for the outermost lines): the end photo's footprint, half a
+    footprint beyond it less the edge margin, must reach the farthest area in that strip;
+  * an end facing a gap (hole, exclusion, notch) is not extended into it, except at low side overlap for
+    that same exclusive strip beside the gap, and never past the middle of the gap;
+  * band pieces the line never crosses (tips between lines) stretch the outermost leg or get a short leg;
+  * finally a repair pass measures what the legs' footprint strips leave uncovered and covers each piece
+    from its nearest line (stretching a leg, else adding a short one).
+So a leg never leaves the area and re-enters it: any part of a leg outside the area touches its end.
 
-With `trigger_m`, leg ends are snapped to a grid of photo positions v = k·trigger_m shared by all lines
-(photos line up across lines and the first photo is at the leg start): outward at outer ends; at gap
-ends inward when half a footprint still reaches the boundary (front overlap ≥ 50 %), else outward.
+With `trigger_m`, leg ends lie on a grid of photo positions v = k·trigger_m shared by all lines (photos
+line up across lines and the first photo is at the leg start); gap ends snap inward when half a
+footprint still reaches the boundary (front overlap ≥ 50 %), else outward.
 
-Cost: one vectorised shapely intersection per line and band — O(lines · vertices).
+Cost: vectorised shapely intersections per line and band — O(lines · vertices) — plus one union of
+O(legs) rectangles for the repair pass.
 """
 
 from __future__ import annotations
