@@ -213,10 +213,16 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
         op_alt, tol = _rededge_tolerance(alts)
         front, side = rededge_overlap[name]
         rededge[name] = RedEdgeSurvey(op_alt, tol, front, side)
-    setup = setup_steps(plan.payloads, cameras, rededge)
+    try:
+        setup = setup_steps(plan.payloads, cameras, rededge)
+    except PlanError as e:
+        raise _relocate(e, plan.where("payloads")) from None
     lua = render_script(plan.name) if emitted.needs_lua else None
-    params = autopilot_params(prof, plan.payloads, cameras, infos, instances, needs_lua=emitted.needs_lua,
-                              triggers={a.trigger for a in areas})
+    try:
+        params = autopilot_params(prof, plan.payloads, cameras, infos, instances, needs_lua=emitted.needs_lua,
+                                  triggers={a.trigger for a in areas})
+    except PlanError as e:
+        raise _relocate(e, plan.where("mission")) from None
     # PayloadInfo only for payloads whose optics are known: the report measures coverage with them
     payloads = tuple(infos[p.name] for p in plan.payloads if p.name in infos)
     for name, e in optics_errors.items():

@@ -316,3 +316,24 @@ def test_ardupilot_params_file_format(tmp_path):
     lines = format_params(c).splitlines()
     assert "CAM1_TYPE,6" in lines and "SERIAL2_PROTOCOL,2" in lines and "SERIAL2_BAUD,57" in lines
     assert all(l.startswith("#") or "," in l for l in lines)
+
+
+def test_px4_fixture_plan():
+    c = compile_plan(PLANS / "px4-interval.yaml")
+    n = names(c.items)
+    assert set(n) <= MAY_EMIT["px4"] and c.lua is None
+    assert "DO_SET_CAM_TRIGG_INTERVAL" in n and "SET_CAMERA_MODE" in n and n[-1] == "NAV_LAND"
+    mode = c.items[n.index("SET_CAMERA_MODE")]
+    assert (mode.x, mode.y) == (3, 2)          # fullscreen 2 + 1, visible 1 + 1 (manual §6.3.2.5)
+    # Security thermal: 17 µm, 35 mm -> 5 cm/px at 0.05 · 35 / 0.017 m
+    assert c.areas[0].altitude_m == pytest.approx(0.05 * 35 / 0.017, rel=1e-6)
+    iv = c.items[n.index("DO_SET_CAM_TRIGG_INTERVAL")].param1 / 1000
+    assert iv >= 1.8                               # the Security's minimum interval (QGC CameraMetaData)
+
+
+def test_video_setting_refused_at_the_payload(tmp_path):
+    def ch(doc):
+        doc["payloads"]["thermal"]["settings"] = {"video": ["visible_encoded"]}
+    with pytest.raises(PlanError) as ei:
+        build(tmp_path, ch)
+    assert "recording" in ei.value.message and str(tmp_path / "plan.yaml") in ei.value.where
