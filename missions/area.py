@@ -298,6 +298,13 @@ def _clean_ring(lats: np.ndarray, lons: np.ndarray, proj: LocalProjection, where
         raise PlanError(f"{what} has {len(lats)} vertices (limit {MAX_VERTICES})", where=where,
                         hint="simplify the boundary")
     x, y = proj.to_xy(lats, lons)
+    from missions.geo import MAX_EXTENT_M
+    far = ~(np.isfinite(x) & np.isfinite(y)) | (np.hypot(x, y) > MAX_EXTENT_M)
+    if far.any():
+        i = int(np.argmax(far))
+        raise PlanError(f"{what} vertex {i} lies more than {MAX_EXTENT_M / 1000:.0f} km from the area's centre",
+                        where=where, hint="one plan covers a local area; split it, or check the coordinates "
+                                          "(lat/lon swapped, or a vertex at 0,0)")
     keep: list[int] = []
     for i in range(len(x)):
         if keep and math.hypot(x[i] - x[keep[-1]], y[i] - y[keep[-1]]) < DEDUP_TOLERANCE_M:

@@ -162,3 +162,45 @@ def test_hole_outside_the_outer_ring(tmp_path: Path) -> None:
     with pytest.raises(PlanError, match="invalid") as e:
         load_area(f)
     assert "holes must lie inside" in e.value.hint
+
+
+# ------------------------------------------------------------------------------------ fuzzed inputs
+from hypothesis import HealthCheck, given, settings, strategies as st  # noqa: E402
+
+_json = st.recursive(
+    st.none() | st.booleans() | st.integers(-200, 200) | st.floats(allow_infinity=True, allow_nan=True) | st.text(max_size=8),
+    lambda kids: st.lists(kids, max_size=5) | st.dictionaries(
+        st.sampled_from(["type", "coordinates", "features", "geometry", "geometries", "crs", "properties"]), kids,
+        max_size=4),
+    max_leaves=30)
+
+
+@given(_json, st.sampled_from(["Polygon", "MultiPolygon", "Feature", "FeatureCollection", "GeometryCollection"]))
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+def test_any_geojson_gives_an_area_or_a_plan_error(tmp_path_factory, body, kind) -> None:
+    import json
+    doc = {"type": kind, "coordinates": body, "features": body if isinstance(body, list) else [body],
+           "geometry": body, "geometries": body if isinstance(body, list) else [body]}
+    f = tmp_path_factory.mktemp("gj") / "a.geojson"
+    f.write_text(json.dumps(doc))
+    try:
+        load_area(f)
+    except PlanError as e:
+        assert e.where and str(f) in e.where
+
+
+@given(st.text(max_size=300), st.sampled_from(["", "<kml><Polygon><outerBoundaryIs><coordinates>"]))
+@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+def test_any_kml_text_gives_an_area_or_a_plan_error(tmp_path_factory, text, prefix) -> None:
+    f = tmp_path_factory.mktemp("kml") / "a.kml"
+    f.write_text(prefix + text, encoding="utf-8")
+    try:
+        load_area(f)
+    except PlanError as e:
+        assert str(f) in (e.where or "")
+
+
+def test_area_spanning_the_globe_is_refused() -> None:
+    with pytest.raises(PlanError, match="more than 200 km") as e:
+        load_area([[50.1, 14.5], [50.1, 14.51], [0.0, 0.0]])
+    assert "0,0" in e.value.hint
