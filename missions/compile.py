@@ -123,14 +123,16 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
             where_speed = plan.step_where(step, "overlap", "front")
             moving = step.trigger != "hover"
             interval = optics.check_interval(info, trig, speed, where=where_speed) if moving else None
-            for other in step.payloads[1:]:
+            for other in step.payloads:
                 if cameras[other].protocol == "rededge-serial":
                     # its own overlap mode: its own footprint and the plan's front overlap, at the same speed
-                    if other in infos:
+                    if other in infos and other != lead:
                         optics.check_interval(infos[other], optics.trigger_m(infos[other], alt, step.front_pct),
                                               speed, where=where_speed)
                     rededge_alts.setdefault(other, []).append(alt)
                     rededge_overlap.setdefault(other, (step.front_pct, step.side_pct))
+                elif other == lead:
+                    continue
                 elif other not in infos:
                     warnings.append(f"no_optics: {other} triggers alongside {lead} but its optics are unknown, "
                                     "so its coverage cannot be measured")
@@ -169,7 +171,8 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
             track = Track(points=tuple(TrackPoint(w.lat, w.lon, w.kind) for w in geo.waypoints),
                           spans=tuple((s.start_index, s.stop_index) for s in geo.camera_spans),
                           altitude_m=alt, trigger=step.trigger, trigger_distance_m=geo.trigger_distance_m,
-                          interval_s=(geo.trigger_distance_m / speed), hold_s=hold)
+                          interval_s=(geo.trigger_distance_m / speed), hold_s=hold,
+                          autopilot_triggers=any(cameras[n].protocol != "rededge-serial" for n in step.payloads))
             em.track(track, where=plan.step_where(step, "trigger"))
             for w in geo.warnings:
                 warnings.append(f"{w.code}: {kind} at {here}: {w.message}")

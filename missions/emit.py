@@ -61,6 +61,8 @@ class Track:
     trigger_distance_m: float
     interval_s: float | None = None
     hold_s: float = HOVER_HOLD_S
+    # False when only RedEdges fly it: they capture themselves (overlap mode), no trigger items are emitted
+    autopilot_triggers: bool = True
 
 
 @dataclass
@@ -145,6 +147,11 @@ class Emitter:
     def track(self, t: Track, where: str | None = None) -> None:
         if not self.s.speed_set:
             self.set_speed()
+        if not t.autopilot_triggers:
+            for p in t.points:
+                self._add(_nav(mavlink.MAV_CMD_NAV_WAYPOINT, p.lat, p.lon, t.altitude_m,
+                               comment=f"{p.kind} (RedEdge captures itself)"))
+            return
         if t.trigger == "interval" and not self.profile.interval_trigger:
             raise PlanError(f"trigger: interval cannot be flown on {self.profile.title}", where=where,
                             hint=self.profile.rule(mavlink.MAV_CMD_DO_SET_CAM_TRIGG_INTERVAL))

@@ -337,3 +337,15 @@ def test_video_setting_refused_at_the_payload(tmp_path):
     with pytest.raises(PlanError) as ei:
         build(tmp_path, ch)
     assert "recording" in ei.value.message and str(tmp_path / "plan.yaml") in ei.value.where
+
+
+def test_rededge_alone_sets_its_own_overlap_mode_and_gets_no_trigger_items(tmp_path):
+    def ch(doc):
+        doc["payloads"] = {"ms": {"camera": "rededge-m"}}
+        survey(doc)["payloads"] = ["ms"]
+        survey(doc)["altitude_m"] = 80
+    c = build(tmp_path, ch)
+    assert not any(it.command == m.MAV_CMD_DO_SET_CAM_TRIGG_DIST for it in c.items)
+    got = {s.param_id: s.value for s in c.setup}
+    assert got["autoCapMode"] == 2 and got["operatingAlt"] == 80
+    assert c.payloads[0].gsd_cm(120) == pytest.approx(8.33, abs=0.01)
