@@ -1,6 +1,6 @@
 """Survey quality benchmark: missions.survey against a QGroundControl-style baseline, side by side.
 
-    .venv/bin/python bench/bench_survey_quality.py [--md]
+    .venv/bin/python bench/bench_survey_quality.py [--md | --compact]
 
 Footprint: WIRIS Pro 640×512, 17 µm pixels, 13 mm lens at 60 m (GSD 7.85 cm, 50.2 m × 40.2 m),
 front/side overlap 80/70 %, turnaround 10 m, 6 m/s. Areas: bench/areas.py (22 areas, deterministic).
@@ -172,7 +172,9 @@ def main(argv: list[str]) -> int:
         lines.append([r["area"], r["kind"], r["planner"], fmt(r["cov"], ".2f"), fmt(r["side"], ".1f"),
                       fmt(r["front"], ".1f"), fmt(r["path_lb"], ".3f"), fmt(r["photos_lb"], ".3f"),
                       fmt(r["out"], ".0f"), fmt(r["cam_out"], ".0f"), str(r["legs"])])
-    if md:
+    if "--compact" in argv:
+        compact(rows)
+    elif md:
         print("| " + " | ".join(head) + " |")
         print("|" + "---|" * len(head))
         for l in lines:
@@ -199,8 +201,20 @@ def main(argv: list[str]) -> int:
               f"path/LB ≤ 1.10 on {ratio_ok}/{len(ratios)} convex (mean {np.mean(ratios):.3f}), "
               f"photos {sum(r['photos'] for r in rs)}, outside {sum(r['out'] for r in rs):.0f} m "
               f"(camera on {sum(r['cam_out'] for r in rs):.0f} m), plan time {sum(r['secs'] for r in rs):.2f} s")
-    low_overlap_section()
+    if "--compact" not in argv:
+        low_overlap_section()
     return 0
+
+
+def compact(rows: list[dict]) -> None:
+    """One line per area: QGC-style → ours@auto (coverage, overlaps: see the summary)."""
+    by = {(r["area"], r["planner"]): r for r in rows}
+    print(f"{'area':20s} {'kind':8s} {'path/LB':>13s} {'photos/LB':>13s} {'out m':>11s} {'cam-out m':>11s}  cov/side/front % (qgc | ours)")
+    for a in dict.fromkeys(r["area"] for r in rows):
+        q, o = by[(a, "qgc@0")], by[(a, "ours@auto")]
+        cso = lambda r: f"{r['cov']:.1f}/{fmt(r['side'], '.0f')}/{fmt(r['front'], '.0f')}"  # noqa: E731
+        print(f"{a:20s} {q['kind']:8s} {q['path_lb']:6.3f}→{o['path_lb']:6.3f} {q['photos_lb']:6.3f}→{o['photos_lb']:6.3f} "
+              f"{q['out']:5.0f}→{o['out']:5.0f} {q['cam_out']:5.0f}→{o['cam_out']:5.0f}  {cso(q)} | {cso(o)}")
 
 
 def low_overlap_section() -> None:
