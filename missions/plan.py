@@ -648,6 +648,8 @@ def _meaning(data: dict, conv: _Yaml, problems: list[Problem], base_dir: Path) -
                                                 "paths in a plan are relative to the plan file"))
         elif kind == "waypoint":
             payload_ref(body.get("capture"), base + ("capture",))
+        elif kind == "land" and ("lat" in body) != ("lon" in body):
+            problems.append(Problem(_at(conv, base), "land needs both lat and lon, or neither (land where it is)"))
         elif kind == "camera":
             ref = body.get("payload")
             payload_ref(ref, base + ("payload",))

@@ -228,3 +228,7 @@ def test_schema_is_valid_and_lists_steps():
     jsonschema.Draft202012Validator.check_schema(s)
     assert set(s["properties"]["mission"]["items"]["properties"]) == {
         "takeoff", "survey", "corridor", "waypoint", "camera", "rtl", "land"}
+
+
+def test_land_needs_both_coordinates(tmp_path):
+    one(BASE.replace("  - rtl: {}", "  - land: {lat: 50.11}"), tmp_path, "both lat and lon")
