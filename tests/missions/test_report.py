@@ -210,3 +210,27 @@ def test_flight_time_of_one_leg_follows_the_stated_model():
     assert rep["flight_time_qgc_s"] == pytest.approx(600 / v + 10.0, rel=0.01)
     assert rep["path_length_m"] == pytest.approx(600.0, abs=0.5)
     assert not any(w["code"] == "no_landing" for w in rep["warnings"])
+
+
+@pytest.fixture(scope="module")
+def small_full():
+    c = handmade(size_m=120.0)
+    return c, report(c)
+
+
+def test_removing_trigger_items_never_adds_coverage(small_full):
+    from hypothesis import given, settings, strategies as st
+
+    full, rep = small_full
+    ons = [i for i, it in enumerate(full.items)
+           if it.command == mavlink.MAV_CMD_DO_SET_CAM_TRIGG_DIST and it.param1 > 0]
+
+    @settings(max_examples=8, deadline=None, derandomize=True)
+    @given(st.sets(st.sampled_from(range(len(ons))), min_size=1))
+    def check(drop):
+        cut = _without_lines(full, sorted(drop))
+        r = report(cut)
+        assert r["photos"]["thermal"] < rep["photos"]["thermal"]
+        assert r["coverage"]["thermal"] <= rep["coverage"]["thermal"] + 1e-9
+
+    check()
