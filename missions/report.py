@@ -36,6 +36,13 @@ How the items are flown (the model, stated so it can be checked):
   For comparison `flight_time_qgc_s` is QGroundControl's statistic (MissionController: horizontal distance /
   cruise speed + hold times, no acceleration, no climbs); Mission Planner shows distance / (0.8·speed).
   Our model is longer than QGC's on every survey with turns — that is the point of it.
+* Measuring: per survey/corridor step and payload with `missions.coverage`, in one metric plane (the first
+  area's projection, so photos on a line stay exactly collinear): the photos whose footprint can reach the
+  area, grouped by altitude (one footprint size per group; coverage is the union over all groups). Front
+  overlap pairs consecutive photos of one camera-on stretch; a turn of more than TURN_SPLIT_DEG starts a new
+  stretch (a turnaround is not a front pair; a corridor's gentle bend is, and its lower overlap is real).
+  Coverage below COVERAGE_TARGET and overlaps more than OVERLAP_SLACK below the request are warnings, not
+  errors: the mission flies, the result is worse than asked.
 """
 
 from __future__ import annotations
