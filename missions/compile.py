@@ -121,6 +121,15 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
             fp = optics.footprint(info, alt)
             trig = optics.trigger_m(info, alt, step.front_pct)
             where_speed = plan.step_where(step, "overlap", "front")
+            triggered = [n for n in step.payloads if cameras[n].protocol != "rededge-serial"]
+            if step.trigger == "distance" and len(triggered) > 1 and not prof.distance_trigger_all:
+                raise PlanError(f"{prof.title} distance-triggers only its primary camera: {', '.join(triggered[1:])} "
+                                f"would take just the first photo of each line",
+                                where=plan.step_where(step, "payloads"),
+                                hint="AP_Camera::set_trigger_distance() drives the primary instance only. Use "
+                                     "trigger: hover (one IMAGE_START_CAPTURE reaches every instance), one WIRIS "
+                                     "per survey with that camera as CAM1, or PX4 (camera_trigger addresses "
+                                     "components 100..105)")
             moving = step.trigger != "hover"
             interval = optics.check_interval(info, trig, speed, where=where_speed) if moving else None
             for other in step.payloads:

@@ -7,8 +7,9 @@ Conventions of every emitted item:
   FRAME_MISSION with params 5/6 as int32 zeros (MISSION_ITEM_INT cannot carry NaN there, reference §4.2);
 - yaw/reserved float params that mean "unchanged" are NaN, as QGroundControl writes them (survey-planners §1.6).
 
-Triggering (one DO_SET_CAM_TRIGG_DIST per camera-on segment triggers every camera: ArduPilot calls
-take_picture() on every AP_Camera instance; PX4's camera_trigger sends to components 100..105; reference §7):
+Triggering (one DO_SET_CAM_TRIGG_DIST per camera-on segment; PX4's camera_trigger sends each shot to
+components 100..105, reference §3.2; ArduPilot distance-triggers only its primary AP_Camera instance —
+AP_Camera::set_trigger_distance() — so the compiler refuses two WIRIS on one distance-triggered ArduPilot survey):
 - distance: DO_SET_CAM_TRIGG_DIST(d, 0, 1) after the entry waypoint (param3 = 1: one photo at once, QGC
   does the same, survey-planners §1.6), DO_SET_CAM_TRIGG_DIST(0, 0, 0) after the exit waypoint;
 - interval: PX4 only (ArduPilot rejects DO_SET_CAM_TRIGG_INTERVAL at upload): DO_SET_CAM_TRIGG_INTERVAL(ms)

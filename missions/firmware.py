@@ -43,6 +43,10 @@ class FirmwareProfile:
     script_messages: bool                  # DO_SEND_SCRIPT_MESSAGE + Lua available
     max_camera_instances: int              # AP_Camera instances (CAMn_*); PX4 addresses components instead
     source: str
+    # Distance triggering reaches every camera (PX4 camera_trigger: components 100..105) or only the primary
+    # one (ArduPilot: AP_Camera::set_trigger_distance() calls `primary` only, AP_Camera.cpp; the first photo
+    # of DO_SET_CAM_TRIGG_DIST param3 = 1 goes to every instance through take_picture()).
+    distance_trigger_all: bool = True
 
     def accepts(self, command: int) -> bool:
         return command in self.accepted
@@ -96,7 +100,8 @@ ARDUPILOT = FirmwareProfile(
     item_limit_why="about 718 items fit common boards' mission storage (ArduPilot #7254); 700 keeps headroom",
     camera_target="instance", interval_trigger=False, camera_mode_item=False, digicam_configure_item=True,
     script_messages=True, max_camera_instances=2,
-    source="reference autopilots-and-cameras §2.2/§7; survey-planners §7.2",
+    source="reference autopilots-and-cameras §2.2/§7; survey-planners §7.2; ArduPilot AP_Camera.cpp",
+    distance_trigger_all=False,
 )
 
 PX4 = FirmwareProfile(

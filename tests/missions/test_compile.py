@@ -285,7 +285,7 @@ def test_unknown_optics_lead_refused_second_warned(tmp_path):
     def second(doc):
         doc["payloads"]["agro"] = {"camera": "wiris-agro", "component_id": 102}
         survey(doc)["payloads"] = ["thermal", "agro"]
-    c = build(tmp_path, second)
+    c = build(tmp_path, second, firmware="px4")     # ArduPilot would refuse a second distance-triggered WIRIS
     assert any(w.startswith("no_optics:") for w in c.warnings)
     assert [p.name for p in c.payloads] == ["thermal"]
 
@@ -349,3 +349,30 @@ def test_rededge_alone_sets_its_own_overlap_mode_and_gets_no_trigger_items(tmp_p
     got = {s.param_id: s.value for s in c.setup}
     assert got["autoCapMode"] == 2 and got["operatingAlt"] == 80
     assert c.payloads[0].gsd_cm(120) == pytest.approx(8.33, abs=0.01)
+
+
+def two_wiris(doc):
+    doc["payloads"]["vis"] = {"camera": "wiris-security", "component_id": 102}
+    survey(doc)["payloads"] = ["thermal", "vis"]
+
+
+def test_two_wiris_distance_triggered_on_ardupilot_refused(tmp_path):
+    # ArduPilot AP_Camera::set_trigger_distance() drives the primary instance only
+    with pytest.raises(PlanError) as ei:
+        build(tmp_path, two_wiris)
+    assert "primary" in ei.value.message and "vis" in ei.value.message and "hover" in ei.value.hint
+
+
+def test_two_wiris_hover_on_ardupilot_and_distance_on_px4(tmp_path):
+    def hover(doc):
+        two_wiris(doc)
+        survey(doc)["trigger"] = "hover"
+    c = build(tmp_path, hover)
+    caps = [it for it in c.items if it.command == m.MAV_CMD_IMAGE_START_CAPTURE]
+    assert caps and all(it.param1 == 0 for it in caps)           # 0 = every AP_Camera instance
+    assert {n for n, v, _ in c.params} >= {"CAM1_TYPE", "CAM2_TYPE"}
+    def slow(doc):
+        two_wiris(doc)
+        doc["vehicle"]["speed_mps"] = 2.5        # the Security needs 1.8 s between photos
+    c = build(tmp_path, slow, firmware="px4")
+    assert any(it.command == m.MAV_CMD_DO_SET_CAM_TRIGG_DIST for it in c.items)
