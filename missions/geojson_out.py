@@ -82,22 +82,55 @@ def feature_collection(compiled: Compiled, sim: Simulation, rep: dict) -> dict:
                                      "item_seq": p.cause + seq_base if p.cause >= 0 else None, "time_s": round(p.time_s, 1)},
                       "geometry": {"type": "Point", "coordinates": [_r7(p.lon), _r7(p.lat), round(home_amsl + p.alt_m, 2)]}})
     if write_fp:
-        for k, p in enumerate(sim.photos):
-            for name in p.payloads:
-                ring = footprint_ring(p, compiled.payload(name))
-                xs = [q[0] for q in ring]
-                ys = [q[1] for q in ring]
-                lat, lon = sim.projection.to_latlon(xs, ys)
-                feats.append({"type": "Feature",
-                              "properties": {"kind": "footprint", "photo": k, "payload": name},
-                              "geometry": {"type": "Polygon",
-                                           "coordinates": [[[_r7(b), _r7(a)] for a, b in zip(lat.tolist(), lon.tolist())]]}})
+        feats.extend(_footprints(compiled, sim))
     props: dict[str, Any] = {"plan": compiled.name, "firmware": compiled.firmware,
                              "generator": "wiris-tools", "altitudes": "metres AMSL (home AMSL + height above home)"}
     if not write_fp:
         props["footprints_omitted"] = (f"{n_fp} footprints exceed {MAX_FOOTPRINT_FEATURES}; "
                                        "photo points are complete")
     return {"type": "FeatureCollection", "properties": props, "features": feats}
+
+
+def _footprints(compiled: Compiled, sim: Simulation) -> list[dict]:
+    """Footprint polygons of every photo and payload, corners computed at once (one projection call)."""
+    import numpy as np
+
+    owners = [(k, name) for k, p in enumerate(sim.photos) for name in p.payloads]
+    if not owners:
+        return []
+    ph = sim.photos
+    idx = np.array([k for k, _ in owners])
+    c = np.array([(ph[k].x, ph[k].y) for k in idx], dtype=float)
+    alt = np.maximum(np.array([ph[k].alt_m for k in idx]), 0.0)
+    h = np.radians([ph[k].heading_deg for k in idx])
+    unit = {p.name: p.footprint_m(1.0) for p in compiled.payloads}      # footprints scale with altitude
+    across = alt * np.array([unit[n][0] for _, n in owners]) / 2
+    along = alt * np.array([unit[n][1] for _, n in owners]) / 2
+    d = np.column_stack([np.sin(h), np.cos(h)])
+    n = np.column_stack([np.cos(h), -np.sin(h)])
+    a, b = d * along[:, None], n * across[:, None]
+    corners = np.stack([c - a - b, c + a - b, c + a + b, c - a + b, c - a - b], axis=1)   # as footprint_ring
+    lat, lon = sim.projection.to_latlon(corners[..., 0].ravel(), corners[..., 1].ravel())
+    lat = np.round(lat, 7).reshape(-1, 5).tolist()
+    lon = np.round(lon, 7).reshape(-1, 5).tolist()
+    return [{"type": "Feature", "properties": {"kind": "footprint", "photo": k, "payload": name},
+             "geometry": {"type": "Polygon", "coordinates": [[[b, a] for a, b in zip(la, lo)]]}}
+            for (k, name), la, lo in zip(owners, lat, lon)]
+
+
+def dumps_collection(fc: dict) -> str:
+    """The collection as text: one feature per line (diffable, and json's C encoder instead of its slow
+    indenting one). JSON has no NaN: a non-finite number anywhere becomes null."""
+    import json
+
+    def dump(obj: Any) -> str:
+        try:
+            return json.dumps(obj, ensure_ascii=False, allow_nan=False, separators=(",", ":"))
+        except ValueError:
+            return json.dumps(finite(obj), ensure_ascii=False, allow_nan=False, separators=(",", ":"))
+
+    head = dump({k: v for k, v in fc.items() if k != "features"})[:-1]
+    return head + ',"features":[\n' + ",\n".join(dump(f) for f in fc["features"]) + "\n]}\n"
 
 
 def finite(obj: Any) -> Any:

@@ -20,7 +20,8 @@ FOLDERS = (("area", "Areas"), ("gap", "Holes and exclusions"), ("path", "Flight 
 
 
 def _coords(points) -> str:
-    return " ".join(",".join(repr(float(c)) for c in p) for p in points)
+    # GeoJSON side already rounded to 7 decimals (~1 cm); %g keeps that and drops trailing zeros
+    return " ".join(",".join(["%.12g" % c for c in p]) for p in points)
 
 
 def _ring(points) -> str:
@@ -80,8 +81,9 @@ def render_kml(fc: dict) -> str:
         for f in feats:
             p = f["properties"]
             style = f"<styleUrl>#{kind}</styleUrl>" if kind in STYLES else ""
-            out.append(f"<Placemark><name>{escape(_name(p))}</name><description>{_description(p)}</description>"
-                       f"{style}{_geometry(f['geometry'])}</Placemark>")
+            # footprints are many and say nothing beyond their photo's number: no description
+            desc = "" if kind == "footprint" else f"<description>{_description(p)}</description>"
+            out.append(f"<Placemark><name>{escape(_name(p))}</name>{desc}{style}{_geometry(f['geometry'])}</Placemark>")
         out.append("</Folder>")
     out.append("</Document></kml>\n")
     return "\n".join(out)

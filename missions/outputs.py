@@ -61,7 +61,7 @@ def _params_text(compiled: Compiled) -> str:
 
 def _writers(compiled: Compiled, rep: dict, sim) -> list[tuple[str, Callable[[Path], None]]]:
     from missions import planfile, wpl
-    from missions.geojson_out import feature_collection
+    from missions.geojson_out import dumps_collection, feature_collection
     from missions.kml_out import render_kml
 
     name = compiled.name
@@ -70,7 +70,7 @@ def _writers(compiled: Compiled, rep: dict, sim) -> list[tuple[str, Callable[[Pa
         (f"{name}.plan", lambda p: planfile.write_plan(p, compiled)),
         (f"{name}.waypoints", lambda p: wpl.write_wpl(p, compiled.items, home=compiled.home,
                                                       firmware=compiled.firmware)),
-        (f"{name}.geojson", lambda p: p.write_text(_json_text(fc), encoding="utf-8")),
+        (f"{name}.geojson", lambda p: p.write_text(dumps_collection(fc), encoding="utf-8")),
         (f"{name}.kml", lambda p: p.write_text(render_kml(fc), encoding="utf-8")),
         (f"{name}.setup.json", lambda p: p.write_text(_json_text(setup_document(compiled)), encoding="utf-8")),
         (f"{name}.params", lambda p: p.write_text(_params_text(compiled), encoding="utf-8")),
