@@ -979,7 +979,8 @@ def format_report(rep: dict) -> str:
             ("path length", f"{rep['path_length_m']:.0f} m (climb {rep['climb_m']:.0f} m)"),
             ("flight time", f"{rep['flight_time_s'] / 60:.1f} min (QGC's estimate: {rep['flight_time_qgc_s'] / 60:.1f} min)"),
             ("highest point", f"{rep['max_altitude_m']:.1f} m above home"),
-            ("area", f"{rep['area_m2']:.0f} m² ({rep['area_m2'] / 10000:.2f} ha)")]
+            ("area", f"{rep['area_m2']:.0f} m² ({rep['area_m2'] / 10000:.2f} ha)" if rep["area_m2"] else
+                     "none (no survey or corridor)")]
     for name, n in rep["photos"].items():
         g = rep["gsd_cm"].get(name)
         gs = "" if not g else (f", GSD {g[0]:.2f} cm/px" if abs(g[1] - g[0]) < 0.005 else f", GSD {g[0]:.2f}–{g[1]:.2f} cm/px")
