@@ -9,6 +9,8 @@ How the items are flown (the model, stated so it can be checked):
   takeoff and land share). Takeoff climbs vertically over the current position (both firmwares take off over
   the launch point). RTL climbs to RTL_ALT (ArduPilot's default 15 m) when lower, flies home and descends;
   LAND descends where it is. After RTL, LAND or LOITER_UNLIM nothing further is flown.
+* A mission split into parts is measured as `compiled.items`, the whole flight: the parts reproduce it, each
+  ending in a hold (LOITER_UNLIM) while the next one is uploaded; upload time is not in the flight time.
 * Altitude: relative frames are above home; absolute (AMSL) frames are converted with home's AMSL altitude;
   terrain frames are taken as height above the ground (a warning says so). The ground is assumed flat at
   home's elevation: the report cannot know the terrain, and neither can the autopilot without terrain data.
