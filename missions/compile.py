@@ -16,7 +16,6 @@ no_optics, mission_split, px4_single_capture_all.
 
 from __future__ import annotations
 
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 

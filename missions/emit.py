@@ -33,7 +33,7 @@ import math
 from typing import Any, Sequence
 
 from missions.errors import PlanError
-from missions.firmware import FirmwareProfile, cmd_name
+from missions.firmware import FirmwareProfile
 from missions.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem, deg_to_e7, mavlink
 from missions import lua as bridge
 from missions.setup import commands_for

@@ -40,7 +40,6 @@ MAX_OVERLAP_PCT = 95.0
 # the plan leaves unplaced is moved to the first free id of 101..105 instead (reported as a note).
 REDEDGE_COMPONENT = 100
 
-Path_ = tuple  # a location key: ("mission", 2, "survey", "altitude_m")
 
 
 @dataclass(frozen=True)

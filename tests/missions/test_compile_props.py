@@ -4,7 +4,6 @@ exception, never an item the firmware would reject at upload."""
 
 from __future__ import annotations
 
-import copy
 from pathlib import Path
 
 import yaml
