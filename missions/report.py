@@ -790,7 +790,20 @@ def _measure_area(area_info: Any, payload: PayloadInfo, photos: Sequence[Photo],
         result["front_min"] = min(fronts) if fronts else None
         result["side_min"] = min(sides) if sides else None
     result["outside_m"] = outside_length_m(sim.xy, geom)
+    result["over_gaps_m"] = _over_gaps_m(sim.xy, geom)
     return result
+
+
+def _over_gaps_m(path_xy: np.ndarray, geom: Any) -> float:
+    """Metres of the flown path over the area's holes (its source holes and the exclusion zones inside it)."""
+    import shapely
+    from shapely.geometry import LineString, Polygon
+
+    polys = list(geom.geoms) if geom.geom_type == "MultiPolygon" else [geom]
+    holes = [Polygon(r) for p in polys for r in p.interiors]
+    if not holes or len(path_xy) < 2:
+        return 0.0
+    return float(LineString(path_xy).intersection(shapely.union_all(holes)).length)
 
 
 def _r(v: float | None, nd: int = 4) -> float | None:
@@ -822,6 +835,7 @@ def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | N
             row["overlap"][pname] = {"front_min": _r(m["front_min"]), "side_min": _r(m["side_min"])}
             row["photos"][pname] = m["photos"]
             row["outside_m"] = _r(m["outside_m"], 1)
+            row["over_gaps_m"] = _r(m["over_gaps_m"], 1)
             cov_acc.setdefault(pname, []).append((m["coverage"], a.area.area_m2))
             acc = ov_acc.setdefault(pname, {"front": [], "side": []})
             if m["front_min"] is not None:
@@ -841,6 +855,11 @@ def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | N
                 warnings.append({"code": "side_overlap_low",
                                  "message": f"{where}: minimum side overlap {100 * m['side_min']:.1f} % "
                                             f"< requested {100 * a.side_overlap:.0f} %"})
+        if row.get("over_gaps_m", 0) > 1.0:
+            warnings.append({"code": "path_over_exclusion",
+                             "message": f"step {a.step} ({a.kind}): the flown path crosses the area's holes or "
+                                        f"exclusion zones for {row['over_gaps_m']:.0f} m (transits, take-off or "
+                                        "return are not routed around them); check that overflight is allowed"})
         area_rows.append(row)
     coverage = {n: _r(sum(c * A for c, A in v) / sum(A for _, A in v), 5) if sum(A for _, A in v) > 0 else 0.0
                 for n, v in cov_acc.items()}

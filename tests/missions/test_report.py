@@ -234,3 +234,14 @@ def test_removing_trigger_items_never_adds_coverage(small_full):
         assert r["coverage"]["thermal"] <= rep["coverage"]["thermal"] + 1e-9
 
     check()
+
+
+def test_flying_over_a_hole_is_reported():
+    # the hand-written lawn-mower flies straight through a 40 m hole in the middle of the area
+    rep = report(handmade(size_m=160.0, hole_m=40.0))
+    row = rep["areas"][0]
+    assert row["over_gaps_m"] > 40.0
+    assert any(w["code"] == "path_over_exclusion" for w in rep["warnings"])
+    clean = report(handmade(size_m=160.0))
+    assert clean["areas"][0]["over_gaps_m"] == 0.0
+    assert not any(w["code"] == "path_over_exclusion" for w in clean["warnings"])
