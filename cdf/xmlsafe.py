@@ -17,8 +17,10 @@ CdfError.
 
 from __future__ import annotations
 
+import http.client
 import lzma
 import socket
+import threading
 import time
 import urllib.error
 import urllib.parse
@@ -110,15 +112,42 @@ class _HttpOnlyRedirects(urllib.request.HTTPRedirectHandler):
 
 
 def fetch_url(url: str, *, timeout_s: float = HTTP_TIMEOUT_S) -> bytes:
-    """GET an http(s) URL with a per-operation timeout, at most MAX_BYTES + 1 bytes, http(s)-only redirects."""
+    """GET an http(s) URL: at most MAX_BYTES + 1 bytes, http(s)-only redirects, each socket operation
+    bounded by timeout_s and the whole download by 2 * timeout_s + 1 s.
+
+    The download runs in a daemon thread the caller stops waiting for at the deadline: a server can
+    trickle header lines slowly enough that no single socket operation times out.
+    """
     scheme = urllib.parse.urlsplit(url).scheme.lower()
     if scheme not in ("http", "https"):
         raise CdfError(f"unsupported URL scheme {scheme!r}", where=url,
                        hint="use http:// or https:// (mftp:// needs a MAVLink link: download it first)")
+    total_s = 2 * timeout_s + 1.0
+    outcome: list = []
+    worker = threading.Thread(target=lambda: outcome.append(_fetch_outcome(url, timeout_s, total_s)),
+                              name="cdf-fetch", daemon=True)
+    worker.start()
+    worker.join(total_s)
+    if not outcome:
+        raise CdfError(f"no complete answer within {total_s:g} s (server sends too slowly)", where=url,
+                       hint="is the server overloaded or hostile?")
+    result = outcome[0]
+    if isinstance(result, CdfError):
+        raise result
+    return result
+
+
+def _fetch_outcome(url: str, timeout_s: float, total_s: float) -> bytes | CdfError:
+    try:
+        return _fetch(url, timeout_s, time.monotonic() + total_s - 1.0)
+    except CdfError as err:
+        return err
+
+
+def _fetch(url: str, timeout_s: float, deadline: float) -> bytes:
     opener = urllib.request.build_opener(_HttpOnlyRedirects())
     req = urllib.request.Request(url, headers={"User-Agent": "wiris-tools-cdf-validate"})
     try:
-        deadline = time.monotonic() + 2 * timeout_s
         with opener.open(req, timeout=timeout_s) as resp:
             return _read_bounded(resp, url, deadline)
     except CdfError:
@@ -134,6 +163,8 @@ def fetch_url(url: str, *, timeout_s: float = HTTP_TIMEOUT_S) -> bytes:
             raise CdfError(f"no answer within {timeout_s:g} s", where=url,
                            hint="is the server up and reachable?") from None
         raise CdfError(f"cannot fetch: {reason}", where=url, hint="check the URL and the network") from None
+    except http.client.HTTPException as err:  # malformed status line, too many headers, ...
+        raise CdfError(f"broken HTTP answer: {type(err).__name__}: {err}", where=url) from None
     except (OSError, ValueError) as err:
         raise CdfError(f"cannot fetch: {err}", where=url) from None
 
@@ -143,8 +174,10 @@ def _read_bounded(resp, url: str, deadline: float) -> bytes:
     chunks, total = [], 0
     while total <= MAX_BYTES:
         if time.monotonic() > deadline:
-            raise CdfError("download took too long (server sends too slowly)", where=url)
-        chunk = resp.read(min(65536, MAX_BYTES + 1 - total))
+            raise CdfError("download took too long (server sends too slowly)", where=url,
+                           hint="is the server overloaded or hostile?")
+        # read1: at most one recv, so a trickling server cannot keep us inside one read() call
+        chunk = resp.read1(min(65536, MAX_BYTES + 1 - total))
         if not chunk:
             break
         chunks.append(chunk)

@@ -243,3 +243,62 @@ def test_empty_and_binary_input():
     for data in (b"", b"\x00\x01\x02garbage", b"<?xml version='1.0'?>"):
         r = validate_bytes(data, "junk")
         assert not r.valid and [f.rule for f in r.findings] == ["CDF004"]
+
+
+def test_server_that_trickles_forever_is_cut_off():
+    # each read gets a byte before the socket timeout, so only the overall deadline stops it
+    listener = socket.socket()
+    listener.bind(("127.0.0.1", 0))
+    listener.listen(1)
+    stop = threading.Event()
+
+    def trickle():
+        conn, _ = listener.accept()
+        with conn:
+            conn.sendall(b"HTTP/1.0 200 OK\r\nContent-Type: application/xml\r\n\r\n<mavlinkcamera>")
+            while not stop.wait(0.1):
+                try:
+                    conn.sendall(b" ")
+                except OSError:
+                    return
+
+    t = threading.Thread(target=trickle, daemon=True)
+    t.start()
+    try:
+        with pytest.raises(CdfError, match="too slowly"):
+            validate_source(f"http://127.0.0.1:{listener.getsockname()[1]}/cdf.xml", timeout_s=0.5)
+    finally:
+        stop.set()
+        listener.close()
+        t.join(5)
+
+
+@pytest.mark.parametrize("answer", [b"HTTP/1.0 200 OK\r\n", b"garbage that is not HTTP\r\n\r\n"])
+def test_server_with_endless_headers_or_garbage(answer):
+    listener = socket.socket()
+    listener.bind(("127.0.0.1", 0))
+    listener.listen(1)
+    stop = threading.Event()
+
+    def serve():
+        conn, _ = listener.accept()
+        with conn:
+            try:
+                conn.sendall(answer)
+                i = 0
+                while not stop.wait(0.05):  # one header line at a time, each before the socket timeout
+                    conn.sendall(f"X-Slow-{i}: y\r\n".encode())
+                    i += 1
+            except OSError:
+                return
+
+    t = threading.Thread(target=serve, daemon=True)
+    t.start()
+    try:
+        with pytest.raises(CdfError) as err:
+            validate_source(f"http://127.0.0.1:{listener.getsockname()[1]}/cdf.xml", timeout_s=0.5)
+        assert "HTTP" in str(err.value) or "too slowly" in str(err.value)
+    finally:
+        stop.set()
+        listener.close()
+        t.join(5)
