@@ -129,7 +129,7 @@ def _order_length(legs: Sequence[Leg], order: Sequence[tuple[int, bool]], turnar
 
 def angle_objective(sw: SwathSet, turnaround_m: float, speed_mps: float) -> float:
     """Objective of the angle search (seconds, lower is better): estimated flight time of the pass."""
-    order = order_legs(sw.legs, max_starts=4)
+    order = order_legs(sw.legs, max_starts=2)
     return estimated_time_s(_order_length(sw.legs, order, turnaround_m), max(0, len(order) - 1) * 2 + 2, speed_mps)
 
 
@@ -141,7 +141,7 @@ def best_angle(geometry: Any, across_m: float, spacing_m: float, trigger_m: floa
     def cost(a: float) -> float:
         a = round(normalise_angle(a), 6)
         if a not in cache:
-            sw = generate_swaths(geometry, a, across_m, spacing_m, trigger_m, along_m)
+            sw = generate_swaths(geometry, a, across_m, spacing_m, trigger_m, along_m, estimate=True)
             cache[a] = angle_objective(sw, turnaround_m, speed_mps) if sw.legs else math.inf
         return cache[a]
 
