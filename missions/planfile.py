@@ -47,6 +47,7 @@ Home = tuple[float, float, float]
 
 MAX_PLAN_BYTES = 20 * 1024 * 1024     # a 2000-item survey plan is well under 2 MB
 MAX_ITEMS = 65535                     # MISSION_COUNT is 16 bits
+FLOAT32_MAX = 3.4028234663852886e38   # params 1-4 and z travel as float32
 
 # MAV_CMD numbers (common.xml) — named here because missions/ modules stay free of pymavlink.
 CMD_NAV_WAYPOINT = 16
@@ -359,6 +360,9 @@ def _simple(r: _Reader, raw: Any, path: str, mission_type: int) -> MissionItem:
     if not isinstance(auto, bool):
         raise r.err(f"{path}.autoContinue", f"expected true or false, found {_kind(auto)}")
     p = [r.number(v, f"{path}.params[{k}]", null_ok=True) for k, v in enumerate(params)]
+    for k in (0, 1, 2, 3, 6):
+        if p[k] is not None and abs(float(p[k])) > FLOAT32_MAX:
+            raise r.err(f"{path}.params[{k}]", f"{p[k]} is beyond the float32 range MISSION_ITEM_INT carries")
     return MissionItem(command=command, frame=frame, param1=_f(p[0]), param2=_f(p[1]), param3=_f(p[2]),
                        param4=_f(p[3]), x=r.fixed(params[4], f"{path}.params[4]", frame),
                        y=r.fixed(params[5], f"{path}.params[5]", frame), z=_f(p[6]), autocontinue=int(auto),

@@ -28,7 +28,7 @@ from pathlib import Path
 
 from missions.errors import PlanError
 from missions.items import FRAME_GLOBAL, MISSION_TYPE_MISSION, MissionItem
-from missions.planfile import MAX_ITEMS, _scale, atomic_write
+from missions.planfile import FLOAT32_MAX, MAX_ITEMS, _scale, atomic_write
 
 Home = tuple[float, float, float]
 
@@ -147,6 +147,9 @@ def read_wpl(text: str | bytes, name: str = "<waypoints>", *,
             raise PlanError(f"row index {index}, expected {len(rows)}", where=where,
                             hint="rows must be numbered 0, 1, 2, … without gaps")
         params = [float(_decimal(fields[k], where, f"param{k - 3}")) for k in range(4, 8)]
+        z = float(_decimal(fields[10], where, "altitude/z"))
+        if any(abs(v) > FLOAT32_MAX for v in (*params, z) if not math.isnan(v)):
+            raise PlanError("a value is beyond the float32 range MISSION_ITEM_INT carries", where=where)
         xy = []
         for k, what in ((8, "latitude/x"), (9, "longitude/y")):
             d = _decimal(fields[k], where, what)
@@ -157,7 +160,6 @@ def read_wpl(text: str | bytes, name: str = "<waypoints>", *,
             if not -2**31 <= v < 2**31:
                 raise PlanError(f"{what} {fields[k]} does not fit MISSION_ITEM_INT for frame {frame}", where=where)
             xy.append(v)
-        z = float(_decimal(fields[10], where, "altitude/z"))
         rows.append((lineno, MissionItem(command=command, frame=frame, param1=params[0], param2=params[1],
                                          param3=params[2], param4=params[3], x=xy[0], y=xy[1], z=z,
                                          autocontinue=auto, current=current, mission_type=MISSION_TYPE_MISSION),

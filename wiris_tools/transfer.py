@@ -662,10 +662,12 @@ def find_autopilot(link: Link, target_system: int | None, timeout: float):
 
 def upload_file(link: Link, path: str, *, mission_type: int = MISSION_TYPE_MISSION, verify: bool = False,
                 target_system: int | None = None, target_component: int = 1, part: int | None = None,
-                firmware: str | None = None, timeout: float = 10.0,
-                progress: Progress | None = None) -> dict:
-    """Load `path`, upload it (ArduPilot: home as item 0), optionally verify; a summary dict."""
-    items, home = load_for_upload(path, mission_type, part=part, firmware=firmware)
+                firmware: str | None = None, timeout: float = 10.0, progress: Progress | None = None,
+                loaded: tuple[list[MissionItem], tuple[float, float, float] | None] | None = None) -> dict:
+    """Load `path` (or take `loaded`, from load_for_upload), upload it (ArduPilot: home as item 0),
+    optionally verify; a summary dict."""
+    items, home = loaded if loaded is not None else load_for_upload(path, mission_type, part=part,
+                                                                     firmware=firmware)
     hb = find_autopilot(link, target_system, timeout)
     system = hb.get_srcSystem()
     ardupilot = hb.autopilot == mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA

@@ -153,6 +153,7 @@ def test_file_form_writes_atomically(tmp_path):
     (lambda d: d["mission"]["items"][0].__setitem__("type", "FancyItem"), "mission.items[0].type"),
     (lambda d: d["mission"]["items"][1]["params"].__setitem__(4, "47.1"), "mission.items[1].params[4]"),
     (lambda d: d["mission"]["items"][1]["params"].__setitem__(4, 1e12), "mission.items[1].params[4]"),
+    (lambda d: d["mission"]["items"][1]["params"].__setitem__(0, 1e300), "mission.items[1].params[0]"),
     (lambda d: d["mission"].__setitem__("plannedHomePosition", [95, 0, 0]), "mission.plannedHomePosition"),
     (lambda d: d["rallyPoints"]["points"].append([1, 2]), "rallyPoints.points[1]"),
     (lambda d: d["geoFence"]["polygons"][0]["polygon"].pop(), "geoFence.polygons[0]"),

@@ -88,6 +88,7 @@ def test_pymavlink_loader_reads_what_we_write(tmp_path):
     ("QGC WPL 110\n\n# c\n0\t2\t0\t16\t0\t0\t0\t0\t1\t2\t3\t1\n", "w:4", "current"),
     ("QGC WPL 110\n0\t0\t0\t16.5\t0\t0\t0\t0\t1\t2\t3\t1\n", "w:2", "command"),
     ("QGC WPL 110\n0\t0\t0\t16\t0\t0\t0\t0\t300\t2\t3\t1\n", "w:2", "does not fit"),
+    ("QGC WPL 110\n0\t0\t0\t16\t1e300\t0\t0\t0\t1\t2\t3\t1\n", "w:2", "float32"),
 ])
 def test_bad_rows_name_their_line(text, where, msg):
     with pytest.raises(PlanError) as err:

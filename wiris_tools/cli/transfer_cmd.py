@@ -85,11 +85,11 @@ def upload(file: str, kind: str, verify: bool, part: int | None, firmware: str |
     from missions.items import MISSION_TYPES
     from wiris_tools.transfer import load_for_upload, upload_file
 
-    load_for_upload(file, MISSION_TYPES[kind], part=part, firmware=firmware)   # bad files fail before connecting
+    loaded = load_for_upload(file, MISSION_TYPES[kind], part=part, firmware=firmware)  # fails before connecting
     with _link(url, signing_key) as link, _progress(f"upload {kind}", as_json) as progress:
         summary = upload_file(link, file, mission_type=MISSION_TYPES[kind], verify=verify,
-                              target_system=target_system, target_component=target_component, part=part,
-                              firmware=firmware, timeout=timeout, progress=progress)
+                              target_system=target_system, target_component=target_component, timeout=timeout,
+                              progress=progress, loaded=loaded)
     if as_json:
         click.echo(json.dumps(summary, indent=1))
         return
