@@ -26,10 +26,13 @@
 Errors: `PlanError` for overlap out of range, a trigger interval shorter than the camera's minimum
 (hint: the highest speed that works), an area that produces no legs.
 
-Complexity: swath generation O(lines · vertices); route ordering O(cells² · starts) with cells = legs
-for convex areas only when they split (normally cells ≈ number of concave regions); photos O(photos).
-`angle_deg="auto"` multiplies the swath + order cost by the number of candidate angles (≤ ~90).
-Near-linear in the photo count overall: a 100 km² area at 15 m × 8 m plans in seconds.
+Complexity (n = photos, L = lines, V = area vertices, C = boustrophedon cells):
+  swaths O(L·V) vectorised + one union of O(legs) rectangles; route O(legs) plus greedy cell order
+  O(C²·starts) with starts ≤ 2400/C; connections that would cross a hole/notch get a visibility-graph
+  path (built once per part, O(V²) segment tests, parts ≤ 400 vertices); photos O(n) (vectorised per
+  straight segment). angle_deg="auto" ranks ~30–60 candidate angles on bare inside segments, then plans
+  once. Measured on 2 shared cores: 100 km² (785k photos) plans in 4–9 s and measures in ~2 s; a jagged
+  2000-vertex boundary takes ~3 s at a fixed angle, ~30 s with "auto".
 """
 
 from __future__ import annotations
