@@ -218,3 +218,22 @@ def test_lost_final_ack_is_unconfirmed_and_verify_settles_it():
             state["drop"] = 1
             result = client.upload_verified(waypoints(5))
             assert "verified" in result.notes and any("final MISSION_ACK" in n for n in result.notes)
+
+
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+from wiris_tools.transfer import RttEstimator  # noqa: E402
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.floats(min_value=0.0, max_value=10.0), max_size=50),
+       st.floats(min_value=0.001, max_value=0.1), st.floats(min_value=0.2, max_value=3.0))
+def test_rto_stays_between_floor_and_cap_and_above_srtt(samples, floor, cap):
+    est = RttEstimator()
+    for s in samples:
+        est.sample(s)
+    rto = est.rto(floor, cap, 0.25)
+    assert floor <= rto <= cap or (est.srtt is None and rto == min(0.25, cap))
+    if est.srtt is not None and 1.5 * est.srtt <= cap:
+        assert rto >= 1.5 * est.srtt - 1e-12   # never retransmit before a normal round trip is over

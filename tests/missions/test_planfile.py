@@ -235,3 +235,19 @@ def test_mavsdk_imports_what_we_write(tmp_path, autopilot):
     # MAVSDK marks fence and rally items autocontinue=0 (meaningless for them); the rest must match.
     assert same([f.with_(autocontinue=1) for f in res["fence"]], fence_items())
     assert same([r.with_(autocontinue=1) for r in res["rally"]], rally_items())
+
+
+@pytest.mark.peer
+def test_compiled_example_plan_imports_in_mavsdk(tmp_path):
+    """The compiler's .plan output (written through write_plan's file form) is what MAVSDK reads."""
+    import mission_peers
+    from missions.compile import compile_plan
+
+    root = Path(__file__).resolve().parents[2]
+    compiled = compile_plan(str(root / "examples" / "waypoint-inspection.yaml"))
+    target = tmp_path / "w.plan"
+    write_plan(target, compiled)
+    res = mission_peers.mavsdk_import_plan(target.read_text(), tmp_path, autopilot=compiled.firmware)
+    assert res["ok"], res.get("error")
+    mission = res["mission"][1:] if compiled.firmware == "ardupilot" else res["mission"]
+    assert same(mission, list(compiled.items))
