@@ -19,7 +19,8 @@ Both are measured by the same functions (missions.coverage.measure) on photos re
 missions.triggers.simulate_distance_trigger from each planner's own path.
 
 Columns: cov = area covered by ≥ 1 footprint (%), side/front = minimum achieved overlap (%),
-path/LB = path length ÷ (area / spacing), photos/LB = photos ÷ (area / (spacing · trigger distance)),
+path/LB = path length ÷ (area / spacing), time = path/speed + 2·v/a per leg end (a = 2 m/s², the
+angle search's objective), photos/LB = photos ÷ (area / (spacing · trigger distance)),
 out = metres of path outside the area (turnarounds included), cam-out = metres of camera-on legs outside
 the area (flying and shooting over what is not to be surveyed).
 Targets: cov ≥ 99.5 %, side ≥ 69 %, front ≥ 79 % (requested − 1 point), path/LB ≤ 1.10 on convex areas.
@@ -41,7 +42,7 @@ from areas import bench_areas, to_latlon_polygons  # noqa: E402
 from missions.area import build_area  # noqa: E402
 from missions.coverage import measure  # noqa: E402
 from missions.footprint import Footprint, transect_spacing_m, trigger_distance_m  # noqa: E402
-from missions.survey import plan_survey  # noqa: E402
+from missions.survey import estimated_time_s, plan_survey  # noqa: E402
 from missions.swaths import frame  # noqa: E402
 from missions.triggers import TriggerSpan, simulate_distance_trigger  # noqa: E402
 
@@ -139,6 +140,8 @@ def row(name, kind, planner, geom, xy, spans, photos, spacing, trig, legs, secs)
         "front": None if c.min_front_overlap is None else 100 * c.min_front_overlap,
         "path_lb": c.path_ratio, "photos_lb": c.photo_ratio, "photos": c.photo_count,
         "out": c.outside_m, "cam_out": camera_on_outside_m(xy, spans, geom), "legs": legs, "secs": secs,
+        # the angle search's objective, applied to every planner alike: cruise + brake/accelerate per turn
+        "time_min": estimated_time_s(c.path_length_m, 2 * legs, SPEED_MPS) / 60.0,
     }
 
 
@@ -166,12 +169,13 @@ def main(argv: list[str]) -> int:
             secs = time.perf_counter() - t
             rows.append(row(a.name, a.kind, label, geom, p.path_xy, p.camera_spans, p.photos, spacing, trig,
                             len(p.legs), secs))
-    head = ["area", "kind", "planner", "cov %", "side %", "front %", "path/LB", "photos/LB", "out m", "cam-out m", "legs"]
+    head = ["area", "kind", "planner", "cov %", "side %", "front %", "path/LB", "time min", "photos/LB", "out m",
+            "cam-out m", "legs"]
     lines = []
     for r in rows:
         lines.append([r["area"], r["kind"], r["planner"], fmt(r["cov"], ".2f"), fmt(r["side"], ".1f"),
-                      fmt(r["front"], ".1f"), fmt(r["path_lb"], ".3f"), fmt(r["photos_lb"], ".3f"),
-                      fmt(r["out"], ".0f"), fmt(r["cam_out"], ".0f"), str(r["legs"])])
+                      fmt(r["front"], ".1f"), fmt(r["path_lb"], ".3f"), fmt(r["time_min"], ".1f"),
+                      fmt(r["photos_lb"], ".3f"), fmt(r["out"], ".0f"), fmt(r["cam_out"], ".0f"), str(r["legs"])])
     if "--compact" in argv:
         compact(rows)
     elif md:
@@ -199,6 +203,7 @@ def main(argv: list[str]) -> int:
         print(f"  {planner:10s} cov ok {cov_ok}/{n_areas} (min {min(r['cov'] for r in rs):.2f} %), "
               f"side ok {side_ok}/{n_areas}, front ok {front_ok}/{n_areas}, "
               f"path/LB ≤ 1.10 on {ratio_ok}/{len(ratios)} convex (mean {np.mean(ratios):.3f}), "
+              f"est. time {sum(r['time_min'] for r in rs):.0f} min, "
               f"photos {sum(r['photos'] for r in rs)}, outside {sum(r['out'] for r in rs):.0f} m "
               f"(camera on {sum(r['cam_out'] for r in rs):.0f} m), plan time {sum(r['secs'] for r in rs):.2f} s")
     if "--compact" not in argv:
@@ -209,11 +214,13 @@ def main(argv: list[str]) -> int:
 def compact(rows: list[dict]) -> None:
     """One line per area: QGC-style → ours@auto (coverage, overlaps: see the summary)."""
     by = {(r["area"], r["planner"]): r for r in rows}
-    print(f"{'area':20s} {'kind':8s} {'path/LB':>13s} {'photos/LB':>13s} {'out m':>11s} {'cam-out m':>11s}  cov/side/front % (qgc | ours)")
+    print(f"{'area':20s} {'kind':8s} {'path/LB':>13s} {'time min':>11s} {'photos/LB':>13s} {'out m':>11s} "
+          f"{'cam-out m':>11s}  cov/side/front % (qgc | ours)")
     for a in dict.fromkeys(r["area"] for r in rows):
         q, o = by[(a, "qgc@0")], by[(a, "ours@auto")]
         cso = lambda r: f"{r['cov']:.1f}/{fmt(r['side'], '.0f')}/{fmt(r['front'], '.0f')}"  # noqa: E731
-        print(f"{a:20s} {q['kind']:8s} {q['path_lb']:6.3f}→{o['path_lb']:6.3f} {q['photos_lb']:6.3f}→{o['photos_lb']:6.3f} "
+        print(f"{a:20s} {q['kind']:8s} {q['path_lb']:6.3f}→{o['path_lb']:6.3f} {q['time_min']:5.1f}→{o['time_min']:5.1f} "
+              f"{q['photos_lb']:6.3f}→{o['photos_lb']:6.3f} "
               f"{q['out']:5.0f}→{o['out']:5.0f} {q['cam_out']:5.0f}→{o['cam_out']:5.0f}  {cso(q)} | {cso(o)}")
 
 

@@ -138,7 +138,8 @@ def angle_objective(sw: SwathSet, turnaround_m: float, speed_mps: float) -> floa
 
 def best_angle(geometry: Any, across_m: float, spacing_m: float, trigger_m: float, along_m: float,
                turnaround_m: float, speed_mps: float) -> float:
-    """Minimum-objective line azimuth: candidate edge directions and a coarse sweep, then a 1° refinement."""
+    """Minimum-objective line azimuth: candidate edge directions and a coarse sweep ranked on bare inside
+    segments, a 1° refinement, then the best four distinct angles re-ranked on the full swaths."""
     cache: dict[float, float] = {}
 
     def cost(a: float) -> float:
@@ -154,7 +155,21 @@ def best_angle(geometry: Any, across_m: float, spacing_m: float, trigger_m: floa
         for a in (best - step, best + step):
             if cost(a) < cost(best) - 1e-9:
                 best = round(normalise_angle(a), 6)
-    return best
+    # the estimate ignores leg-end rules and repairs, which matter on concave areas: re-rank the best few
+    # distinct angles on the full swaths
+    ranked = sorted(cache, key=lambda a: (cache[a], abs(a)))
+    finalists: list[float] = []
+    for a in [best] + ranked:
+        if all(abs(normalise_angle(a - f)) >= 3.0 for f in finalists):
+            finalists.append(a)
+        if len(finalists) == 4:
+            break
+
+    def full_cost(a: float) -> float:
+        sw = generate_swaths(geometry, a, across_m, spacing_m, trigger_m, along_m)
+        return angle_objective(sw, turnaround_m, speed_mps) if sw.legs else math.inf
+
+    return min(finalists, key=lambda a: (full_cost(a), abs(a)))
 
 
 # ---------------------------------------------------------------------------------------- planning
