@@ -184,3 +184,35 @@ def test_corridor_front_overlap_on_a_straight_line() -> None:
 def test_corridor_errors(line, width, match) -> None:
     with pytest.raises(PlanError, match=match):
         plan_corridor(line, width, FP, 80, 60)
+
+
+def test_exclusion_zone_is_not_photographed_over_at_default_overlap() -> None:
+    from shapely.geometry import LineString
+    area = load_area(DATA / "square.geojson", exclude=[DATA / "substation.geojson"])
+    plan = plan_survey(area, FP, 80, 70, angle_deg=0, turnaround_m=10, speed_mps=6)
+    zone = load_area(DATA / "substation.geojson")
+    lat, lon = zone.projection.to_latlon(*np.asarray(zone.geometry.exterior.coords).T)
+    from shapely.geometry import Polygon
+    excl = Polygon(np.column_stack(area.projection.to_xy(lat, lon))).buffer(-1.0)
+    xy = plan.path_xy
+    on = sum(LineString(xy[s.start_index:s.stop_index + 1]).intersection(excl).length for s in plan.camera_spans)
+    assert on == 0.0
+    assert not any(excl.contains(Point(p.x, p.y)) for p in plan.photos)
+    c = measure(area.geometry, plan.photos, FP)
+    assert c.coverage >= 0.995
+
+
+def test_route_starts_near_home_and_refly_starts_near_the_end_of_pass_one() -> None:
+    pts = _rect(50.10, 14.50, 0.003, 0.004)
+    area = load_area(pts)
+    for corner in pts:
+        plan = plan_survey(area, FP, 80, 70, angle_deg=0, turnaround_m=10, speed_mps=6, start_latlon=tuple(corner))
+        first = plan.waypoints[0]
+        hx, hy = area.projection.point_to_xy(*corner)
+        dists = [math.hypot(w.x - hx, w.y - hy) for w in plan.waypoints if w.kind == "entry"]
+        assert math.hypot(first.x - hx, first.y - hy) <= min(dists) + 25.0     # nearest entry (+ turnaround)
+    plan = plan_survey(area, FP, 80, 70, angle_deg=0, turnaround_m=10, speed_mps=6, refly_90=True)
+    k = next(i for i, l in enumerate(plan.legs) if abs(l.angle_deg) > 45)
+    end1 = plan.waypoints[plan.camera_spans[k - 1].stop_index]
+    start2 = plan.waypoints[plan.camera_spans[k].start_index]
+    assert math.hypot(end1.x - start2.x, end1.y - start2.y) < 120.0    # a corner hop, not across the area
