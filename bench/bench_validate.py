@@ -33,7 +33,7 @@ CORPUS = REPO.parent / "shared" / "corpus" / "cdf"
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--repeat", type=int, default=7)
+    ap.add_argument("--repeat", type=int, default=15)
     args = ap.parse_args()
     files = sorted(CORPUS.rglob("*.xml")) + sorted(CORPUS.rglob("*.xml.xz"))
     raw = [f.read_bytes() for f in files]
@@ -58,14 +58,6 @@ def main() -> None:
         finally:
             engine.schema_hits = real
 
-    def median_s(fn) -> float:
-        times = []
-        for _ in range(args.repeat):
-            t = time.perf_counter()
-            fn()
-            times.append(time.perf_counter() - t)
-        return statistics.median(times)
-
     def xmlschema_always() -> None:
         real = engine.schema_hits
         engine.schema_hits = schema.xmlschema_hits  # no fast path: xmlschema on every file
@@ -74,20 +66,27 @@ def main() -> None:
         finally:
             engine.schema_hits = real
 
+    def medians(*fns) -> list[float]:
+        # interleaved per iteration: a burst of load on the shared machine hits every side alike
+        samples: list[list[float]] = [[] for _ in fns]
+        for _ in range(args.repeat):
+            for i, fn in enumerate(fns):
+                t = time.perf_counter()
+                fn()
+                samples[i].append(time.perf_counter() - t)
+        return [statistics.median(x) for x in samples]
+
     from cdf.xmlsafe import parse_xml
 
     need_xmlschema = sum(not schema.conforms_fast(parse_xml(d, "x")[0]) for d in plain)
-    # interleave the measurements so both sides see the same machine state
-    b1, v1, n1 = median_s(bare), median_s(full), median_s(without_xsd)
-    b2, v2, n2 = median_s(bare), median_s(full), median_s(without_xsd)
-    b, v, n = (b1 + b2) / 2, (v1 + v2) / 2, (n1 + n2) / 2
-    a = median_s(xmlschema_always)
+    b, v, n = medians(bare, full, without_xsd)
+    a = medians(xmlschema_always)[0]
     tracemalloc.start()
     full()
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
     total_kb = sum(len(d) for d in plain) / 1024
-    print(f"corpus: {len(files)} files, {total_kb:.0f} KiB of XML; median of {args.repeat} runs, two rounds")
+    print(f"corpus: {len(files)} files, {total_kb:.0f} KiB of XML; median of {args.repeat} interleaved runs")
     print(f"{'bare lxml parse':<34}{b * 1000:9.2f} ms")
     print(f"{'validate (strict, all rules)':<34}{v * 1000:9.2f} ms")
     print(f"{'validate without the XSD pass':<34}{n * 1000:9.2f} ms")
