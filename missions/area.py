@@ -42,6 +42,7 @@ class LatLonPolygon:
     outer: tuple[tuple[float, float], ...]
     holes: tuple[tuple[tuple[float, float], ...], ...]
     where: str
+    ring_wheres: tuple[str, ...] = ()     # per ring (outer first), e.g. the line of each KML <coordinates>
 
 
 @dataclass(frozen=True)
@@ -219,7 +220,8 @@ def _geojson_polygon(coords: Any, file: str, jpath: str) -> LatLonPolygon:
                                      "WGS84: `ogr2ogr -t_srs EPSG:4326 out.geojson in.geojson`")
             pts.append((lat, lon))
         rings.append(tuple(pts))
-    return LatLonPolygon(rings[0], tuple(rings[1:]), f"{file}: {jpath}")
+    wheres = tuple(f"{file}: {jpath}[{r}]" for r in range(len(rings)))
+    return LatLonPolygon(rings[0], tuple(rings[1:]), f"{file}: {jpath}", wheres)
 
 
 # KML ------------------------------------------------------------------------------------------------------
@@ -259,6 +261,14 @@ def _kml_children(el: Any, name: str) -> list[Any]:
     return [c for c in el if isinstance(c.tag, str) and etree.QName(c).localname == name]
 
 
+def _kml_ring_where(boundary: Any, path: Path) -> str:
+    from lxml import etree
+    for el in boundary.iter():
+        if isinstance(el.tag, str) and etree.QName(el).localname == "coordinates":
+            return f"{path}:{el.sourceline}"
+    return f"{path}:{boundary.sourceline}"
+
+
 def _kml_ring(boundary: Any, path: Path) -> tuple[tuple[float, float], ...]:
     from lxml import etree
     coords_el = None
@@ -286,8 +296,10 @@ def _kml_polygon(poly: Any, path: Path) -> LatLonPolygon:
     outer = _kml_children(poly, "outerBoundaryIs")
     if not outer:
         raise PlanError("Polygon without <outerBoundaryIs>", where=f"{path}:{poly.sourceline}")
-    holes = tuple(_kml_ring(b, path) for b in _kml_children(poly, "innerBoundaryIs"))
-    return LatLonPolygon(_kml_ring(outer[0], path), holes, f"{path}:{poly.sourceline}")
+    inner = _kml_children(poly, "innerBoundaryIs")
+    holes = tuple(_kml_ring(b, path) for b in inner)
+    wheres = tuple(_kml_ring_where(b, path) for b in [outer[0], *inner])
+    return LatLonPolygon(_kml_ring(outer[0], path), holes, f"{path}:{poly.sourceline}", wheres)
 
 
 # ------------------------------------------------------------------------------------- cleaning & checks
@@ -359,13 +371,14 @@ def _project_polygon(p: LatLonPolygon, proj: LocalProjection):
     from shapely.geometry.polygon import orient
     from shapely.validation import explain_validity
 
-    def ring_of(pts, what):
+    def ring_of(pts, what, r):
+        where = p.ring_wheres[r] if r < len(p.ring_wheres) else p.where
         arr = np.asarray(pts, dtype=float).reshape(-1, 2)
-        xy, idx = _clean_ring(arr[:, 0], arr[:, 1], proj, p.where, what)
-        return _check_ring(xy, idx, proj, p.where, what)
+        xy, idx = _clean_ring(arr[:, 0], arr[:, 1], proj, where, what)
+        return _check_ring(xy, idx, proj, where, what)
 
-    outer = ring_of(p.outer, "polygon")
-    holes = [ring_of(h, f"hole {k}") for k, h in enumerate(p.holes)]
+    outer = ring_of(p.outer, "polygon", 0)
+    holes = [ring_of(h, f"hole {k}", k + 1) for k, h in enumerate(p.holes)]
     poly = Polygon(outer, holes)
     if not poly.is_valid:
         raise PlanError(f"polygon is invalid: {explain_validity(poly)}", where=p.where,

@@ -80,7 +80,7 @@ def test_self_intersecting_polygon_says_where_it_crosses() -> None:
     msg = str(e.value)
     assert "intersects itself" in msg and "edge 0→1 crosses edge 2→3" in msg
     assert "lat 50.102" in msg and "lon 14.503" in msg
-    assert e.value.where.endswith("self_intersecting.kml:4")          # line of the <Polygon>
+    assert e.value.where.endswith("self_intersecting.kml:7")          # line of its <coordinates>
 
 
 def test_zero_area() -> None:
@@ -204,3 +204,21 @@ def test_area_spanning_the_globe_is_refused() -> None:
     with pytest.raises(PlanError, match="more than 200 km") as e:
         load_area([[50.1, 14.5], [50.1, 14.51], [0.0, 0.0]])
     assert "0,0" in e.value.hint
+
+
+def test_hole_errors_point_at_the_hole(tmp_path: Path) -> None:
+    f = tmp_path / "h.kml"
+    f.write_text("""<kml xmlns="http://www.opengis.net/kml/2.2"><Placemark><Polygon>
+<outerBoundaryIs><LinearRing><coordinates>14.500,50.100 14.506,50.100 14.506,50.104 14.500,50.104</coordinates></LinearRing></outerBoundaryIs>
+<innerBoundaryIs><LinearRing>
+<coordinates>14.502,50.101 14.504,50.103 14.504,50.101 14.502,50.103</coordinates></LinearRing></innerBoundaryIs>
+</Polygon></Placemark></kml>""")
+    with pytest.raises(PlanError, match="hole 0 intersects itself") as e:
+        load_area(f)
+    assert e.value.where == f"{f}:5"
+    g = tmp_path / "h.geojson"
+    g.write_text('{"type": "Polygon", "coordinates": [[[14.5, 50.1], [14.506, 50.1], [14.506, 50.104], [14.5, 50.104]],'
+                 ' [[14.502, 50.101], [14.504, 50.103], [14.504, 50.101], [14.502, 50.103]]]}')
+    with pytest.raises(PlanError, match="hole 0") as e:
+        load_area(g)
+    assert e.value.where == f"{g}: $.coordinates[1]"
