@@ -215,7 +215,7 @@ def test_hole_errors_point_at_the_hole(tmp_path: Path) -> None:
 </Polygon></Placemark></kml>""")
     with pytest.raises(PlanError, match="hole 0 intersects itself") as e:
         load_area(f)
-    assert e.value.where == f"{f}:5"
+    assert e.value.where == f"{f}:4"          # the hole's <coordinates> line
     g = tmp_path / "h.geojson"
     g.write_text('{"type": "Polygon", "coordinates": [[[14.5, 50.1], [14.506, 50.1], [14.506, 50.104], [14.5, 50.104]],'
                  ' [[14.502, 50.101], [14.504, 50.103], [14.504, 50.101], [14.502, 50.103]]]}')
