@@ -38,6 +38,7 @@ Complexity (n = photos, L = lines, V = area vertices, C = boustrophedon cells):
 from __future__ import annotations
 
 from dataclasses import dataclass
+import functools
 import math
 from typing import Any, Sequence
 
@@ -91,20 +92,49 @@ class SurveyStats:
 
 @dataclass(frozen=True)
 class SurveyPlan:
+    """A planned survey. `photos` and `stats` are derived on first use: the compiler needs only the waypoints
+    and spans (the report re-derives photos from the emitted items), and a 100 km² survey has ~10^6 photos,
+    so building them eagerly made compile time grow with the area instead of with the mission."""
+
     waypoints: tuple[Waypoint, ...]
     camera_spans: tuple[TriggerSpan, ...]
     hover: bool
     trigger_distance_m: float
     spacing_m: float
     angle_deg: float
-    photos: tuple[PhotoPoint, ...]
     legs: tuple[Leg, ...]
-    stats: SurveyStats
     warnings: tuple[PlanWarning, ...]
+    area: Area
+    route: Route
+    lines: int
+    speed_mps: float
 
     @property
     def path_xy(self) -> np.ndarray:
         return np.array([(w.x, w.y) for w in self.waypoints], dtype=float).reshape(-1, 2)
+
+    @functools.cached_property
+    def photos(self) -> tuple[PhotoPoint, ...]:
+        route = self.route
+        if self.hover:
+            raw = [PhotoPoint(p.x, p.y, _leg_heading(route, p.leg), p.leg) for p in route.points if p.kind == KIND_PHOTO]
+        else:
+            raw = simulate_distance_trigger(route.xy, self.camera_spans)
+        pxy = np.array([(p.x, p.y) for p in raw], dtype=float).reshape(-1, 2)
+        plat, plon = _latlon(self.area, pxy)
+        return tuple(PhotoPoint(p.x, p.y, p.heading_deg, p.span, float(a), float(o)) for p, a, o in zip(raw, plat, plon))
+
+    @functools.cached_property
+    def stats(self) -> SurveyStats:
+        length = self.route.length_m
+        hover_stops = sum(1 for p in self.route.points if p.kind == KIND_PHOTO) if self.hover else 0
+        return SurveyStats(
+            area_m2=float(self.area.geometry.area), angle_deg=self.angle_deg, spacing_m=self.spacing_m,
+            trigger_distance_m=self.trigger_distance_m, lines=self.lines, legs=len(self.route.legs),
+            photo_count=len(self.photos), path_length_m=length,
+            leg_length_m=float(sum(l.length_m for l in self.route.legs)),
+            est_time_s=estimated_time_s(length, 2 * len(self.route.legs), self.speed_mps, hover_stops=hover_stops),
+            trigger_interval_s=self.trigger_distance_m / self.speed_mps)
 
 
 # ---------------------------------------------------------------------------------------- objectives
@@ -249,25 +279,9 @@ def plan_survey(area: Area, footprint: Footprint, front_pct: float, side_pct: fl
     lat, lon = _latlon(area, xy)
     wps = tuple(Waypoint(float(p.x), float(p.y), float(a), float(o), p.kind, p.leg)
                 for p, a, o in zip(route.points, lat, lon))
-    if hover:
-        spans: tuple[TriggerSpan, ...] = ()
-        raw = [PhotoPoint(p.x, p.y, _leg_heading(route, p.leg), p.leg) for p in route.points if p.kind == KIND_PHOTO]
-    else:
-        spans = tuple(TriggerSpan(a, b, trig, True, False) for a, b in route.spans)
-        raw = simulate_distance_trigger(xy, spans)
-    pxy = np.array([(p.x, p.y) for p in raw], dtype=float).reshape(-1, 2)
-    plat, plon = _latlon(area, pxy)
-    photos = tuple(PhotoPoint(p.x, p.y, p.heading_deg, p.span, float(a), float(o)) for p, a, o in zip(raw, plat, plon))
-
-    length = route.length_m
-    stats = SurveyStats(
-        area_m2=float(geom.area), angle_deg=angle, spacing_m=spacing, trigger_distance_m=trig,
-        lines=sum(sw.lines for sw in passes), legs=len(route.legs), photo_count=len(photos),
-        path_length_m=length, leg_length_m=float(sum(l.length_m for l in route.legs)),
-        est_time_s=estimated_time_s(length, 2 * len(route.legs), speed_mps,
-                                    hover_stops=len(photos) if hover else 0),
-        trigger_interval_s=interval)
-    return SurveyPlan(wps, spans, hover, trig, spacing, angle, photos, route.legs, stats, tuple(warnings))
+    spans = () if hover else tuple(TriggerSpan(a, b, trig, True, False) for a, b in route.spans)
+    return SurveyPlan(wps, spans, hover, trig, spacing, angle, route.legs, tuple(warnings), area, route,
+                      sum(sw.lines for sw in passes), float(speed_mps))
 
 
 def _leg_heading(route: Route, k: int) -> float:
