@@ -995,8 +995,9 @@ def summary_lines(rep: dict) -> list[str]:
 def format_report(rep: dict) -> str:
     """The human-readable report of `wiris mission check`."""
     rows = [("plan", rep["plan"]), ("firmware", f"{rep['firmware']} {rep['frame']}"),
-            ("mission items", f"{rep['mission_items']} (limit {rep['item_limit']}; parts: "
-                              f"{', '.join(str(n) for n in rep['part_items'])})"),
+            ("mission items", f"{rep['mission_items']} (limit {rep['item_limit']}; "
+                              + ("fits in one upload)" if rep["parts"] == 1 else
+                                 f"{rep['parts']} parts of {', '.join(str(n) for n in rep['part_items'])} items)")),
             ("path length", f"{rep['path_length_m']:.0f} m (climb {rep['climb_m']:.0f} m)"),
             ("flight time", f"{rep['flight_time_s'] / 60:.1f} min (QGC's estimate: {rep['flight_time_qgc_s'] / 60:.1f} min)"),
             ("highest point", f"{rep['max_altitude_m']:.1f} m above home"),
