@@ -1,10 +1,10 @@
 #!/usr/bin/env python3
 """Mission upload over an emulated 57600-baud radio: ours vs the protocol's lower bound vs MAVSDK.
 
-    .venv/bin/python bench/bench_upload.py [--quick] [--trials 200]
+    .venv/bin/python bench/bench_upload.py [--quick] [--reps 3] [--trials 200] [--flavour px4|ardupilot]
 
 Setup per row (items x loss): a PX4-like vehicle_sim (MISSION_REQUEST_INT, re-requests after
-250 ms) behind wiris_tools.linkemu at 57600 baud 8N1 = 5760 bytes/s each way, 20 ms latency each
+250 ms; `--flavour ardupilot`: legacy MISSION_REQUEST, 1 s re-requests, INVALID_SEQUENCE NACKs) behind wiris_tools.linkemu at 57600 baud 8N1 = 5760 bytes/s each way, 20 ms latency each
 way, the given loss on both directions, seeded. Our uploader (`wiris mission upload FILE.plan
 --json`, default spec timeouts; its own measured upload time) and MAVSDK 4.1.0's mission_raw
 uploader (default 0.5 s timeout; the time of upload_mission()) each run in a child process and
@@ -44,7 +44,7 @@ import mission_peers  # noqa: E402
 from missions.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem  # noqa: E402
 from missions.planfile import write_plan  # noqa: E402
 from wiris_tools.linkemu import LinkEmulator, LinkProfile  # noqa: E402
-from wiris_tools.transfer import compare_items  # noqa: E402
+from wiris_tools.transfer import compare_items, home_item  # noqa: E402
 from wiris_tools.vehicle_sim import VehicleSim  # noqa: E402
 
 BAUD = 57600
@@ -85,12 +85,16 @@ def profile(loss: float) -> LinkProfile:
     return LinkProfile.serial(BAUD, latency_s=LATENCY_S, loss=loss)
 
 
-def ours(items: list[MissionItem], loss: float, seed: int, scratch: Path) -> tuple[float | None, str]:
+def ours(items: list[MissionItem], loss: float, seed: int, scratch: Path,
+         flavour: str = "px4") -> tuple[float | None, str]:
     """`wiris mission upload` in a child process, like MAVSDK's uploader, so that neither shares
     the bench process (vehicle_sim + emulator) and its interpreter lock."""
     plan = scratch / f"bench-{len(items)}.plan"
-    plan.write_text(write_plan(items, None, firmware="px4", vehicle="copter"))
-    with VehicleSim(flavour="px4", item_limit=None, heartbeat_s=1.0) as sim, \
+    # `items` is the list on the wire; for ArduPilot its item 0 is the home row, which the file
+    # keeps in plannedHomePosition and `wiris mission upload` puts back in front.
+    plan.write_text(write_plan(items[1:] if flavour == "ardupilot" else items, None, firmware=flavour,
+                               vehicle="copter"))
+    with VehicleSim(flavour=flavour, item_limit=None, heartbeat_s=1.0) as sim, \
             LinkEmulator(sim.port, profile=profile(loss), seed=seed) as emu:
         proc = subprocess.run([str(Path(sys.executable).with_name("wiris")), "mission", "upload", str(plan),
                                "--connect", f"udpout:127.0.0.1:{emu.port}", "--json"],
@@ -105,8 +109,9 @@ def ours(items: list[MissionItem], loss: float, seed: int, scratch: Path) -> tup
         return seconds, "ok"
 
 
-def mavsdk(items: list[MissionItem], loss: float, seed: int, scratch: Path) -> tuple[float | None, str]:
-    with VehicleSim(flavour="px4", item_limit=None, heartbeat_s=1.0) as sim, \
+def mavsdk(items: list[MissionItem], loss: float, seed: int, scratch: Path,
+           flavour: str = "px4") -> tuple[float | None, str]:
+    with VehicleSim(flavour=flavour, item_limit=None, heartbeat_s=1.0) as sim, \
             LinkEmulator(sim.port, profile=profile(loss), seed=seed) as emu:
         try:
             client = mission_peers.MavsdkClient(emu.port, scratch)
@@ -140,24 +145,29 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="100 items only")
     ap.add_argument("--trials", type=int, default=200, help="reliability trials (0 to skip)")
     ap.add_argument("--reps", type=int, default=3, help="runs per row (different seeds); medians are printed")
+    ap.add_argument("--flavour", choices=["px4", "ardupilot"], default="px4",
+                    help="vehicle_sim behaviour: px4 (re-requests after 250 ms) or ardupilot (legacy "
+                         "MISSION_REQUEST, re-requests after 1 s, INVALID_SEQUENCE NACKs)")
     a = ap.parse_args()
     sizes = (100,) if a.quick else (100, 500)
     rate = BAUD / 10.0
     print(f"# link: {BAUD} baud 8N1 = {rate:.0f} B/s each way, {LATENCY_S * 1000:.0f} ms latency each way; "
-          "vehicle: vehicle_sim px4 flavour")
+          f"vehicle: vehicle_sim {a.flavour} flavour")
     print("| items | loss | ours s | bound s | ours/bound | mavsdk s | ours/mavsdk |")
     print("|---:|---:|---:|---:|---:|---:|---:|")
     notes = []
     with tempfile.TemporaryDirectory(prefix="bench-upload-") as tmp:
         for n in sizes:
             items = mission(n)
+            if a.flavour == "ardupilot":
+                items = [home_item(None)] + items   # the same n+1 items on the wire for both uploaders
             bound = lower_bound_s(items, rate, LATENCY_S)
             for loss in (0.0, 0.05, 0.20):
                 runs_ours, runs_sdk = [], []
                 for rep in range(a.reps):
                     seed = 1000 * rep + n + int(loss * 100)   # the same seed for both uploaders
-                    t_ours, s_ours = ours(items, loss, seed, Path(tmp))
-                    t_sdk, s_sdk = mavsdk(items, loss, seed, Path(tmp))
+                    t_ours, s_ours = ours(items, loss, seed, Path(tmp), a.flavour)
+                    t_sdk, s_sdk = mavsdk(items, loss, seed, Path(tmp), a.flavour)
                     runs_ours.append(t_ours)
                     runs_sdk.append(t_sdk)
                     for who, s in (("ours", s_ours), ("mavsdk", s_sdk)):
