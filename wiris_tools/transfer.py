@@ -5,6 +5,12 @@
     items, result = client.download(mission_type=MISSION_TYPE_MISSION)
     result = client.upload_verified(items)          # upload + read-back, field by field
 
+Files (what `wiris mission upload/download` call): load_for_upload(path, type) reads a .plan,
+a WPL 110 file or a capture plan (compiled with missions.compile); upload_file(link, path, ...)
+puts the file's home in as item 0 when the vehicle's HEARTBEAT says ArduPilot (as QGC and MAVSDK
+do); download_file(link, out) splits ArduPilot's item 0 off as the file's home and writes .plan
+(mission, fence, rally) or .waypoints atomically.
+
 Only MISSION_ITEM_INT is sent. Requests may come as MISSION_REQUEST_INT or the legacy
 MISSION_REQUEST (ArduPilot's own request path still sends the legacy one); both get the INT item.
 
