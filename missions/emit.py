@@ -93,9 +93,11 @@ def _do(command: int, p1: float = 0.0, p2: float = 0.0, p3: float = 0.0, p4: flo
 
 def _nav(command: int, lat: float, lon: float, alt: float, p1: float = 0.0, p2: float = 0.0, p3: float = 0.0,
          p4: float = NAN, comment: str = "") -> MissionItem:
+    # ArduPilot stores mission altitudes in whole centimetres: a finer altitude reads back different and
+    # would fail an upload's --verify, so emit what the vehicle will hold.
     return MissionItem(command=command, frame=FRAME_GLOBAL_RELATIVE_ALT, param1=float(p1), param2=float(p2),
-                       param3=float(p3), param4=float(p4), x=deg_to_e7(lat), y=deg_to_e7(lon), z=float(alt),
-                       comment=comment)
+                       param3=float(p3), param4=float(p4), x=deg_to_e7(lat), y=deg_to_e7(lon),
+                       z=round(float(alt), 2), comment=comment)
 
 
 class Emitter:
