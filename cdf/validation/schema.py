@@ -154,14 +154,16 @@ def _canonical_paths() -> list[str]:
 
 def _build_violation_xpath() -> str:
     """One XPath 1.0 expression, evaluated in C by libxml2, that is true when the document may break the
-    XSD: a CDF element outside the places the XSD allows (counted: every CDF element in the document vs
-    those at canonical paths; CDF names inside unknown elements count as misplaced, which is stricter than
-    the XSD's skip and so still safe), a child over its maxOccurs, a text element with non-text children,
-    a bad parameter flag or decimalPlaces, or a processing instruction."""
+    XSD: fewer CDF elements at canonical paths than `cdf_count` (the number of CDF elements anywhere,
+    passed in as $cdf_count: a CDF element elsewhere, even inside an unknown element, where the XSD would
+    skip it, counts as misplaced, which is stricter and so still safe), a child over its maxOccurs, a text
+    element with non-text children, a bad parameter flag or decimalPlaces, or a processing instruction.
+
+    Written for libxml2's speed: absolute paths touch only the nodes on them, while each //name walks the
+    whole document; a sum of count()s avoids merging and sorting one big node set (measured: the union
+    of the misplaced paths costs twice the sum; for the small node sets below a union is cheaper)."""
     paths = _canonical_paths()
-    # //name is a fast name test in libxml2; //*[self::a or self::b ...] is 50x slower
-    everywhere = " + ".join(f"count(//{t})" for t in sorted(_CDF_TAGS))
-    misplaced = f"{everywhere} != count({' | '.join(paths)})"
+    misplaced = f"$cdf_count != {' + '.join(f'count({p})' for p in paths)}"
     too_many = []
     for path in paths:
         capped = [c for c, n in sorted(_COMPLEX.get(path.rsplit("/", 1)[1], {}).items()) if n == 1]
@@ -194,7 +196,9 @@ def conforms_fast(root) -> bool:
     tree = root.getroottree()
     if tree.docinfo.internalDTD is not None or tree.docinfo.doctype:
         return False  # entity reference nodes are invisible to XPath: let xmlschema judge
-    if _violation_xpath()(root):
+    # lxml's tag-filtered iter() counts in C, 3x faster than XPath's count(//a) + count(//b) + ...
+    cdf_count = sum(1 for _ in root.iter(*_CDF_TAGS))
+    if _violation_xpath()(root, cdf_count=cdf_count):
         return False
     for p in root.iterfind("parameters/parameter"):
         a = p.attrib
