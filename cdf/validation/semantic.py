@@ -88,6 +88,7 @@ class _Params:
         self.elements = elements
         self.by_name: dict[str, object] = {}
         self._typed: dict[str, frozenset | None] = {}
+        self._values: dict[str, list[str] | None] = {}
         # option values repeat (0, 1, 2, ... in every parameter): parse each (text, type) once per document
         self._parsed: dict[tuple[str, str], tuple[int | float | None, str | None]] = {}
         for p in elements:
@@ -116,13 +117,13 @@ class _Params:
         return self._typed[name]
 
     def option_values(self, name: str) -> list[str] | None:
-        p = self.by_name.get(name)
-        if p is None:
-            return None
-        opts = p.find("options")
-        if opts is None:
-            return None
-        return [o.get("value") for o in opts.findall("option") if o.get("value") is not None]
+        """The target's option values (cached like typed_option_values; callers do not mutate it)."""
+        if name not in self._values:
+            p = self.by_name.get(name)
+            opts = p.find("options") if p is not None else None
+            values = None if opts is None else [o.get("value") for o in opts.findall("option")]
+            self._values[name] = None if values is None else [v for v in values if v is not None]
+        return self._values[name]
 
 
 def check_document(root, data: bytes) -> Iterator[Hit]:
@@ -277,6 +278,7 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
     typed_options: list[tuple[object, object]] = []  # (element, typed value or None)
     with_refs = []  # options with children: the only ones _check_option_refs can report on
     stoi = numeric and ptype in STOI_TYPES
+    parsed = params._parsed
     for o in options:
         oname, oval = o.get("name"), o.get("value")
         if oname is None or oval is None:
@@ -284,7 +286,7 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
             yield Hit("CDF123", _line(o), name, f"<option> without {what} (QGC rejects the file, MAVSDK skips the parameter)")
         v = None
         if oval is not None and numeric:
-            v, why = params.parse(oval, ptype)
+            v, why = parsed.get((oval, ptype)) or params.parse(oval, ptype)  # inline cache hit: the hot path
             if why:
                 yield Hit("CDF120", _line(o), name, f"option value: {why}")
             elif stoi and v > STOI_MAX:
@@ -450,13 +452,15 @@ def _check_localization(root, params: _Params, definition) -> Iterator[Hit]:
         if d is not None and d.text:
             texts.add(d.text)
         for o in p.iter("option", "roption"):
-            if o.get("name"):
-                texts.add(o.get("name"))
-            if o.get("value"):
-                structural.add(o.get("value"))
+            oname, oval = o.get("name"), o.get("value")  # each get() is a C call: read once
+            if oname:
+                texts.add(oname)
+            if oval:
+                structural.add(oval)
         for a in ("name", "type", "default"):
-            if p.get(a):
-                structural.add(p.get(a))
+            v = p.get(a)
+            if v:
+                structural.add(v)
         for e in p.iter("exclude", "update"):
             if e.text:
                 structural.add(e.text.strip())
