@@ -8,7 +8,7 @@ from cdf.errors import CdfError
 from cdf.validation.report import Finding, Report
 from cdf.validation.rules import PROFILES, RULES_BY_ID
 from cdf.validation.schema import Hit, schema_hits
-from cdf.validation.semantic import CameraInfo, check_camera, check_document
+from cdf.validation.semantic import CameraInfo, check_camera, check_document, scan_tree
 from cdf.xmlsafe import HTTP_TIMEOUT_S, inflate, parse_xml, read_source
 
 
@@ -21,8 +21,9 @@ def _hits(data: bytes, name: str, camera_info: CameraInfo | None) -> tuple[list[
     hits += [Hit(p.rule, p.line, None, p.message) for p in problems]
     if root is None:
         return hits, 0
-    hits += check_document(root, loaded.data)
-    hits += schema_hits(root)
+    scan = scan_tree(root)  # one walk for the vocabulary rule and the XSD fast path's structure test
+    hits += check_document(root, loaded.data, scan)
+    hits += schema_hits(root, scan.xsd_structure_ok)
     if camera_info is not None:
         hits += check_camera(root, camera_info)
     params = root.find("parameters")

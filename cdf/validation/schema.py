@@ -185,23 +185,37 @@ def _violation_xpath():
     return etree.XPath(_build_violation_xpath())
 
 
-def conforms_fast(root) -> bool:
+_DIGITS = re.compile(r"[0-9]+")
+
+
+def conforms_fast(root, structure_ok: bool | None = None) -> bool:
     """True only if the XSD would report nothing that _map keeps. False means "not sure": run xmlschema.
 
     Structure is checked by one compiled XPath (C speed; it also looks inside unknown elements, which the
-    XSD skips: stricter, so still safe); typed attribute values by Python on the parameters only.
+    XSD skips: stricter, so still safe), unless the caller already knows it from semantic.scan_tree's walk
+    (`structure_ok`, the same test in Python, done while the walk visits every element anyway); typed
+    attribute values by Python on the parameters only.
     """
     if root.tag != "mavlinkcamera":
         return True  # schema_hits does not run on other roots
     tree = root.getroottree()
     if tree.docinfo.internalDTD is not None or tree.docinfo.doctype:
         return False  # entity reference nodes are invisible to XPath: let xmlschema judge
-    # lxml's tag-filtered iter() counts in C, 3x faster than XPath's count(//a) + count(//b) + ...
-    cdf_count = sum(1 for _ in root.iter(*_CDF_TAGS))
-    if _violation_xpath()(root, cdf_count=cdf_count):
+    if structure_ok is None:
+        # lxml's tag-filtered iter() counts in C, 3x faster than XPath's count(//a) + count(//b) + ...
+        cdf_count = sum(1 for _ in root.iter(*_CDF_TAGS))
+        structure_ok = not _violation_xpath()(root, cdf_count=cdf_count)
+    if not structure_ok:
         return False
     for p in root.iterfind("parameters/parameter"):
         a = p.attrib
+        for flag in ("control", "readonly", "writeonly"):  # also in the XPath: scan_tree leaves them here
+            v = a.get(flag)
+            if v is not None and v != "0" and v != "1":
+                return False
+        v = a.get("decimalPlaces")
+        if v is not None and not _DIGITS.fullmatch(v):
+            return False
         ptype = a.get("type")
         if ptype is None:
             continue
@@ -212,9 +226,10 @@ def conforms_fast(root) -> bool:
     return True
 
 
-def schema_hits(root) -> list[Hit]:
-    """XSD findings for a document whose root is <mavlinkcamera> (other roots: CDF101, semantic.py)."""
-    if root.tag != "mavlinkcamera" or conforms_fast(root):
+def schema_hits(root, structure_ok: bool | None = None) -> list[Hit]:
+    """XSD findings for a document whose root is <mavlinkcamera> (other roots: CDF101, semantic.py).
+    `structure_ok`: see conforms_fast."""
+    if root.tag != "mavlinkcamera" or conforms_fast(root, structure_ok):
         return []
     return xmlschema_hits(root)
 

@@ -126,7 +126,8 @@ class _Params:
         return self._values[name]
 
 
-def check_document(root, data: bytes) -> Iterator[Hit]:
+def check_document(root, data: bytes, scan: TreeScan | None = None) -> Iterator[Hit]:
+    """All Python checks of one parsed document; `scan` is scan_tree(root) when the caller has it."""
     yield from _check_encoding(data)
     if root.tag != "mavlinkcamera":
         yield Hit("CDF101", _line(root), None,
@@ -147,7 +148,10 @@ def check_document(root, data: bytes) -> Iterator[Hit]:
     for p in elements:
         yield from _check_parameter(p, params, seen)
     yield from _check_localization(root, params, definition)
-    yield from _check_vocabulary(root)
+    if scan is not None:
+        yield from scan.vocabulary
+    else:
+        yield from _check_vocabulary(root)
 
 
 def _check_encoding(data: bytes) -> Iterator[Hit]:
@@ -535,16 +539,48 @@ def _check_vocabulary(root) -> Iterator[Hit]:
 _WALK_ENTRY: dict[str, tuple[frozenset[str], bool]] = {t: (v[1], t in TEXT_ELEMENTS) for t, v in VOCABULARY.items()}
 
 
-def _vocabulary_walk(root) -> Iterator[Hit]:
+@dataclass(frozen=True)
+class TreeScan:
+    """What one walk over the tree found: the vocabulary findings (CDF211) and whether the structure is
+    one mavlinkcamera.xsd accepts (every CDF element where the XSD allows it, within maxOccurs, nothing
+    inside text elements, no processing instruction). xsd_structure_ok=True lets schema.conforms_fast
+    skip its structural XPath; False only means "not sure"."""
+
+    vocabulary: tuple[Hit, ...]
+    xsd_structure_ok: bool
+
+
+def scan_tree(root) -> TreeScan:
+    """One walk serving two checks that would otherwise each traverse the document (the vocabulary rule
+    and the XSD fast path's structure test); tests/cdf/test_validate_speed.py checks its structure
+    verdict against the XPath statement in schema.py."""
+    hits = list(_vocabulary_walk(root, structure := []))
+    return TreeScan(tuple(hits), not structure)
+
+
+def _vocabulary_walk(root, structure: list | None = None) -> Iterator[Hit]:
+    """CDF211 findings; when `structure` is a list, appends to it a reason whenever the structure may
+    break the XSD (see TreeScan), following schema._COMPLEX along the canonical paths."""
     # Hot loop over every element: each lxml property read costs a C call, so the common case (known
     # attributes, whitespace-only text) is settled with one subset test and str.isspace (which, unlike
     # strip(), allocates nothing); the messages are built only when a finding fires. Children come as
     # one slice (el[:] builds the list in C, about 3x cheaper than iterating the element); text
     # elements rarely have children, and len() says so without building anything.
+    from lxml.etree import PI
+
+    from cdf.validation.schema import _COMPLEX
+
+    track = structure is not None
+    if track:
+        if root.tag != "mavlinkcamera":
+            structure.append("root")
+        elif next(root.itersiblings(PI), None) is not None or \
+                next(root.itersiblings(PI, preceding=True), None) is not None:
+            structure.append("processing instruction outside the root")
     reported_attrs: set[tuple[str, str]] = set()
-    stack = [root]
+    stack = [(root, track and not structure)]  # (element, at a path the XSD allows)
     while stack:
-        el = stack.pop()
+        el, canonical = stack.pop()
         tag = el.tag
         entry = _WALK_ENTRY.get(tag)
         if entry is None:
@@ -560,17 +596,23 @@ def _vocabulary_walk(root) -> Iterator[Hit]:
         if simple:
             if not len(el):
                 continue
+            if canonical:
+                structure.append(f"<{tag}> has children")
             for c in el[:]:
                 ctag = c.tag
                 if ctag in CDF_TAGS:
-                    stack.append(c)
+                    stack.append((c, False))
                 elif isinstance(ctag, str):
+                    if track:
+                        _check_unknown_subtree(c, structure, PI)
                     yield _unknown_element(c, el)
             continue
         text = el.text
         if text and not text.isspace():
             yield Hit("CDF211", _line(el), _param_name(el), f"stray text {text.strip()[:30]!r} inside <{tag}> "
                                                             "(ignored by all parsers)")
+        allowed = _COMPLEX.get(tag, _NOTHING) if canonical else _NOTHING
+        capped_seen: set[str] = set()
         for c in el[:]:
             tail = c.tail
             if tail and not tail.isspace():
@@ -578,9 +620,31 @@ def _vocabulary_walk(root) -> Iterator[Hit]:
                                                                f"<{tag}> (ignored by all parsers)")
             ctag = c.tag
             if ctag in CDF_TAGS:
-                stack.append(c)
+                ok = ctag in allowed
+                if track:
+                    if not ok:
+                        structure.append(f"<{ctag}> misplaced")
+                    elif allowed[ctag] == 1:
+                        if ctag in capped_seen:
+                            structure.append(f"<{ctag}> more than once")
+                        capped_seen.add(ctag)
+                stack.append((c, ok))
             elif isinstance(ctag, str):  # not a comment or processing instruction
+                if track:
+                    _check_unknown_subtree(c, structure, PI)
                 yield _unknown_element(c, el)
+            elif track and ctag is PI:
+                structure.append("processing instruction")
+
+
+_NOTHING: dict[str, int] = {}
+
+
+def _check_unknown_subtree(el, structure: list, PI) -> None:
+    # the walk does not enter unknown elements; a CDF element or processing instruction inside one
+    # still makes the structure doubtful (the XPath version counts them too)
+    if next(el.iter(PI, *CDF_TAGS), None) is not None:
+        structure.append(f"CDF element or processing instruction inside <{el.tag}>")
 
 
 def _unknown_element(c, parent) -> Hit:

@@ -8,6 +8,7 @@ documents. No timing is asserted here: bench/bench_validate.py measures speed.
 
 from __future__ import annotations
 
+import lzma
 from pathlib import Path
 
 import pytest
@@ -15,9 +16,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from lxml import etree
 
-from cdf.validation import engine, schema
+from cdf.validation import engine, schema, semantic
 from cdf.validation.rules import PROFILES
 from cdf.validate import validate_bytes
+from cdf.xmlsafe import parse_xml
 
 def _sibling(name: str):
     """The mutation strategy of test_validate_schema.py (tests/cdf is not a package, so load it by path)."""
@@ -38,7 +40,8 @@ FILES = sorted(CORPUS.rglob("*.xml")) + sorted(CORPUS.rglob("*.xml.xz"))
 def _both(data: bytes, name: str, profile: str, monkeypatch):
     fast = validate_bytes(data, name, profile)
     with monkeypatch.context() as m:
-        m.setattr(engine, "schema_hits", schema.xmlschema_hits)  # no fast path: xmlschema on every document
+        # no fast path: xmlschema on every document
+        m.setattr(engine, "schema_hits", lambda root, _structure_ok=None: schema.xmlschema_hits(root))
         slow = validate_bytes(data, name, profile)
     return fast, slow
 
@@ -63,3 +66,33 @@ def test_mutated_reports_equal_the_xmlschema_path(ops, declare, monkeypatch):
     data = (b'<?xml version="1.0" encoding="UTF-8"?>\n' if declare else b"") + etree.tostring(root)
     fast, slow = _both(data, "m.xml", "strict", monkeypatch)
     assert fast == slow, data
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(ops=st.lists(mutation, min_size=0, max_size=6))
+def test_scan_structure_verdict_equals_the_xpath(ops):
+    # two independent statements of the XSD's structure (scan_tree's walk, schema.py's XPath) agree
+    root = mutate(etree.fromstring(BASE), ops)
+    scan = semantic.scan_tree(root)
+    assert schema.conforms_fast(root, scan.xsd_structure_ok) == schema.conforms_fast(root), etree.tostring(root)
+    assert list(scan.vocabulary) == list(semantic._vocabulary_walk(root))
+
+
+def test_scan_structure_verdict_on_the_corpus():
+    for path in FILES:
+        root = parse_xml(path.read_bytes() if path.suffix == ".xml" else lzma.decompress(path.read_bytes()),
+                         path.name)[0]
+        assert schema.conforms_fast(root, semantic.scan_tree(root).xsd_structure_ok) == schema.conforms_fast(root)
+
+
+@pytest.mark.parametrize("doc", [
+    BASE.replace(b"<description>p</description>", b"<description>p<?pi x?></description>"),
+    BASE.replace(b"</mavlinkcamera>", b"</mavlinkcamera><?pi x?>"),
+    BASE.replace(b"<updates>", b"<x><option/></x><updates>"),
+    BASE.replace(b"<model>m</model>", b"<model>m</model><model>n</model>"),
+    BASE.replace(b"<exclusions>", b"<exclusions><exclusions/>"),
+])
+def test_scan_structure_doubts(doc):
+    root = etree.fromstring(doc)
+    assert not semantic.scan_tree(root).xsd_structure_ok
+    assert not schema.conforms_fast(root)
