@@ -611,6 +611,8 @@ def _vocabulary_walk(root, structure: list | None = None) -> Iterator[Hit]:
         if text and not text.isspace():
             yield Hit("CDF211", _line(el), _param_name(el), f"stray text {text.strip()[:30]!r} inside <{tag}> "
                                                             "(ignored by all parsers)")
+        if not len(el):
+            continue  # a leaf (most options, roptions, strings): nothing more to look at
         allowed = _COMPLEX.get(tag, _NOTHING) if canonical else _NOTHING
         capped_seen: set[str] = set()
         for c in el[:]:
@@ -620,15 +622,15 @@ def _vocabulary_walk(root, structure: list | None = None) -> Iterator[Hit]:
                                                                f"<{tag}> (ignored by all parsers)")
             ctag = c.tag
             if ctag in CDF_TAGS:
-                ok = ctag in allowed
+                max_occurs = allowed.get(ctag)
                 if track:
-                    if not ok:
+                    if max_occurs is None:
                         structure.append(f"<{ctag}> misplaced")
-                    elif allowed[ctag] == 1:
+                    elif max_occurs == 1:
                         if ctag in capped_seen:
                             structure.append(f"<{ctag}> more than once")
                         capped_seen.add(ctag)
-                stack.append((c, ok))
+                stack.append((c, max_occurs is not None))
             elif isinstance(ctag, str):  # not a comment or processing instruction
                 if track:
                     _check_unknown_subtree(c, structure, PI)
