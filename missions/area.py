@@ -22,7 +22,7 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 
 from missions.errors import PlanError
-from missions.geo import LocalProjection
+from missions.geo import LocalProjection, leaf_parts
 
 MAX_AREA_FILE_BYTES = 20 * 1024 * 1024   # a 20 MB boundary file is already ~500k vertices
 MAX_VERTICES = 200_000
@@ -389,17 +389,7 @@ def _project_polygon(p: LatLonPolygon, proj: LocalProjection):
 def _polygonal(g: Any) -> Any:
     """Only the areal parts of a shapely result (differences can leave lines and points behind)."""
     from shapely.geometry import MultiPolygon
-    parts = []
-    stack = [g]
-    while stack:
-        h = stack.pop()
-        if h.is_empty:
-            continue
-        if h.geom_type == "Polygon":
-            if h.area >= MIN_AREA_M2:
-                parts.append(h)
-        elif hasattr(h, "geoms"):
-            stack.extend(h.geoms)
+    parts = [h for h in leaf_parts(g, "Polygon") if h.area >= MIN_AREA_M2]
     if not parts:
         return MultiPolygon()
     return parts[0] if len(parts) == 1 else MultiPolygon(parts)

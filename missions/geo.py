@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import math
-from typing import Iterable, Sequence
+from typing import Any, Iterable, Iterator, Sequence
 
 import numpy as np
 
@@ -28,6 +28,20 @@ MAX_ABS_LAT_DEG = 85.0
 # An aeqd plane is accurate to 1e-5 within 50 km of its centre; a single survey larger than this is
 # certainly a unit mistake (a projected CRS read as degrees) or should be split into several plans.
 MAX_EXTENT_M = 200_000.0
+
+
+def leaf_parts(g: Any, geom_type: str) -> Iterator[Any]:
+    """The non-empty parts of type `geom_type` ("Polygon", "LineString") of a shapely result, however
+    deeply nested in multi-geometries and collections (clipping and differences return any mix)."""
+    stack = [g]
+    while stack:
+        h = stack.pop()
+        if h.is_empty:
+            continue
+        if h.geom_type == geom_type:
+            yield h
+        elif hasattr(h, "geoms"):
+            stack.extend(h.geoms)
 
 
 def unwrap_lons(lons: Sequence[float], ref: float | None = None) -> np.ndarray:

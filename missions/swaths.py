@@ -40,6 +40,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from missions.geo import leaf_parts
+
 # Aircraft cross-track error of a GNSS multirotor is ~0.5–1 m; the outermost footprints reach this far
 # past the boundary so that the edge stays covered when the line is flown slightly inside.
 DEFAULT_EDGE_MARGIN_M = 0.5
@@ -119,18 +121,11 @@ def line_offsets(width_m: float, across_m: float, spacing_m: float, edge_margin_
 def _intervals(g: Any) -> list[tuple[float, float]]:
     """v-intervals of the line pieces of a (rotated) intersection result."""
     out = []
-    stack = [g]
-    while stack:
-        h = stack.pop()
-        if h.is_empty:
-            continue
-        if h.geom_type == "LineString":
-            ys = [c[1] for c in h.coords]
-            a, b = min(ys), max(ys)
-            if b - a > _EPS:
-                out.append((a, b))
-        elif hasattr(h, "geoms"):
-            stack.extend(h.geoms)
+    for h in leaf_parts(g, "LineString"):
+        ys = [c[1] for c in h.coords]
+        a, b = min(ys), max(ys)
+        if b - a > _EPS:
+            out.append((a, b))
     out.sort()
     merged: list[list[float]] = []
     for a, b in out:
@@ -142,18 +137,7 @@ def _intervals(g: Any) -> list[tuple[float, float]]:
 
 
 def _polys(g: Any) -> list[Any]:
-    out = []
-    stack = [g]
-    while stack:
-        h = stack.pop()
-        if h.is_empty:
-            continue
-        if h.geom_type == "Polygon":
-            if h.area > _EPS:
-                out.append(h)
-        elif hasattr(h, "geoms"):
-            stack.extend(h.geoms)
-    return out
+    return [h for h in leaf_parts(g, "Polygon") if h.area > _EPS]
 
 
 def _snap(a: float, b: float, outer_a: bool, outer_b: bool, trigger_m: float, inward_ok: bool) -> tuple[float, float]:
