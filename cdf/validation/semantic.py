@@ -54,6 +54,7 @@ _NAME_OK = re.compile(r"[ -~]{1,16}")
 _NAME_STYLE = re.compile(r"[A-Z0-9_]+")
 _COND_TEST = re.compile(r"([A-Za-z0-9_\-]+)(!=|=|>|<)(\S+)")
 _LOCALE = re.compile(r"[a-z]{2}_[A-Z]{2}")
+_MARKUP = re.compile(r'[&<>"]')
 _ENCODING = re.compile(rb"<\?xml[^>]*encoding\s*=\s*[\"']([A-Za-z0-9._-]+)[\"']")
 
 
@@ -448,14 +449,16 @@ def _check_condition(cond: str, pr, name, params: _Params) -> Iterator[Hit]:
 
 @functools.lru_cache(maxsize=1)
 def _localization_xpaths():
-    """(option/roption names, their values and the parameters' name/type/default, exclude/update
-    elements) of the <parameter> children of a <parameters> section, at any depth."""
+    """(first <description> elements, option/roption names, their values and the parameters'
+    name/type/default, exclude/update elements) of the <parameter> children of a <parameters> section,
+    at any depth."""
     from lxml import etree
 
     def compile_(expr: str):
         return etree.XPath(expr, smart_strings=False)  # plain str results: nothing keeps the tree alive
 
-    return (compile_("parameter//option/@name | parameter//roption/@name"),
+    return (compile_("parameter/description[1]"),
+            compile_("parameter//option/@name | parameter//roption/@name"),
             compile_("parameter//option/@value | parameter//roption/@value"
                      " | parameter/@name | parameter/@type | parameter/@default"),
             compile_("parameter//exclude | parameter//update"))
@@ -469,15 +472,13 @@ def _check_localization(root, params: _Params, definition) -> Iterator[Hit]:
         yield Hit("CDF210", _line(locs[1]), None, "more than one <localization> (QGC uses the first)")
     texts = set()
     structural = set()
-    for p in params.elements:
-        d = p.find("description")
-        if d is not None and d.text:
-            texts.add(d.text)
     if params.elements:
-        # the same sets as a loop over each parameter's attributes and option/roption/exclude/update
-        # descendants, gathered by XPath in C: thousands of lxml calls fewer on a localized file
+        # the same sets as a loop over each parameter's first <description>, its attributes and its
+        # option/roption/exclude/update descendants, gathered by XPath in C: thousands of lxml calls
+        # fewer on a localized file
         section = params.elements[0].getparent()
-        names, values, refs = _localization_xpaths()
+        descriptions, names, values, refs = _localization_xpaths()
+        texts.update(d.text for d in descriptions(section) if d.text)
         texts.update(v for v in names(section) if v)
         structural.update(v for v in values(section) if v)
         structural.update(e.text.strip() for e in refs(section) if e.text)
@@ -493,7 +494,7 @@ def _check_localization(root, params: _Params, definition) -> Iterator[Hit]:
         elif not _LOCALE.fullmatch(lname):
             yield Hit("CDF210", _line(loc), None, f"locale name {lname!r} is not ll_CC (e.g. de_DE): "
                                                   "QGC matches the full name or its first 3 characters")
-        unmatched: list[tuple[int | None, str]] = []
+        unmatched: list[tuple[object, str]] = []  # (element, original); only the first one's line is used
         for s in loc.findall("strings"):
             orig, trans = s.get("original"), s.get("translated")
             if orig is None or trans is None:
@@ -503,13 +504,13 @@ def _check_localization(root, params: _Params, definition) -> Iterator[Hit]:
                 yield Hit("CDF210", _line(s), None, f"original {orig!r} also occurs as a name/value/model text: QGC's "
                                                     "byte replacement on the whole file would change it too")
             elif orig not in texts:
-                unmatched.append((_line(s), orig))
-            if any(c in orig + trans for c in "&<>\""):
+                unmatched.append((s, orig))
+            if _MARKUP.search(orig) or _MARKUP.search(trans):
                 yield Hit("CDF210", _line(s), None, "original/translated contain &, <, > or \" "
                                                     "(QGC replaces raw bytes: such strings never match or break XML)")
         if unmatched:
             shown = ", ".join(repr(o) for _l, o in unmatched[:5]) + (", ..." if len(unmatched) > 5 else "")
-            yield Hit("CDF210", unmatched[0][0], None, f"locale {lname}: {len(unmatched)} original string(s) match "
+            yield Hit("CDF210", _line(unmatched[0][0]), None, f"locale {lname}: {len(unmatched)} original string(s) match "
                                                        f"no description or option name: {shown}")
 
 
