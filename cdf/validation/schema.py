@@ -208,19 +208,19 @@ def conforms_fast(root, structure_ok: bool | None = None) -> bool:
     if not structure_ok:
         return False
     for p in root.iterfind("parameters/parameter"):
-        a = p.attrib
+        get = p.get  # direct lookups: no attrib proxy per parameter
         for flag in ("control", "readonly", "writeonly"):  # also in the XPath: scan_tree leaves them here
-            v = a.get(flag)
+            v = get(flag)
             if v is not None and v != "0" and v != "1":
                 return False
-        v = a.get("decimalPlaces")
+        v = get("decimalPlaces")
         if v is not None and not _DIGITS.fullmatch(v):
             return False
-        ptype = a.get("type")
+        ptype = get("type")
         if ptype is None:
             continue
         for attr in ("default", "min", "max", "step"):
-            v = a.get(attr)
+            v = get(attr)
             if v is not None and not _lexical_ok(v, ptype):
                 return False
     return True

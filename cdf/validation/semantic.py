@@ -50,6 +50,8 @@ CDF_TAGS = frozenset(VOCABULARY)
 _PARAM_ATTRS = VOCABULARY["parameter"][1]
 TEXT_ELEMENTS = frozenset({"model", "vendor", "description", "update", "exclude"})
 
+# set versions of values.py's type tuples: membership is tested per parameter, option and roption
+_NUMERIC, _KNOWN, _STOI = frozenset(NUMERIC_TYPES), frozenset(KNOWN_TYPES), frozenset(STOI_TYPES)
 _NAME_OK = re.compile(r"[ -~]{1,16}")
 _NAME_STYLE = re.compile(r"[A-Z0-9_]+")
 _COND_TEST = re.compile(r"([A-Za-z0-9_\-]+)(!=|=|>|<)(\S+)")
@@ -114,7 +116,7 @@ class _Params:
         if name not in self._typed:
             ttype, values = self.type_of(name), self.option_values(name)
             self._typed[name] = None if values is None else frozenset(
-                parse_typed(v, ttype)[0] for v in values) if ttype in NUMERIC_TYPES else frozenset()
+                parse_typed(v, ttype)[0] for v in values) if ttype in _NUMERIC else frozenset()
         return self._typed[name]
 
     def option_values(self, name: str) -> list[str] | None:
@@ -225,7 +227,7 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
         if ptype == "elapsedseconds":
             yield Hit("CDF133", line, name, f"type {ptype_raw!r} is known to QGC only (MAVSDK and MAVProxy reject "
                                             "the file); use uint32 with unit=\"s\"")
-        elif ptype not in KNOWN_TYPES:
+        elif ptype not in _KNOWN:
             yield Hit("CDF110", line, name, f"unknown type {ptype_raw!r} (QGC and MAVSDK reject the file)")
         elif ptype_raw != ptype:
             yield Hit("CDF111", line, name, f"type {ptype_raw!r} is not lower case (MAVSDK rejects the file)")
@@ -265,14 +267,14 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
     if not _PARAM_ATTRS.issuperset(a) and any(k.lower() == "decimalplaces" and k != "decimalPlaces" for k in a):
         yield Hit("CDF207", line, name, "attribute must be spelled decimalPlaces (QGC ignores other spellings)")
 
-    numeric = ptype in NUMERIC_TYPES and ptype_raw == ptype
+    numeric = ptype in _NUMERIC and ptype_raw == ptype
     default_text = a.get("default")
-    if default_text is None and ptype in NUMERIC_TYPES:
+    if default_text is None and ptype in _NUMERIC:
         yield Hit("CDF119", line, name, "no default (MAVSDK silently skips the parameter: 'Default missing')")
     # typed default/min/max/step, None when absent or invalid (invalid ones are the XSD's CDF120)
     typed = {k: params.parse(a[k], ptype)[0] for k in ("default", "min", "max", "step") if k in a} if numeric else {}
     default = typed.get("default")
-    if numeric and ptype in STOI_TYPES:
+    if numeric and ptype in _STOI:
         for attr, v in typed.items():
             if isinstance(v, int) and v > STOI_MAX:
                 yield Hit("CDF121", line, name, f"{attr}={v} exceeds 2147483647 (MAVSDK's std::stoi throws: crash)")
@@ -282,7 +284,7 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
                                                     "not inside <options> (MAVSDK does not see them)")
     options = list(options_el.iterchildren("option")) if options_el is not None else []
     with_refs = []  # options with children: the only ones _check_option_refs can report on
-    stoi = numeric and ptype in STOI_TYPES
+    stoi = numeric and ptype in _STOI
     parsed = params._parsed
     counted: dict[object, int] = {}  # typed option value -> how often
     n_values = 0
@@ -403,7 +405,7 @@ def _check_option_refs(o, p, name, ptype, params: _Params) -> Iterator[Hit]:
                 yield Hit("CDF123", _line(r), name, f"<roption> without {what} "
                                                     "(QGC rejects the file, MAVSDK skips the parameter)")
                 continue
-            if ttype in NUMERIC_TYPES:
+            if ttype in _NUMERIC:
                 v, why = params._parsed.get((rval, ttype)) or params.parse(rval, ttype)
                 if why:
                     yield Hit("CDF120", _line(r), name, f"roption value for {target} ({ttype}): {why}")
