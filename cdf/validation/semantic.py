@@ -398,15 +398,16 @@ def _check_option_refs(o, p, name, ptype, params: _Params) -> Iterator[Hit]:
         if tvalues is None:
             yield Hit("CDF204", _line(pr), name, f"range target {target} has no <options> to restrict")
         typed_targets = params.typed_option_values(target) or frozenset()
-        for r in pr.findall("roption"):
+        numeric_target, parsed = ttype in _NUMERIC, params._parsed
+        for r in pr.iterchildren("roption"):
             rname, rval = r.get("name"), r.get("value")
             if rname is None or rval is None:
                 what = " and ".join(a for a, v in (("name", rname), ("value", rval)) if v is None)
                 yield Hit("CDF123", _line(r), name, f"<roption> without {what} "
                                                     "(QGC rejects the file, MAVSDK skips the parameter)")
                 continue
-            if ttype in _NUMERIC:
-                v, why = params._parsed.get((rval, ttype)) or params.parse(rval, ttype)
+            if numeric_target:
+                v, why = parsed.get((rval, ttype)) or params.parse(rval, ttype)
                 if why:
                     yield Hit("CDF120", _line(r), name, f"roption value for {target} ({ttype}): {why}")
                 elif tvalues is not None and v not in typed_targets:
