@@ -519,7 +519,7 @@ def _check_localization(root, params: _Params, definition) -> Iterator[Hit]:
 
 def _vocabulary_xpath_text() -> str:
     """True when every CDF element sits at a canonical path with only known children and attributes and
-    no stray text: then _check_vocabulary's walk would find nothing (it runs otherwise)."""
+    no stray text: then _vocabulary_walk finds nothing (an independent statement the tests hold it to)."""
     from cdf.validation.schema import _canonical_paths
 
     paths = [(p, p.rsplit("/", 1)[1]) for p in _canonical_paths()]
