@@ -42,19 +42,14 @@ def cli() -> None:
     """Tools for Workswell WIRIS and MicaSense RedEdge cameras on MAVLink drones."""
 
 
-def _register() -> None:
-    for mod, name in (("cdf_cmd", "cdf"), ("mission_cmd", "mission"), ("camera_cmd", "camera"),
-                      ("emulate_cmd", "emulate")):
-        try:
-            module = __import__(f"wiris_tools.cli.{mod}", fromlist=[name])
-        except ModuleNotFoundError as err:
-            if err.name != f"wiris_tools.cli.{mod}":
-                raise
-            continue  # command group not built yet
-        cli.add_command(getattr(module, name))
+# Each group module imports only click at module level, so registering them costs little at start-up.
+from wiris_tools.cli.camera_cmd import camera  # noqa: E402
+from wiris_tools.cli.cdf_cmd import cdf  # noqa: E402
+from wiris_tools.cli.emulate_cmd import emulate  # noqa: E402
+from wiris_tools.cli.mission_cmd import mission  # noqa: E402
 
-
-_register()
+for _command in (cdf, mission, camera, emulate):
+    cli.add_command(_command)
 
 
 def main() -> None:
