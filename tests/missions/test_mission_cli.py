@@ -124,3 +124,22 @@ def test_split_mission_is_a_warning_not_an_error(tmp_path):
     rep = json.loads(r.output)
     assert rep["parts"] > 1 and all(n <= 10 for n in rep["part_items"])
     assert [w["code"] for w in rep["warnings"]].count("mission_split") == 1
+
+
+def test_compile_writes_nothing_when_the_measured_report_has_errors(tmp_path, monkeypatch):
+    """A mission the report finds unflyable (e.g. a part over the item limit) is printed, not written."""
+    import missions.report as report_module
+
+    real_report = report_module.report
+
+    def report_with_an_error(*args, **kwargs):
+        rep = real_report(*args, **kwargs)
+        rep["errors"].append({"code": "item_limit", "message": "part 1 has 701 items, over the limit of 700"})
+        return rep
+
+    monkeypatch.setattr(report_module, "report", report_with_an_error)
+    out = tmp_path / "out"
+    r = run("mission", "compile", small_plan(tmp_path), "-o", out)
+    assert r.exit_code == 1
+    assert "error [item_limit]" in r.output
+    assert not out.exists()

@@ -39,14 +39,15 @@ def compile_cmd(plan: str, out_dir: str, firmware: str | None) -> None:
     compiled = _compile(plan, firmware)
     sim = simulate(compiled)
     rep = report(compiled, sim, plan_path=plan)
-    paths = write_outputs(compiled, out_dir, rep=rep, sim=sim)
     for line in summary_lines(rep):
         click.echo(line)
+    if rep["errors"]:   # a mission that cannot be flown is not written (`check` shows the whole report)
+        click.echo(f"not written: {len(rep['errors'])} error(s)", err=True)
+        raise click.exceptions.Exit(1)
+    paths = write_outputs(compiled, out_dir, rep=rep, sim=sim)
     click.echo("wrote:")
     for p in paths:
         click.echo(f"  {p}")
-    if rep["errors"]:
-        raise click.exceptions.Exit(1)
 
 
 @mission.command("check")
