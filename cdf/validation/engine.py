@@ -21,6 +21,10 @@ def _hits(data: bytes, name: str, camera_info: CameraInfo | None) -> tuple[list[
     hits += [Hit(p.rule, p.line, None, p.message) for p in problems]
     if root is None:
         return hits, 0
+    # lxml creates a Python proxy object each time an element is reached from Python, unless one for it is
+    # still alive; the checks below reach most elements several times (walk, parameters, localization), so
+    # holding one proxy per element for the whole run (built in one C loop) makes the later reads reuse it
+    alive = list(root.iter())
     scan = scan_tree(root)  # one walk for the vocabulary rule and the XSD fast path's structure test
     hits += check_document(root, loaded.data, scan)
     hits += schema_hits(root, scan.xsd_structure_ok)
@@ -30,6 +34,7 @@ def _hits(data: bytes, name: str, camera_info: CameraInfo | None) -> tuple[list[
     if params is None:
         params = next(root.iter("parameters"), None)
     count = len(params.findall("parameter")) if params is not None else 0
+    del alive  # kept until here on purpose (see above)
     return hits, count
 
 

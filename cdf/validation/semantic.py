@@ -452,19 +452,21 @@ def _check_condition(cond: str, pr, name, params: _Params) -> Iterator[Hit]:
 
 @functools.lru_cache(maxsize=1)
 def _localization_xpaths():
-    """(first <description> elements, option/roption names, their values and the parameters'
-    name/type/default, exclude/update elements) of the <parameter> children of a <parameters> section,
-    at any depth."""
+    """XPaths over the <parameter> children of a <parameters> section, at any depth: (first <description>
+    elements, (option names, roption names), (option values, roption values, the parameters'
+    name/type/default), (exclude elements, update elements)); each tuple's results together form one set."""
     from lxml import etree
 
     def compile_(expr: str):
         return etree.XPath(expr, smart_strings=False)  # plain str results: nothing keeps the tree alive
 
+    # no unions ("a | b"): libxml2 sorts a union into document order, which costs more than finding the
+    # nodes, and the results only go into sets
     return (compile_("parameter/description[1]"),
-            compile_("parameter//option/@name | parameter//roption/@name"),
-            compile_("parameter//option/@value | parameter//roption/@value"
-                     " | parameter/@name | parameter/@type | parameter/@default"),
-            compile_("parameter//exclude | parameter//update"))
+            (compile_("parameter//option/@name"), compile_("parameter//roption/@name")),
+            (compile_("parameter//option/@value"), compile_("parameter//roption/@value"),
+             compile_("parameter/@name | parameter/@type | parameter/@default")),
+            (compile_("parameter//exclude"), compile_("parameter//update")))
 
 
 def _check_localization(root, params: _Params, definition) -> Iterator[Hit]:
@@ -482,9 +484,12 @@ def _check_localization(root, params: _Params, definition) -> Iterator[Hit]:
         section = params.elements[0].getparent()
         descriptions, names, values, refs = _localization_xpaths()
         texts.update(d.text for d in descriptions(section) if d.text)
-        texts.update(v for v in names(section) if v)
-        structural.update(v for v in values(section) if v)
-        structural.update(e.text.strip() for e in refs(section) if e.text)
+        for xpath in names:
+            texts.update(v for v in xpath(section) if v)
+        for xpath in values:
+            structural.update(v for v in xpath(section) if v)
+        for xpath in refs:
+            structural.update(e.text.strip() for e in xpath(section) if e.text)
     if definition is not None:
         for tag in ("model", "vendor"):
             el = definition.find(tag)
@@ -591,10 +596,11 @@ def _vocabulary_walk(root, structure: list | None = None) -> Iterator[Hit]:
                 next(root.itersiblings(PI, preceding=True), None) is not None:
             structure.append("processing instruction outside the root")
     reported_attrs: set[tuple[str, str]] = set()
-    stack = [(root, track and not structure)]  # (element, at a path the XSD allows)
+    # (element, its tag, at a path the XSD allows): the parent already read the tag, and every .tag read
+    # is a C call that builds a new str
+    stack = [(root, root.tag, track and not structure)]
     while stack:
-        el, canonical = stack.pop()
-        tag = el.tag
+        el, tag, canonical = stack.pop()
         entry = _WALK_ENTRY.get(tag)
         if entry is None:
             continue
@@ -614,7 +620,7 @@ def _vocabulary_walk(root, structure: list | None = None) -> Iterator[Hit]:
             for c in el[:]:
                 ctag = c.tag
                 if ctag in CDF_TAGS:
-                    stack.append((c, False))
+                    stack.append((c, ctag, False))
                 elif isinstance(ctag, str):
                     if track:
                         _check_unknown_subtree(c, structure, PI)
@@ -624,11 +630,12 @@ def _vocabulary_walk(root, structure: list | None = None) -> Iterator[Hit]:
         if text and not text.isspace():
             yield Hit("CDF211", _line(el), _param_name(el), f"stray text {text.strip()[:30]!r} inside <{tag}> "
                                                             "(ignored by all parsers)")
-        if not len(el):
+        children = el[:]
+        if not children:
             continue  # a leaf (most options, roptions, strings): nothing more to look at
         allowed = _COMPLEX.get(tag, _NOTHING) if canonical else _NOTHING
         capped_seen: set[str] = set()
-        for c in el[:]:
+        for c in children:
             tail = c.tail
             if tail and not tail.isspace():
                 yield Hit("CDF211", _line(c), _param_name(el), f"stray text {tail.strip()[:30]!r} inside "
@@ -643,7 +650,7 @@ def _vocabulary_walk(root, structure: list | None = None) -> Iterator[Hit]:
                         if ctag in capped_seen:
                             structure.append(f"<{ctag}> more than once")
                         capped_seen.add(ctag)
-                stack.append((c, max_occurs is not None))
+                stack.append((c, ctag, max_occurs is not None))
             elif isinstance(ctag, str):  # not a comment or processing instruction
                 if track:
                     _check_unknown_subtree(c, structure, PI)
