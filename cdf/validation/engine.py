@@ -7,6 +7,7 @@ from pathlib import Path
 from cdf.errors import CdfError
 from cdf.validation.report import Finding, Report
 from cdf.validation.rules import PROFILES, RULES_BY_ID
+from cdf.validation import schema, semantic
 from cdf.validation.schema import Hit, schema_hits
 from cdf.validation.semantic import CameraInfo, check_camera, check_document, scan_tree
 from cdf.xmlsafe import HTTP_TIMEOUT_S, inflate, parse_xml, read_source
@@ -36,6 +37,13 @@ def _hits(data: bytes, name: str, camera_info: CameraInfo | None) -> tuple[list[
     count = len(params.findall("parameter")) if params is not None else 0
     del alive  # kept until here on purpose (see above)
     return hits, count
+
+
+def clear_caches() -> None:
+    """Forget the values memoised across files: what a fresh process starts with (the bench starts every
+    run cold)."""
+    semantic._parse.cache_clear()
+    schema._lexical_ok.cache_clear()
 
 
 def validate_bytes(data: bytes, name: str = "<bytes>", profile: str = "strict", *,

@@ -130,6 +130,7 @@ _INT_RANGE = {"bool": (0, 1), "uint8": (0, 255), "int8": (-128, 127), "uint16": 
               "uint64": (0, 2**64 - 1), "int64": (-2**63, 2**63 - 1)}
 
 
+@functools.lru_cache(maxsize=8192)  # the same few values in every parameter of every file
 def _lexical_ok(value: str, ptype: str) -> bool:
     if ptype in _INT_RANGE:
         if not _INT_LEX.fullmatch(value):

@@ -57,6 +57,11 @@ _NAME_STYLE = re.compile(r"[A-Z0-9_]+")
 _COND_TEST = re.compile(r"([A-Za-z0-9_\-]+)(!=|=|>|<)(\S+)")
 _LOCALE = re.compile(r"[a-z]{2}_[A-Z]{2}")
 _MARKUP = re.compile(r'[&<>"]')
+# option values repeat (0, 1, 2, ... in every parameter of every file): parse each (text, type) once per
+# process; the results are immutable (engine.clear_caches forgets them)
+_parse = functools.lru_cache(maxsize=8192)(parse_typed)
+
+
 _ENCODING = re.compile(rb"<\?xml[^>]*encoding\s*=\s*[\"']([A-Za-z0-9._-]+)[\"']")
 
 
@@ -92,20 +97,10 @@ class _Params:
         self.by_name: dict[str, object] = {}
         self._typed: dict[str, frozenset | None] = {}
         self._values: dict[str, list[str] | None] = {}
-        # option values repeat (0, 1, 2, ... in every parameter): parse each (text, type) once per document
-        self._parsed: dict[tuple[str, str], tuple[int | float | None, str | None]] = {}
         for p in elements:
             n = p.get("name")
             if n is not None and n not in self.by_name:
                 self.by_name[n] = p
-
-    def parse(self, text: str, ptype: str) -> tuple[int | float | None, str | None]:
-        """parse_typed, memoised for this document."""
-        key = (text, ptype)
-        got = self._parsed.get(key)
-        if got is None:
-            got = self._parsed[key] = parse_typed(text, ptype)
-        return got
 
     def type_of(self, name: str) -> str | None:
         p = self.by_name.get(name)
@@ -116,7 +111,7 @@ class _Params:
         if name not in self._typed:
             ttype, values = self.type_of(name), self.option_values(name)
             self._typed[name] = None if values is None else frozenset(
-                parse_typed(v, ttype)[0] for v in values) if ttype in _NUMERIC else frozenset()
+                _parse(v, ttype)[0] for v in values) if ttype in _NUMERIC else frozenset()
         return self._typed[name]
 
     def option_values(self, name: str) -> list[str] | None:
@@ -150,7 +145,7 @@ def check_document(root, data: bytes, scan: TreeScan | None = None) -> Iterator[
     seen: dict[str, int | None] = {}
     for p in elements:
         yield from _check_parameter(p, params, seen)
-    yield from _check_localization(root, params, definition)
+    yield from _check_localization(root, params, definition, scan is not None and scan.xsd_structure_ok)
     if scan is not None:
         yield from scan.vocabulary
     else:
@@ -272,7 +267,7 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
     if default_text is None and ptype in _NUMERIC:
         yield Hit("CDF119", line, name, "no default (MAVSDK silently skips the parameter: 'Default missing')")
     # typed default/min/max/step, None when absent or invalid (invalid ones are the XSD's CDF120)
-    typed = {k: params.parse(a[k], ptype)[0] for k in ("default", "min", "max", "step") if k in a} if numeric else {}
+    typed = {k: _parse(a[k], ptype)[0] for k in ("default", "min", "max", "step") if k in a} if numeric else {}
     default = typed.get("default")
     if numeric and ptype in _STOI:
         for attr, v in typed.items():
@@ -285,32 +280,28 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
     options = list(options_el.iterchildren("option")) if options_el is not None else []
     with_refs = []  # options with children: the only ones _check_option_refs can report on
     stoi = numeric and ptype in _STOI
-    parsed = params._parsed
-    counted: dict[object, int] = {}  # typed option value -> how often
-    n_values = 0
+    values: list = []  # the options' typed values, for the duplicate and default checks
     for o in options:
         oname, oval = o.get("name"), o.get("value")
         if oname is None or oval is None:
             what = " and ".join(a for a, v in (("name", oname), ("value", oval)) if v is None)
             yield Hit("CDF123", _line(o), name, f"<option> without {what} (QGC rejects the file, MAVSDK skips the parameter)")
-        v = None
         if oval is not None and numeric:
-            v, why = parsed.get((oval, ptype)) or params.parse(oval, ptype)  # inline cache hit: the hot path
+            v, why = _parse(oval, ptype)
             if why:
                 yield Hit("CDF120", _line(o), name, f"option value: {why}")
-            elif stoi and v > STOI_MAX:
-                yield Hit("CDF121", _line(o), name, f"option value {v} exceeds 2147483647 (MAVSDK's std::stoi throws: crash)")
-        if v is not None:
-            counted[v] = counted.get(v, 0) + 1
-            n_values += 1
+            else:
+                if stoi and v > STOI_MAX:
+                    yield Hit("CDF121", _line(o), name, f"option value {v} exceeds 2147483647 (MAVSDK's std::stoi throws: crash)")
+                values.append(v)
         if len(o):
             with_refs.append(o)
 
-    if len(counted) < n_values:  # some value appears twice
-        dups = sorted(repr(v) for v, n in counted.items() if n > 1)
+    if len(set(values)) < len(values):  # some value appears twice
+        dups = sorted(repr(v) for v in set(values) if values.count(v) > 1)
         yield Hit("CDF124", _line(options_el), name, f"option value(s) {', '.join(dups)} appear more than once")
     if numeric and default is not None and options_el is not None:
-        hits = counted.get(default, 0)
+        hits = values.count(default)
         if hits != 1:
             listed = ", ".join(o.get("value") or "?" for o in options)
             yield Hit("CDF125", line, name,
@@ -398,7 +389,7 @@ def _check_option_refs(o, p, name, ptype, params: _Params) -> Iterator[Hit]:
         if tvalues is None:
             yield Hit("CDF204", _line(pr), name, f"range target {target} has no <options> to restrict")
         typed_targets = params.typed_option_values(target) or frozenset()
-        numeric_target, parsed = ttype in _NUMERIC, params._parsed
+        numeric_target = ttype in _NUMERIC
         for r in pr.iterchildren("roption"):
             rname, rval = r.get("name"), r.get("value")
             if rname is None or rval is None:
@@ -407,7 +398,7 @@ def _check_option_refs(o, p, name, ptype, params: _Params) -> Iterator[Hit]:
                                                     "(QGC rejects the file, MAVSDK skips the parameter)")
                 continue
             if numeric_target:
-                v, why = parsed.get((rval, ttype)) or params.parse(rval, ttype)
+                v, why = _parse(rval, ttype)
                 if why:
                     yield Hit("CDF120", _line(r), name, f"roption value for {target} ({ttype}): {why}")
                 elif tvalues is not None and v not in typed_targets:
@@ -450,26 +441,40 @@ def _check_condition(cond: str, pr, name, params: _Params) -> Iterator[Hit]:
         yield Hit("CDF205", _line(pr), name, f"condition {cond!r}: " + "; ".join(problems))
 
 
-@functools.lru_cache(maxsize=1)
-def _localization_xpaths():
-    """XPaths over the <parameter> children of a <parameters> section, at any depth: (first <description>
-    elements, (option names, roption names), (option values, roption values, the parameters'
-    name/type/default), (exclude elements, update elements)); each tuple's results together form one set."""
+@functools.lru_cache(maxsize=2)
+def _localization_xpaths(canonical: bool):
+    """XPaths over the <parameter> children of a <parameters> section: (first <description> elements,
+    (option names, roption names), (option values, roption values, the parameters' name/type/default),
+    (exclude elements, update elements)); each tuple's results together form one set.
+
+    canonical=False finds the elements at any depth below a parameter; canonical=True only at the places
+    the XSD allows them (the same nodes when scan_tree found the structure sound, and cheaper: libxml2
+    follows child steps instead of visiting every descendant)."""
     from lxml import etree
 
-    def compile_(expr: str):
-        return etree.XPath(expr, smart_strings=False)  # plain str results: nothing keeps the tree alive
+    from cdf.validation.schema import _canonical_paths
 
-    # no unions ("a | b"): libxml2 sorts a union into document order, which costs more than finding the
-    # nodes, and the results only go into sets
+    def compile_(*exprs: str):
+        # no unions of big node sets: libxml2 sorts a union into document order, which costs more than
+        # finding the nodes, and the results only go into sets. smart_strings=False: plain str results
+        return tuple(etree.XPath(e, smart_strings=False) for e in exprs)
+
+    section = "/mavlinkcamera/parameters/"
+    below = [p[len(section):] for p in _canonical_paths() if p.startswith(section + "parameter/")]
+
+    def at(tag: str, step: str = "") -> tuple[str, ...]:
+        if not canonical:
+            return (f"parameter//{tag}{step}",)
+        return tuple(p + step for p in below if p.rsplit("/", 1)[-1] == tag)
+
     return (compile_("parameter/description[1]"),
-            (compile_("parameter//option/@name"), compile_("parameter//roption/@name")),
-            (compile_("parameter//option/@value"), compile_("parameter//roption/@value"),
-             compile_("parameter/@name | parameter/@type | parameter/@default")),
-            (compile_("parameter//exclude"), compile_("parameter//update")))
+            compile_(*at("option", "/@name"), *at("roption", "/@name")),
+            compile_(*at("option", "/@value"), *at("roption", "/@value"),
+                     "parameter/@name | parameter/@type | parameter/@default"),
+            compile_(*at("exclude"), *at("update")))
 
 
-def _check_localization(root, params: _Params, definition) -> Iterator[Hit]:
+def _check_localization(root, params: _Params, definition, structure_ok: bool = False) -> Iterator[Hit]:
     locs = root.findall("localization")
     if not locs:
         return
@@ -482,8 +487,9 @@ def _check_localization(root, params: _Params, definition) -> Iterator[Hit]:
         # option/roption/exclude/update descendants, gathered by XPath in C: thousands of lxml calls
         # fewer on a localized file
         section = params.elements[0].getparent()
-        descriptions, names, values, refs = _localization_xpaths()
-        texts.update(d.text for d in descriptions(section) if d.text)
+        descriptions, names, values, refs = _localization_xpaths(structure_ok)
+        for xpath in descriptions:
+            texts.update(d.text for d in xpath(section) if d.text)
         for xpath in names:
             texts.update(v for v in xpath(section) if v)
         for xpath in values:
@@ -607,11 +613,7 @@ def _vocabulary_walk(root, structure: list | None = None) -> Iterator[Hit]:
         attrs, simple = entry
         keys = el.keys()
         if keys and not attrs.issuperset(keys):
-            for a in keys:
-                if a not in attrs and a.lower() != "decimalplaces" and (tag, a) not in reported_attrs:
-                    reported_attrs.add((tag, a))
-                    yield Hit("CDF211", _line(el), _param_name(el), f"attribute {tag}@{a} is not part of the format "
-                                                                    "(ignored by QGC and MAVSDK)")
+            yield from _unknown_attributes(el, tag, keys, attrs, reported_attrs)
         if simple:
             if not len(el):
                 continue
@@ -650,7 +652,20 @@ def _vocabulary_walk(root, structure: list | None = None) -> Iterator[Hit]:
                         if ctag in capped_seen:
                             structure.append(f"<{ctag}> more than once")
                         capped_seen.add(ctag)
-                stack.append((c, ctag, max_occurs is not None))
+                if len(c):
+                    stack.append((c, ctag, max_occurs is not None))
+                    continue
+                # a leaf (most options, roptions, strings): what the loop above would check, without the
+                # trip over the stack
+                c_attrs, c_simple = _WALK_ENTRY[ctag]
+                keys = c.keys()
+                if keys and not c_attrs.issuperset(keys):
+                    yield from _unknown_attributes(c, ctag, keys, c_attrs, reported_attrs)
+                if not c_simple:
+                    text = c.text
+                    if text and not text.isspace():
+                        yield Hit("CDF211", _line(c), _param_name(c), f"stray text {text.strip()[:30]!r} inside "
+                                                                      f"<{ctag}> (ignored by all parsers)")
             elif isinstance(ctag, str):  # not a comment or processing instruction
                 if track:
                     _check_unknown_subtree(c, structure, PI)
@@ -660,6 +675,14 @@ def _vocabulary_walk(root, structure: list | None = None) -> Iterator[Hit]:
 
 
 _NOTHING: dict[str, int] = {}
+
+
+def _unknown_attributes(el, tag: str, keys: list[str], known: frozenset[str], reported: set) -> Iterator[Hit]:
+    for a in keys:  # each unknown (element, attribute) pair once per document
+        if a not in known and a.lower() != "decimalplaces" and (tag, a) not in reported:
+            reported.add((tag, a))
+            yield Hit("CDF211", _line(el), _param_name(el), f"attribute {tag}@{a} is not part of the format "
+                                                            "(ignored by QGC and MAVSDK)")
 
 
 def _check_unknown_subtree(el, structure: list, PI) -> None:

@@ -368,3 +368,11 @@ def test_stray_text_is_info_with_its_line():
     data = doc(GOOD_PARAMS.replace("<options><option name=\"Photo\"", "<options>oops\n<option name=\"Photo\"", 1))
     (f,) = [f for f in findings(data) if f.rule == "CDF211"]
     assert f.severity == "info" and f.line == 7 and f.parameter == "CAM_MODE" and "oops" in f.message
+
+
+def test_unknown_attribute_is_reported_once_at_its_first_occurrence():
+    data = doc('<parameter name="X" type="uint8" default="0">\n<description>d</description>\n<options>\n'
+               '<option name="a" value="0" colour="red"/>\n<option name="b" value="1" colour="blue"/>\n'
+               "</options>\n</parameter>")
+    (f,) = [f for f in findings(data) if f.rule == "CDF211"]
+    assert f.line == 8 and f.parameter == "X" and "option@colour" in f.message
