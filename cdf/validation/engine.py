@@ -5,9 +5,9 @@ from __future__ import annotations
 from pathlib import Path
 
 from cdf.errors import CdfError
+from cdf.validation import schema, semantic
 from cdf.validation.report import Finding, Report
 from cdf.validation.rules import PROFILES, RULES_BY_ID
-from cdf.validation import schema, semantic
 from cdf.validation.schema import Hit, schema_hits
 from cdf.validation.semantic import CameraInfo, check_camera, check_document, scan_tree
 from cdf.xmlsafe import HTTP_TIMEOUT_S, inflate, parse_xml, read_source

@@ -601,7 +601,8 @@ def _vocabulary_walk(root, structure: list | None = None) -> Iterator[Hit]:
         elif next(root.itersiblings(PI), None) is not None or \
                 next(root.itersiblings(PI, preceding=True), None) is not None:
             structure.append("processing instruction outside the root")
-    reported_attrs: set[tuple[str, str]] = set()
+    # (tag, unknown attribute) -> the element where it occurs first in the document: reported once, there
+    unknown_attrs: dict[tuple[str, str], object] = {}
     # (element, its tag, at a path the XSD allows): the parent already read the tag, and every .tag read
     # is a C call that builds a new str
     stack = [(root, root.tag, track and not structure)]
@@ -613,7 +614,7 @@ def _vocabulary_walk(root, structure: list | None = None) -> Iterator[Hit]:
         attrs, simple = entry
         keys = el.keys()
         if keys and not attrs.issuperset(keys):
-            yield from _unknown_attributes(el, tag, keys, attrs, reported_attrs)
+            _note_unknown_attributes(el, tag, keys, attrs, unknown_attrs)
         if simple:
             if not len(el):
                 continue
@@ -634,7 +635,7 @@ def _vocabulary_walk(root, structure: list | None = None) -> Iterator[Hit]:
                                                             "(ignored by all parsers)")
         children = el[:]
         if not children:
-            continue  # a leaf (most options, roptions, strings): nothing more to look at
+            continue  # a leaf reached through the stack (the root, or a child of a text element)
         allowed = _COMPLEX.get(tag, _NOTHING) if canonical else _NOTHING
         capped_seen: set[str] = set()
         for c in children:
@@ -655,12 +656,12 @@ def _vocabulary_walk(root, structure: list | None = None) -> Iterator[Hit]:
                 if len(c):
                     stack.append((c, ctag, max_occurs is not None))
                     continue
-                # a leaf (most options, roptions, strings): what the loop above would check, without the
-                # trip over the stack
+                # a leaf (most options, roptions, strings): what the stack loop would check for it,
+                # without the trip over the stack
                 c_attrs, c_simple = _WALK_ENTRY[ctag]
                 keys = c.keys()
                 if keys and not c_attrs.issuperset(keys):
-                    yield from _unknown_attributes(c, ctag, keys, c_attrs, reported_attrs)
+                    _note_unknown_attributes(c, ctag, keys, c_attrs, unknown_attrs)
                 if not c_simple:
                     text = c.text
                     if text and not text.isspace():
@@ -672,17 +673,22 @@ def _vocabulary_walk(root, structure: list | None = None) -> Iterator[Hit]:
                 yield _unknown_element(c, el)
             elif track and ctag is PI:
                 structure.append("processing instruction")
+    for (tag, a), el in unknown_attrs.items():
+        yield Hit("CDF211", _line(el), _param_name(el), f"attribute {tag}@{a} is not part of the format "
+                                                        "(ignored by QGC and MAVSDK)")
 
 
 _NOTHING: dict[str, int] = {}
 
 
-def _unknown_attributes(el, tag: str, keys: list[str], known: frozenset[str], reported: set) -> Iterator[Hit]:
-    for a in keys:  # each unknown (element, attribute) pair once per document
-        if a not in known and a.lower() != "decimalplaces" and (tag, a) not in reported:
-            reported.add((tag, a))
-            yield Hit("CDF211", _line(el), _param_name(el), f"attribute {tag}@{a} is not part of the format "
-                                                            "(ignored by QGC and MAVSDK)")
+def _note_unknown_attributes(el, tag: str, keys: list[str], known: frozenset[str], first: dict) -> None:
+    # the walk does not visit in document order (leaves inline, subtrees from a stack): keep the earliest
+    line = el.sourceline or 0
+    for a in keys:
+        if a not in known and a.lower() != "decimalplaces":
+            seen = first.get((tag, a))
+            if seen is None or line < (seen.sourceline or 0):
+                first[(tag, a)] = el
 
 
 def _check_unknown_subtree(el, structure: list, PI) -> None:

@@ -376,3 +376,14 @@ def test_unknown_attribute_is_reported_once_at_its_first_occurrence():
                "</options>\n</parameter>")
     (f,) = [f for f in findings(data) if f.rule == "CDF211"]
     assert f.line == 8 and f.parameter == "X" and "option@colour" in f.message
+
+
+def test_unknown_attribute_on_options_with_children_is_reported_at_the_first():
+    data = doc('<parameter name="X" type="uint8" default="0">\n<description>d</description>\n<options>\n'
+               '<option name="a" value="0" colour="red">\n<exclusions><exclude>Y</exclude></exclusions>\n</option>\n'
+               '<option name="b" value="1" colour="blue">\n<exclusions><exclude>Y</exclude></exclusions>\n</option>\n'
+               '<option name="c" value="2" colour="green"/>\n</options>\n</parameter>\n'
+               '<parameter name="Y" type="uint8" default="0"><description>e</description>\n'
+               '<options><option name="a" value="0"/></options></parameter>')
+    (f,) = [f for f in findings(data) if f.rule == "CDF211"]
+    assert f.line == 8 and f.parameter == "X" and "option@colour" in f.message
