@@ -20,6 +20,10 @@ where B_* are the exact MAVLink 2 frame sizes (pymavlink packs them; MAVLink 2 t
 zero bytes, so sizes vary per item). Heartbeats (1 Hz, ~21 bytes, both sides) and loss are not in
 the bound: at 5 % and 20 % loss the ratio shows the cost of the losses.
 
+At 0 % loss a third uploader runs for reference: a bare responder that answers each request with
+pre-packed bytes and does nothing else (no retries, so only at 0 % loss). It measures the floor that
+the vehicle_sim and the emulator set for any uploader on this link.
+
 Also runs the 200-trial reliability check of tests/transfer_trials.py and prints its count.
 """
 
@@ -130,6 +134,55 @@ def mavsdk(items: list[MissionItem], loss: float, seed: int, scratch: Path,
         return res["seconds"], "ok"
 
 
+# the bare responder: MISSION_COUNT, then each request answered with the pre-packed item, until MISSION_ACK
+BARE_RESPONDER = """
+import json, socket, struct, sys, time
+port, frames = int(sys.argv[1]), [bytes.fromhex(h) for h in json.load(open(sys.argv[2]))]
+s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+s.connect(("127.0.0.1", port))
+t0 = time.monotonic()
+s.send(frames[0])
+while True:
+    data, i, done = s.recv(4096), 0, False
+    while i + 10 <= len(data):
+        if data[i] != 0xFD:
+            i += 1
+            continue
+        size, msgid = data[i + 1], int.from_bytes(data[i + 7:i + 10], "little")
+        if msgid in (40, 51):  # MISSION_REQUEST, MISSION_REQUEST_INT: seq is the first payload field
+            s.send(frames[1 + struct.unpack_from("<H", data[i + 10:i + 10 + size] + bytes(2))[0]])
+        done |= msgid == 47  # MISSION_ACK
+        i += 12 + size + (13 if data[i + 2] & 1 else 0)
+    if done:
+        break
+print(time.monotonic() - t0)
+"""
+
+
+def bare(items: list[MissionItem], seed: int, scratch: Path, flavour: str = "px4") -> tuple[float | None, str]:
+    mav = mavlink2.MAVLink(None, srcSystem=255, srcComponent=190)
+    frames = [mav.mission_count_encode(1, 1, len(items), 0).pack(mav)]
+    frames += [mav.mission_item_int_encode(1, 1, k, it.frame, it.command, it.current, it.autocontinue, it.param1,
+                                           it.param2, it.param3, it.param4, it.x, it.y, it.z, 0).pack(mav)
+               for k, it in enumerate(items)]
+    path = scratch / "bare-frames.json"
+    path.write_text(json.dumps([f.hex() for f in frames]))
+    with VehicleSim(flavour=flavour, item_limit=None, heartbeat_s=1.0) as sim, \
+            LinkEmulator(sim.port, profile=profile(0.0), seed=seed) as emu:
+        try:
+            proc = subprocess.run([sys.executable, "-c", BARE_RESPONDER, str(emu.port), str(path)],
+                                  capture_output=True, text=True, timeout=300)
+        except subprocess.TimeoutExpired:
+            return None, "failed: timed out"
+        if proc.returncode != 0:
+            return None, f"failed: {proc.stderr.strip().splitlines()[-1] if proc.stderr.strip() else proc.returncode}"
+        try:
+            compare_items(items, sim.items())
+        except Exception as err:  # noqa: BLE001
+            return None, f"WRONG: {err}".splitlines()[0]
+        return float(proc.stdout), "ok"
+
+
 def median(values: list[float | None]) -> float | None:
     """Median of the runs; a failed run counts as slower than any success (None if most failed)."""
     ranked = sorted(values, key=lambda v: math.inf if v is None else v)
@@ -153,8 +206,8 @@ def main() -> None:
     rate = BAUD / 10.0
     print(f"# link: {BAUD} baud 8N1 = {rate:.0f} B/s each way, {LATENCY_S * 1000:.0f} ms latency each way; "
           f"vehicle: vehicle_sim {a.flavour} flavour")
-    print("| items | loss | ours s | bound s | ours/bound | mavsdk s | ours/mavsdk |")
-    print("|---:|---:|---:|---:|---:|---:|---:|")
+    print("| items | loss | ours s | bound s | ours/bound | mavsdk s | ours/mavsdk | bare responder s (floor) |")
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|")
     notes = []
     with tempfile.TemporaryDirectory(prefix="bench-upload-") as tmp:
         for n in sizes:
@@ -163,22 +216,26 @@ def main() -> None:
                 items = [home_item(None)] + items   # the same n+1 items on the wire for both uploaders
             bound = lower_bound_s(items, rate, LATENCY_S)
             for loss in (0.0, 0.05, 0.20):
-                runs_ours, runs_sdk = [], []
+                runs_ours, runs_sdk, runs_bare = [], [], []
                 for rep in range(a.reps):
-                    seed = 1000 * rep + n + int(loss * 100)   # the same seed for both uploaders
+                    seed = 1000 * rep + n + int(loss * 100)   # the same seed for all uploaders
                     t_ours, s_ours = ours(items, loss, seed, Path(tmp), a.flavour)
                     t_sdk, s_sdk = mavsdk(items, loss, seed, Path(tmp), a.flavour)
+                    t_bare, s_bare = bare(items, seed, Path(tmp), a.flavour) if loss == 0 else (None, "ok")
                     runs_ours.append(t_ours)
                     runs_sdk.append(t_sdk)
-                    for who, s in (("ours", s_ours), ("mavsdk", s_sdk)):
+                    runs_bare.append(t_bare)
+                    for who, s in (("ours", s_ours), ("mavsdk", s_sdk), ("bare responder", s_bare)):
                         if s != "ok":
                             notes.append(f"{n} items, {loss:.0%} loss, seed {seed}, {who}: {s}")
                 t_ours, t_sdk = median(runs_ours), median(runs_sdk)
                 ratio_b = None if t_ours is None else t_ours / bound
                 ratio_m = None if t_ours is None or t_sdk is None else t_ours / t_sdk
                 fails = f" ({runs_sdk.count(None)}/{a.reps} failed)" if None in runs_sdk else ""
+                t_bare = median(runs_bare) if loss == 0 else None
+                floor = f"{fmt(t_bare)} ({fmt(t_bare / bound if t_bare else None)}× bound)" if loss == 0 else "—"
                 print(f"| {n} | {loss:.0%} | {fmt(t_ours)} | {bound:.2f} | {fmt(ratio_b)} | {fmt(t_sdk)}{fails} | "
-                      f"{fmt(ratio_m)} |", flush=True)
+                      f"{fmt(ratio_m)} | {floor} |", flush=True)
     for note in notes:
         print(f"note: {note}")
     if a.trials:
