@@ -1,4 +1,4 @@
-"""The speed work on the validator (fast paths, single passes, per-document caches) changes no finding.
+"""The speed work on the validator (fast paths, single passes, memoised values) changes no finding.
 
 Independent slow path: xmlschema applying cdf/schema/mavlinkcamera.xsd to every document instead of the
 conservative pre-check (schema.conforms_fast). Whole reports (rules, severities, lines, parameters,
@@ -96,3 +96,14 @@ def test_scan_structure_doubts(doc):
     root = etree.fromstring(doc)
     assert not semantic.scan_tree(root).xsd_structure_ok
     assert not schema.conforms_fast(root)
+
+
+def test_values_memoised_across_files_change_no_report():
+    # typed values are memoised for the process: a file validated after others (warm) gets the report it
+    # gets alone (cold), in every profile
+    for f in FILES[:8]:
+        data = f.read_bytes()
+        warm = [validate_bytes(data, f.name, p) for p in PROFILES]
+        engine.clear_caches()
+        cold = [validate_bytes(data, f.name, p) for p in PROFILES]
+        assert warm == cold, f.name
