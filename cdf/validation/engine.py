@@ -26,7 +26,7 @@ def _hits(data: bytes, name: str, camera_info: CameraInfo | None) -> tuple[list[
     # still alive; the checks below reach most elements several times (walk, parameters, localization), so
     # holding one proxy per element for the whole run (built in one C loop) makes the later reads reuse it
     alive = list(root.iter())
-    scan = scan_tree(root)  # one walk for the vocabulary rule and the XSD fast path's structure test
+    scan = scan_tree(root, loaded.data)  # the vocabulary rule and the XSD fast path's structure test
     hits += check_document(root, loaded.data, scan)
     hits += schema_hits(root, scan.xsd_structure_ok)
     if camera_info is not None:

@@ -12,43 +12,18 @@ import re
 from dataclasses import dataclass
 from typing import Iterator, Mapping
 
+from cdf.validation import vocabulary
 from cdf.validation.schema import Hit
 from cdf.validation.values import (INT_RANGES, KNOWN_TYPES, NUMERIC_TYPES, STOI_MAX, STOI_TYPES,
                                    canonical_int, parse_typed)
+from cdf.validation.vocabulary import CDF_TAGS, TEXT_ELEMENTS, VOCABULARY
 
 # camera_def.md §Common Parameters (devguide PR #395)
 RESERVED = frozenset("""CAM_APERTURE CAM_EV CAM_VIDEV CAM_PHOTOEV CAM_EXPMODE CAM_ISO CAM_VIDISO CAM_PHOTOISO
 CAM_METERING CAM_SHUTTERSPD CAM_VIDSHUTSPD CAM_PHOTOSHUTSPD CAM_VIDRES CAM_WBMODE CAM_VIDSTREAM CAM_VIDFPS
 CAM_VIDFOV CAM_VIDFMT CAM_PHOTORATIO CAM_PHOTOFMT CAM_PHOTOSIZE CAM_PHOTOQUAL CAM_MODE""".split())
 
-# The CDF vocabulary: element -> (known child elements, known attributes). QGC's constant list
-# (VehicleCameraControl.h) plus the spec; anything else is ignored by every parser (rule CDF211).
-VOCABULARY: dict[str, tuple[frozenset[str], frozenset[str]]] = {
-    "mavlinkcamera": (frozenset({"definition", "parameters", "localization"}), frozenset()),
-    "definition": (frozenset({"model", "vendor"}), frozenset({"version"})),
-    "model": (frozenset(), frozenset()),
-    "vendor": (frozenset(), frozenset()),
-    "parameters": (frozenset({"parameter"}), frozenset()),
-    "parameter": (frozenset({"description", "updates", "options"}),
-                  frozenset({"name", "type", "default", "control", "readonly", "writeonly", "min", "max", "step",
-                             "decimalPlaces", "unit"})),
-    "description": (frozenset(), frozenset()),
-    "updates": (frozenset({"update"}), frozenset()),
-    "update": (frozenset(), frozenset()),
-    "options": (frozenset({"option"}), frozenset()),
-    "option": (frozenset({"exclusions", "parameterranges"}), frozenset({"name", "value"})),
-    "exclusions": (frozenset({"exclude"}), frozenset()),
-    "exclude": (frozenset(), frozenset()),
-    "parameterranges": (frozenset({"parameterrange"}), frozenset()),
-    "parameterrange": (frozenset({"roption"}), frozenset({"parameter", "condition"})),
-    "roption": (frozenset(), frozenset({"name", "value"})),
-    "localization": (frozenset({"locale"}), frozenset()),
-    "locale": (frozenset({"strings"}), frozenset({"name"})),
-    "strings": (frozenset(), frozenset({"original", "translated"})),
-}
-CDF_TAGS = frozenset(VOCABULARY)
 _PARAM_ATTRS = VOCABULARY["parameter"][1]
-TEXT_ELEMENTS = frozenset({"model", "vendor", "description", "update", "exclude"})
 
 # set versions of values.py's type tuples: membership is tested per parameter, option and roption
 _NUMERIC, _KNOWN, _STOI = frozenset(NUMERIC_TYPES), frozenset(KNOWN_TYPES), frozenset(STOI_TYPES)
@@ -95,6 +70,9 @@ class _Params:
     def __init__(self, elements) -> None:
         self.elements = elements
         self.by_name: dict[str, object] = {}
+        # (texts, structural): the strings the localization rule compares with, gathered while the
+        # parameter checks read them anyway; None when not gathered (see check_document)
+        self.strings: tuple[set[str], set[str]] | None = None
         self._typed: dict[str, frozenset | None] = {}
         self._values: dict[str, list[str] | None] = {}
         for p in elements:
@@ -142,6 +120,10 @@ def check_document(root, data: bytes, scan: TreeScan | None = None) -> Iterator[
     if len(elements) > 65535:
         yield Hit("CDF212", _line(parameters), None, f"{len(elements)} parameters; PARAM_EXT counts are uint16")
     params = _Params(elements)
+    if scan is not None and scan.xsd_structure_ok and root.find("localization") is not None:
+        # the structure is sound, so the parameter checks read every string the localization rule
+        # needs, at the places its XPaths would look: gather them there instead of reading them twice
+        params.strings = (set(), set())
     seen: dict[str, int | None] = {}
     for p in elements:
         yield from _check_parameter(p, params, seen)
@@ -248,6 +230,14 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
                 updates_el = c
         elif ctag == "option":
             stray.append(c)
+    gather = params.strings
+    if gather is not None:
+        if stray:
+            params.strings = gather = None  # stray <option>s hold strings too: the XPaths find them
+        else:
+            gather[1].update(v for v in (name, ptype_raw, a.get("default")) if v)
+            if desc is not None and desc.text:
+                gather[0].add(desc.text)
     if desc is None:
         yield Hit("CDF114", line, name, "no <description> child (QGC and MAVSDK reject the file)")
     elif _text_empty(desc):
@@ -283,6 +273,11 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
     values: list = []  # the options' typed values, for the duplicate and default checks
     for o in options:
         oname, oval = o.get("name"), o.get("value")
+        if gather is not None:
+            if oname:
+                gather[0].add(oname)
+            if oval:
+                gather[1].add(oval)
         if oname is None or oval is None:
             what = " and ".join(a for a, v in (("name", oname), ("value", oval)) if v is None)
             yield Hit("CDF123", _line(o), name, f"<option> without {what} (QGC rejects the file, MAVSDK skips the parameter)")
@@ -345,17 +340,19 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
         yield Hit("CDF209", line, name, f"reserved name {name} used with type {ptype}")
 
     if updates_el is not None:
-        yield from _check_updates(updates_el, name, params)
+        yield from _check_updates(updates_el, name, params, gather)
     for o in with_refs:
-        yield from _check_option_refs(o, p, name, ptype, params)
+        yield from _check_option_refs(o, p, name, ptype, params, gather)
 
 
-def _check_updates(updates, name, params: _Params) -> Iterator[Hit]:
+def _check_updates(updates, name, params: _Params, gather) -> Iterator[Hit]:
     for u in updates.iterchildren("update"):
         if _text_empty(u):
             yield Hit("CDF105", _line(u), name, "<update> is empty (MAVSDK crashes on empty text)")
             continue
         target = u.text.strip()
+        if gather is not None:
+            gather[1].add(target)
         if target == name:
             yield Hit("CDF202", _line(u), name, "<update> names the parameter itself")
         elif target not in params.by_name:
@@ -363,26 +360,34 @@ def _check_updates(updates, name, params: _Params) -> Iterator[Hit]:
                                                 "(QGC dereferences a null pointer for it)")
 
 
-def _check_option_refs(o, p, name, ptype, params: _Params) -> Iterator[Hit]:
-    """Exclusions and parameter ranges of one option (called only for options with children)."""
+def _check_option_refs(o, p, name, ptype, params: _Params, gather) -> Iterator[Hit]:
+    """Exclusions and parameter ranges of one option (called only for options with children).
+    `gather`: the localization rule's (texts, structural) sets to add the strings read here to, or None."""
     is_trigger = False
     for ex in o.iter("exclude"):  # recursive like QGC; nesting itself is CDF200 (XSD)
         is_trigger = True
         if _text_empty(ex):
             yield Hit("CDF105", _line(ex), name, "<exclude> is empty (MAVSDK crashes on empty text)")
-        elif ex.text.strip() not in params.by_name:
-            yield Hit("CDF201", _line(ex), name, f"<exclude> names unknown parameter {ex.text.strip()!r}")
+            continue
+        target = ex.text.strip()
+        if gather is not None:
+            gather[1].add(target)
+        if target not in params.by_name:
+            yield Hit("CDF201", _line(ex), name, f"<exclude> names unknown parameter {target!r}")
     for pr in o.iter("parameterrange"):
         is_trigger = True
         target = pr.get("parameter")
-        if target is None:
-            yield Hit("CDF123", _line(pr), name, "<parameterrange> without parameter "
-                                                 "(QGC rejects the file, MAVSDK skips the parameter)")
-            continue
-        if target == name or target not in params.by_name:
-            why = "its own parameter" if target == name else f"unknown parameter {target!r}"
-            yield Hit("CDF203", _line(pr), name, f"<parameterrange> targets {why} "
-                                                 "(MAVSDK skips the parameter: 'Unknown roption type')")
+        if target is None or target == name or target not in params.by_name:
+            if target is None:
+                yield Hit("CDF123", _line(pr), name, "<parameterrange> without parameter "
+                                                     "(QGC rejects the file, MAVSDK skips the parameter)")
+            else:
+                why = "its own parameter" if target == name else f"unknown parameter {target!r}"
+                yield Hit("CDF203", _line(pr), name, f"<parameterrange> targets {why} "
+                                                     "(MAVSDK skips the parameter: 'Unknown roption type')")
+            if gather is not None:
+                for r in pr.iterchildren("roption"):
+                    _gather_attributes(r, gather)
             continue
         ttype = params.type_of(target)
         tvalues = params.option_values(target)
@@ -392,6 +397,11 @@ def _check_option_refs(o, p, name, ptype, params: _Params) -> Iterator[Hit]:
         numeric_target = ttype in _NUMERIC
         for r in pr.iterchildren("roption"):
             rname, rval = r.get("name"), r.get("value")
+            if gather is not None:
+                if rname:
+                    gather[0].add(rname)
+                if rval:
+                    gather[1].add(rval)
             if rname is None or rval is None:
                 what = " and ".join(a for a, v in (("name", rname), ("value", rval)) if v is None)
                 yield Hit("CDF123", _line(r), name, f"<roption> without {what} "
@@ -414,6 +424,14 @@ def _check_option_refs(o, p, name, ptype, params: _Params) -> Iterator[Hit]:
         elif val is not None and ptype in ("float", "double"):
             yield Hit("CDF206", _line(o), name, f"{ptype} option {val!r} triggers exclusions/ranges; QGC matches it "
                                                 "only if written exactly as it renders the value")
+
+
+def _gather_attributes(el, gather) -> None:
+    n, v = el.get("name"), el.get("value")
+    if n:
+        gather[0].add(n)
+    if v:
+        gather[1].add(v)
 
 
 def _check_condition(cond: str, pr, name, params: _Params) -> Iterator[Hit]:
@@ -480,12 +498,13 @@ def _check_localization(root, params: _Params, definition, structure_ok: bool = 
         return
     if len(locs) > 1:
         yield Hit("CDF210", _line(locs[1]), None, "more than one <localization> (QGC uses the first)")
-    texts = set()
-    structural = set()
-    if params.elements:
-        # the same sets as a loop over each parameter's first <description>, its attributes and its
-        # option/roption/exclude/update descendants, gathered by XPath in C: thousands of lxml calls
-        # fewer on a localized file
+    if params.strings is not None:
+        texts, structural = params.strings  # gathered by the parameter checks (see check_document)
+    else:
+        texts, structural = set(), set()
+    if params.strings is None and params.elements:
+        # not gathered (structure unsound, stray options): each parameter's first <description>, its
+        # attributes and its option/roption/exclude/update descendants, by XPath in C
         section = params.elements[0].getparent()
         descriptions, names, values, refs = _localization_xpaths(structure_ok)
         for xpath in descriptions:
@@ -574,10 +593,15 @@ class TreeScan:
     xsd_structure_ok: bool
 
 
-def scan_tree(root) -> TreeScan:
-    """One walk serving two checks that would otherwise each traverse the document (the vocabulary rule
-    and the XSD fast path's structure test); tests/cdf/test_validate_speed.py checks its structure
-    verdict against the XPath statement in schema.py."""
+def scan_tree(root, data: bytes | None = None) -> TreeScan:
+    """The vocabulary rule and the XSD fast path's structure test in one look at the tree: libxml2's proof
+    (vocabulary.unknown_attributes) when it settles the document, else one Python walk serving both.
+    `data`: the bytes `root` was parsed from, if at hand (the proof's shortcut). tests/cdf/
+    test_validate_speed.py holds proof and walk to the same answers, and the walk's structure verdict to
+    the XPath statement in schema.py."""
+    pairs = vocabulary.unknown_attributes(root, data)
+    if pairs is not None:
+        return TreeScan(tuple(_unknown_attribute_hits(root, pairs)), True)
     hits = list(_vocabulary_walk(root, structure := []))
     return TreeScan(tuple(hits), not structure)
 
@@ -601,8 +625,8 @@ def _vocabulary_walk(root, structure: list | None = None) -> Iterator[Hit]:
         elif next(root.itersiblings(PI), None) is not None or \
                 next(root.itersiblings(PI, preceding=True), None) is not None:
             structure.append("processing instruction outside the root")
-    # (tag, unknown attribute) -> the element where it occurs first in the document: reported once, there
-    unknown_attrs: dict[tuple[str, str], object] = {}
+    # (tag, unknown attribute) pairs, each reported once, at its first element in document order
+    unknown_attrs: dict[tuple[str, str], None] = {}
     # (element, its tag, at a path the XSD allows): the parent already read the tag, and every .tag read
     # is a C call that builds a new str
     stack = [(root, root.tag, track and not structure)]
@@ -673,22 +697,38 @@ def _vocabulary_walk(root, structure: list | None = None) -> Iterator[Hit]:
                 yield _unknown_element(c, el)
             elif track and ctag is PI:
                 structure.append("processing instruction")
-    for (tag, a), el in unknown_attrs.items():
-        yield Hit("CDF211", _line(el), _param_name(el), f"attribute {tag}@{a} is not part of the format "
-                                                        "(ignored by QGC and MAVSDK)")
+    yield from _unknown_attribute_hits(root, unknown_attrs)
 
 
 _NOTHING: dict[str, int] = {}
 
 
-def _note_unknown_attributes(el, tag: str, keys: list[str], known: frozenset[str], first: dict) -> None:
-    # the walk does not visit in document order (leaves inline, subtrees from a stack): keep the earliest
-    line = el.sourceline or 0
+def _note_unknown_attributes(el, tag: str, keys: list[str], known: frozenset[str], pairs: dict) -> None:
     for a in keys:
-        if a not in known and a.lower() != "decimalplaces":
-            seen = first.get((tag, a))
-            if seen is None or line < (seen.sourceline or 0):
-                first[(tag, a)] = el
+        if a not in known and a.lower() != "decimalplaces":  # a misspelt decimalPlaces is CDF207
+            pairs[(tag, a)] = None
+
+
+def _unknown_attribute_hits(root, pairs) -> list[Hit]:
+    """One CDF211 per (tag, attribute), at the first element in document order that the walk reaches
+    (every ancestor a CDF element), in document order: the same whichever way the pairs were found."""
+    wanted: dict[str, list[str]] = {}
+    for tag, a in pairs:
+        wanted.setdefault(tag, []).append(a)
+    found = []  # (document position, attribute position, tag, attribute, element)
+    if wanted:
+        for i, el in enumerate(root.iter(*wanted)):
+            attrs = wanted[el.tag]
+            keys = el.keys()
+            for a in [a for a in attrs if a in keys]:
+                if all(x.tag in CDF_TAGS for x in el.iterancestors()):
+                    found.append((i, keys.index(a), el.tag, a, el))
+                    attrs.remove(a)
+            if not any(wanted.values()):
+                break
+    found.sort(key=lambda f: f[:2])
+    return [Hit("CDF211", _line(el), _param_name(el), f"attribute {tag}@{a} is not part of the format "
+                                                      "(ignored by QGC and MAVSDK)") for _i, _k, tag, a, el in found]
 
 
 def _check_unknown_subtree(el, structure: list, PI) -> None:
