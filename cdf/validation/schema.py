@@ -189,13 +189,15 @@ def _violation_xpath():
 _DIGITS = re.compile(r"[0-9]+")
 
 
-def conforms_fast(root, structure_ok: bool | None = None) -> bool:
+def conforms_fast(root, structure_ok: bool | None = None, attributes: list[dict] | None = None) -> bool:
     """True only if the XSD would report nothing that _map keeps. False means "not sure": run xmlschema.
 
     Structure is checked by one compiled XPath (C speed; it also looks inside unknown elements, which the
     XSD skips: stricter, so still safe), unless the caller already knows it from semantic.scan_tree's walk
     (`structure_ok`, the same test in Python, done while the walk visits every element anyway); typed
-    attribute values by Python on the parameters only.
+    attribute values by Python on the parameters only, from `attributes` when the caller has read them
+    (semantic.check_document does: one dict per parameter of the <parameters> section, which is the
+    root's only one whenever the structure is sound, the only case that reads them).
     """
     if root.tag != "mavlinkcamera":
         return True  # schema_hits does not run on other roots
@@ -208,8 +210,12 @@ def conforms_fast(root, structure_ok: bool | None = None) -> bool:
         structure_ok = not _violation_xpath()(root, cdf_count=cdf_count)
     if not structure_ok:
         return False
-    for p in root.iterfind("parameters/parameter"):
-        get = p.get  # direct lookups: no attrib proxy per parameter
+    if attributes is None:
+        # root.iterfind("parameters/parameter") without ElementPath's Python-level path handling
+        attributes = [dict(p.items()) for section in root.iterchildren("parameters")
+                      for p in section.iterchildren("parameter")]
+    for a in attributes:
+        get = a.get
         for flag in ("control", "readonly", "writeonly"):  # also in the XPath: scan_tree leaves them here
             v = get(flag)
             if v is not None and v != "0" and v != "1":
@@ -227,10 +233,10 @@ def conforms_fast(root, structure_ok: bool | None = None) -> bool:
     return True
 
 
-def schema_hits(root, structure_ok: bool | None = None) -> list[Hit]:
+def schema_hits(root, structure_ok: bool | None = None, attributes: list[dict] | None = None) -> list[Hit]:
     """XSD findings for a document whose root is <mavlinkcamera> (other roots: CDF101, semantic.py).
-    `structure_ok`: see conforms_fast."""
-    if root.tag != "mavlinkcamera" or conforms_fast(root, structure_ok):
+    `structure_ok`, `attributes`: see conforms_fast."""
+    if root.tag != "mavlinkcamera" or conforms_fast(root, structure_ok, attributes):
         return []
     return xmlschema_hits(root)
 

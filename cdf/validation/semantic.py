@@ -56,6 +56,12 @@ class CameraInfo:
     answered: frozenset[str] | None = None
 
 
+def _first(el, tag: str):
+    """el.find(tag): the first child with that tag, without ElementPath (which parses the path in Python
+    and costs ten times as much)."""
+    return next(el.iterchildren(tag), None)
+
+
 def _text_empty(el) -> bool:
     return el.text is None or el.text == ""
 
@@ -73,6 +79,7 @@ class _Params:
         # (texts, structural): the strings the localization rule compares with, gathered while the
         # parameter checks read them anyway; None when not gathered (see check_document)
         self.strings: tuple[set[str], set[str]] | None = None
+        self.attributes: list[dict] | None = None  # see check_document
         self._typed: dict[str, frozenset | None] = {}
         self._values: dict[str, list[str] | None] = {}
         for p in elements:
@@ -96,14 +103,16 @@ class _Params:
         """The target's option values (cached like typed_option_values; callers do not mutate it)."""
         if name not in self._values:
             p = self.by_name.get(name)
-            opts = p.find("options") if p is not None else None
-            values = None if opts is None else [o.get("value") for o in opts.findall("option")]
+            opts = _first(p, "options") if p is not None else None
+            values = None if opts is None else [o.get("value") for o in opts.iterchildren("option")]
             self._values[name] = None if values is None else [v for v in values if v is not None]
         return self._values[name]
 
 
-def check_document(root, data: bytes, scan: TreeScan | None = None) -> Iterator[Hit]:
-    """All Python checks of one parsed document; `scan` is scan_tree(root) when the caller has it."""
+def check_document(root, data: bytes, scan: TreeScan | None = None,
+                   attributes: list[dict] | None = None) -> Iterator[Hit]:
+    """All Python checks of one parsed document; `scan` is scan_tree(root) when the caller has it.
+    `attributes`: a list to receive each parameter's attributes as a dict (for schema.conforms_fast)."""
     yield from _check_encoding(data)
     if root.tag != "mavlinkcamera":
         yield Hit("CDF101", _line(root), None,
@@ -114,13 +123,14 @@ def check_document(root, data: bytes, scan: TreeScan | None = None) -> Iterator[
         yield from _check_definition(definition)
     if parameters is None:
         return
-    elements = parameters.findall("parameter")
+    elements = list(parameters.iterchildren("parameter"))
     if not elements:
         yield Hit("CDF108", _line(parameters), None, "no <parameter> (QGC rejects a file where none loads)")
     if len(elements) > 65535:
         yield Hit("CDF212", _line(parameters), None, f"{len(elements)} parameters; PARAM_EXT counts are uint16")
     params = _Params(elements)
-    if scan is not None and scan.xsd_structure_ok and root.find("localization") is not None:
+    params.attributes = attributes
+    if scan is not None and scan.xsd_structure_ok and _first(root, "localization") is not None:
         # the structure is sound, so the parameter checks read every string the localization rule
         # needs, at the places its XPaths would look: gather them there instead of reading them twice
         params.strings = (set(), set())
@@ -147,7 +157,7 @@ def _check_encoding(data: bytes) -> Iterator[Hit]:
 
 
 def _section(root, tag: str):
-    direct = root.find(tag)
+    direct = _first(root, tag)
     if direct is not None:
         return direct
     nested = next(root.iter(tag), None) if root.tag != tag else None
@@ -167,7 +177,7 @@ def _check_definition(d) -> Iterator[Hit]:
         yield Hit("CDF107", _line(d), None,
                   f"version={version!r} is not an integer 0-65535 (cam_definition_version is uint16)")
     for tag in ("model", "vendor"):
-        el = d.find(tag)
+        el = _first(d, tag)
         if el is None:
             yield Hit("CDF104", _line(d), None, f"<definition> has no <{tag}> child (QGC and MAVSDK reject the file)")
         elif _text_empty(el):
@@ -183,7 +193,9 @@ def _check_definition(d) -> Iterator[Hit]:
 
 
 def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
-    a = dict(p.attrib)  # one C call; lxml attribute lookups one by one cost more
+    a = dict(p.items())  # one C call; lxml attribute lookups one by one (and dict(p.attrib)) cost more
+    if params.attributes is not None:
+        params.attributes.append(a)
     name, ptype_raw = a.get("name"), a.get("type")
     line = _line(p)
     if name is None or ptype_raw is None:
@@ -304,7 +316,7 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
                       "(MAVSDK rejects the whole file: 'No default found')")
     if ptype == "bool":
         for o in with_refs:
-            if o.find(".//exclude") is not None or o.find(".//parameterrange") is not None:
+            if next(o.iter("exclude", "parameterrange"), None) is not None:
                 yield Hit("CDF126", _line(o), name, "exclusions/ranges keyed on a bool option never fire in QGC "
                                                     "(it renders bools as true/false); use uint8 with options")
                 break
@@ -435,28 +447,36 @@ def _gather_attributes(el, gather) -> None:
 
 
 def _check_condition(cond: str, pr, name, params: _Params) -> Iterator[Hit]:
+    problems = [f"unknown parameter {pname}" if message is None else message
+                for pname, message in _condition_parts(cond) if message is not None or pname not in params.by_name]
+    if problems:
+        yield Hit("CDF205", _line(pr), name, f"condition {cond!r}: " + "; ".join(problems))
+
+
+@functools.lru_cache(maxsize=1024)  # a file repeats its few conditions in many ranges (engine.clear_caches)
+def _condition_parts(cond: str) -> tuple[tuple[str | None, str | None], ...]:
+    """What is wrong with a condition, in order: (None, message) for what the text alone shows, and
+    (name, None) for each parameter it names (whether that one exists depends on the file)."""
     tokens = cond.split(" ")
-    problems = []
+    parts: list[tuple[str | None, str | None]] = []
     if len(tokens) % 2 == 0:
-        problems.append("expected TEST (AND|OR TEST)...")
+        parts.append((None, "expected TEST (AND|OR TEST)..."))
     for i, tok in enumerate(tokens):
         if i % 2:
             if tok not in ("AND", "OR"):
-                problems.append(f"{tok!r} where AND/OR is expected")
+                parts.append((None, f"{tok!r} where AND/OR is expected"))
             continue
         m = _COND_TEST.fullmatch(tok)
         if not m:
-            problems.append(f"{tok!r} is not NAME=VALUE (no spaces around the operator)")
+            parts.append((None, f"{tok!r} is not NAME=VALUE (no spaces around the operator)"))
             continue
         pname, op, val = m.groups()
-        if pname not in params.by_name:
-            problems.append(f"unknown parameter {pname}")
+        parts.append((pname, None))
         if op in (">", "<"):
-            problems.append(f"{op} compares text in QGC (lexicographic)")
+            parts.append((None, f"{op} compares text in QGC (lexicographic)"))
         if not canonical_int(val):
-            problems.append(f"value {val!r} is not a canonical integer")
-    if problems:
-        yield Hit("CDF205", _line(pr), name, f"condition {cond!r}: " + "; ".join(problems))
+            parts.append((None, f"value {val!r} is not a canonical integer"))
+    return tuple(parts)
 
 
 @functools.lru_cache(maxsize=2)
@@ -493,7 +513,7 @@ def _localization_xpaths(canonical: bool):
 
 
 def _check_localization(root, params: _Params, definition, structure_ok: bool = False) -> Iterator[Hit]:
-    locs = root.findall("localization")
+    locs = list(root.iterchildren("localization"))
     if not locs:
         return
     if len(locs) > 1:
@@ -517,10 +537,10 @@ def _check_localization(root, params: _Params, definition, structure_ok: bool = 
             structural.update(e.text.strip() for e in xpath(section) if e.text)
     if definition is not None:
         for tag in ("model", "vendor"):
-            el = definition.find(tag)
+            el = _first(definition, tag)
             if el is not None and el.text:
                 structural.add(el.text.strip())
-    for loc in locs[0].findall("locale"):
+    for loc in locs[0].iterchildren("locale"):
         lname = loc.get("name")
         if lname is None:
             yield Hit("CDF210", _line(loc), None, "<locale> without name")
@@ -528,7 +548,7 @@ def _check_localization(root, params: _Params, definition, structure_ok: bool = 
             yield Hit("CDF210", _line(loc), None, f"locale name {lname!r} is not ll_CC (e.g. de_DE): "
                                                   "QGC matches the full name or its first 3 characters")
         unmatched: list[tuple[object, str]] = []  # (element, original); only the first one's line is used
-        for s in loc.findall("strings"):
+        for s in loc.iterchildren("strings"):
             orig, trans = s.get("original"), s.get("translated")
             if orig is None or trans is None:
                 yield Hit("CDF210", _line(s), None, "<strings> needs original and translated")

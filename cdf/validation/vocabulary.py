@@ -96,44 +96,45 @@ def _schema():
 def _hidden_xpaths():
     from lxml import etree
 
-    text_parent = " or ".join(f"parent::{t}" for t in sorted(TEXT_ELEMENTS))
-    return (etree.XPath(f"boolean(//processing-instruction() | //comment()[{text_parent}])"),
+    from cdf.validation.schema import _canonical_paths
+
+    # once the XSD has passed, text elements stand only at their canonical paths: absolute paths touch
+    # only the nodes on them, where //comment() would visit the whole tree
+    in_text = " | ".join(f"{p}/comment()" for p in _canonical_paths() if p.rsplit("/", 1)[1] in TEXT_ELEMENTS)
+    return (etree.XPath("boolean(//processing-instruction())"), etree.XPath(f"boolean({in_text})"),
             etree.XPath(f"boolean(//@*[namespace-uri() = '{_XSI}'])"))
 
 
 def _hidden_from_xsd(root, data: bytes | None) -> bool:
-    """True when the document may hold what the XSD does not judge the way the walk does: a DTD (entity
-    references), a processing instruction anywhere or a comment inside a text element (the walk counts
-    both as children), an attribute in the XSI namespace (a validator obeys xsi:type and xsi:nil
-    instead of rejecting them)."""
-    info = root.getroottree().docinfo
-    if info.internalDTD is not None or info.doctype:
-        return True
-    pi_or_comment, xsi = _hidden_xpaths()
+    """For a document that passed the XSD but for unknown attributes: True when it may hold what the XSD
+    does not judge the way the walk does: a processing instruction anywhere or a comment inside a text
+    element (the walk counts both as children), an attribute in the XSI namespace (a validator obeys
+    xsi:type and xsi:nil instead of rejecting them)."""
+    pi, comment_in_text, xsi = _hidden_xpaths()
     # the bytes answer first where they can: in UTF-8 a comment or processing instruction is spelled
-    # out, and the XSI namespace can hide only behind character references (entities need a DTD);
-    # the XPaths walk the whole tree and cost a third of a parse
-    utf8 = data is not None and (info.encoding or "").upper() in ("UTF-8", "UTF8")
+    # out, and the XSI namespace can hide only behind character references (entities need a DTD, and
+    # a DTD never gets here); the XPaths cost up to a third of a parse
+    utf8 = data is not None and (root.getroottree().docinfo.encoding or "").upper() in ("UTF-8", "UTF8")
     if not utf8:
-        return pi_or_comment(root) or xsi(root)
+        return pi(root) or comment_in_text(root) or xsi(root)
     declaration = _XML_DECLARATION.match(data)
     body = data[declaration.end():] if declaration else data
-    if (b"<!--" in body or b"<?" in body) and pi_or_comment(root):
-        return True
-    return (_XSI.encode() in data or b"&#" in data) and xsi(root)
+    return ((b"<?" in body and pi(root)) or (b"<!--" in body and comment_in_text(root))
+            or ((_XSI.encode() in data or b"&#" in data) and xsi(root)))
 
 
 def unknown_attributes(root, data: bytes | None = None) -> list[tuple[str, str]] | None:
     """When the document breaks the vocabulary and the XSD's structure in no way but unknown attributes:
     those, as (element tag, attribute name) in document order, each pair once. None when not sure (the
     walk must judge). `data`: the bytes `root` was parsed from, when the caller has them (a shortcut)."""
-    if root.tag != "mavlinkcamera" or _hidden_from_xsd(root, data):
+    if root.tag != "mavlinkcamera":
         return None
+    info = root.getroottree().docinfo
+    if info.internalDTD is not None or info.doctype:
+        return None  # entity references: the walk judges them
     schema, lock = _schema()
     with lock:  # the error log lives on the schema object
-        if schema.validate(root):
-            return []
-        errors = [(e.type_name, e.message) for e in schema.error_log]
+        errors = [] if schema.validate(root) else [(e.type_name, e.message) for e in schema.error_log]
     pairs: dict[tuple[str, str], None] = {}
     for kind, message in errors:
         m = _UNKNOWN_ATTRIBUTE.fullmatch(message) if kind in _ATTRIBUTE_ERRORS else None
@@ -141,4 +142,4 @@ def unknown_attributes(root, data: bytes | None = None) -> list[tuple[str, str]]
             return None
         if m.group(2).lower() != "decimalplaces":  # a misspelt decimalPlaces is CDF207, semantic.py
             pairs[(m.group(1), m.group(2))] = None
-    return list(pairs)
+    return None if _hidden_from_xsd(root, data) else list(pairs)

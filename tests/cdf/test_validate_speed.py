@@ -41,7 +41,7 @@ def _both(data: bytes, name: str, profile: str, monkeypatch):
     fast = validate_bytes(data, name, profile)
     with monkeypatch.context() as m:
         # no fast path: xmlschema on every document
-        m.setattr(engine, "schema_hits", lambda root, _structure_ok=None: schema.xmlschema_hits(root))
+        m.setattr(engine, "schema_hits", lambda root, *_known: schema.xmlschema_hits(root))
         slow = validate_bytes(data, name, profile)
     return fast, slow
 
@@ -76,6 +76,10 @@ def test_scan_structure_verdict_equals_the_xpath(ops):
     scan = semantic.scan_tree(root)
     assert schema.conforms_fast(root, scan.xsd_structure_ok) == schema.conforms_fast(root), etree.tostring(root)
     assert list(scan.vocabulary) == list(semantic._vocabulary_walk(root))
+    # the parameters' attributes as check_document read them serve conforms_fast like its own reading
+    attributes: list[dict] = []
+    list(semantic.check_document(root, etree.tostring(root), scan, attributes))
+    assert schema.conforms_fast(root, scan.xsd_structure_ok, attributes) == schema.conforms_fast(root)
 
 
 def test_scan_structure_verdict_on_the_corpus():
