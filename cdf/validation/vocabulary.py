@@ -96,31 +96,28 @@ def _schema():
 def _hidden_xpaths():
     from lxml import etree
 
-    from cdf.validation.schema import _canonical_paths
-
-    # once the XSD has passed, text elements stand only at their canonical paths: absolute paths touch
-    # only the nodes on them, where //comment() would visit the whole tree
-    in_text = " | ".join(f"{p}/comment()" for p in _canonical_paths() if p.rsplit("/", 1)[1] in TEXT_ELEMENTS)
-    return (etree.XPath("boolean(//processing-instruction())"), etree.XPath(f"boolean({in_text})"),
+    return (etree.XPath("boolean(//processing-instruction())"),
             etree.XPath(f"boolean(//@*[namespace-uri() = '{_XSI}'])"))
 
 
 def _hidden_from_xsd(root, data: bytes | None) -> bool:
     """For a document that passed the XSD but for unknown attributes: True when it may hold what the XSD
-    does not judge the way the walk does: a processing instruction anywhere or a comment inside a text
-    element (the walk counts both as children), an attribute in the XSI namespace (a validator obeys
-    xsi:type and xsi:nil instead of rejecting them)."""
-    pi, comment_in_text, xsi = _hidden_xpaths()
-    # the bytes answer first where they can: in UTF-8 a comment or processing instruction is spelled
-    # out, and the XSI namespace can hide only behind character references (entities need a DTD, and
-    # a DTD never gets here); the XPaths cost up to a third of a parse
-    utf8 = data is not None and (root.getroottree().docinfo.encoding or "").upper() in ("UTF-8", "UTF8")
-    if not utf8:
-        return pi(root) or comment_in_text(root) or xsi(root)
+    does not judge the way the walk does: a comment or processing instruction inside a text element or
+    a processing instruction anywhere (the walk counts them as children or doubts the structure), an
+    attribute in the XSI namespace (a validator obeys xsi:type and xsi:nil instead of rejecting them)."""
+    for el in root.iter(*TEXT_ELEMENTS):  # an element child has failed the XSD already
+        if len(el):
+            return True
+    pi, xsi = _hidden_xpaths()
+    # the bytes answer first where they can (the XPaths walk the whole tree): in UTF-8 a processing
+    # instruction is spelled out, and an attribute can be in a namespace only through a prefix that an
+    # xmlns: attribute binds (names take no character references; entities need a DTD, and a document
+    # with one never gets here)
+    if data is None or (root.getroottree().docinfo.encoding or "").upper() not in ("UTF-8", "UTF8"):
+        return pi(root) or xsi(root)
     declaration = _XML_DECLARATION.match(data)
-    body = data[declaration.end():] if declaration else data
-    return ((b"<?" in body and pi(root)) or (b"<!--" in body and comment_in_text(root))
-            or ((_XSI.encode() in data or b"&#" in data) and xsi(root)))
+    return ((data.find(b"<?", declaration.end() if declaration else 0) >= 0 and pi(root))
+            or (b"xmlns:" in data and xsi(root)))
 
 
 def unknown_attributes(root, data: bytes | None = None) -> list[tuple[str, str]] | None:
