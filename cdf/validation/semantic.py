@@ -197,7 +197,7 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
     if params.attributes is not None:
         params.attributes.append(a)
     name, ptype_raw = a.get("name"), a.get("type")
-    line = _line(p)
+    line = p.sourceline
     if name is None or ptype_raw is None:
         missing = " and ".join(a for a, v in (("name", name), ("type", ptype_raw)) if v is None)
         yield Hit("CDF109", line, name, f"<parameter> has no {missing} (QGC and MAVSDK reject the file)")
@@ -252,8 +252,8 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
                 gather[0].add(desc.text)
     if desc is None:
         yield Hit("CDF114", line, name, "no <description> child (QGC and MAVSDK reject the file)")
-    elif _text_empty(desc):
-        yield Hit("CDF105", _line(desc), name, "<description> is empty (MAVSDK crashes on empty text)")
+    elif not desc.text:
+        yield Hit("CDF105", desc.sourceline, name, "<description> is empty (MAVSDK crashes on empty text)")
 
     control, readonly = a.get("control"), a.get("readonly")
     if readonly == "1" and a.get("writeonly") == "1":
@@ -269,7 +269,11 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
     if default_text is None and ptype in _NUMERIC:
         yield Hit("CDF119", line, name, "no default (MAVSDK silently skips the parameter: 'Default missing')")
     # typed default/min/max/step, None when absent or invalid (invalid ones are the XSD's CDF120)
-    typed = {k: _parse(a[k], ptype)[0] for k in ("default", "min", "max", "step") if k in a} if numeric else {}
+    typed = {}
+    if numeric:
+        for k in ("default", "min", "max", "step"):
+            if k in a:
+                typed[k] = _parse(a[k], ptype)[0]
     default = typed.get("default")
     if numeric and ptype in _STOI:
         for attr, v in typed.items():

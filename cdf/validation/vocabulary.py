@@ -116,7 +116,8 @@ def _hidden_from_xsd(root, data: bytes | None) -> bool:
     if data is None or (root.getroottree().docinfo.encoding or "").upper() not in ("UTF-8", "UTF8"):
         return pi(root) or xsi(root)
     declaration = _XML_DECLARATION.match(data)
-    return ((data.find(b"<?", declaration.end() if declaration else 0) >= 0 and pi(root))
+    # "?>" ends every processing instruction; "<?" would be sought among all the "<"s
+    return ((data.find(b"?>", declaration.end() if declaration else 0) >= 0 and pi(root))
             or (b"xmlns:" in data and xsi(root)))
 
 
