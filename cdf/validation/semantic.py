@@ -608,10 +608,10 @@ _WALK_ENTRY: dict[str, tuple[frozenset[str], bool]] = {t: (v[1], t in TEXT_ELEME
 
 @dataclass(frozen=True)
 class TreeScan:
-    """What one walk over the tree found: the vocabulary findings (CDF211) and whether the structure is
-    one mavlinkcamera.xsd accepts (every CDF element where the XSD allows it, within maxOccurs, nothing
-    inside text elements, no processing instruction). xsd_structure_ok=True lets schema.conforms_fast
-    skip its structural XPath; False only means "not sure"."""
+    """What scan_tree found (libxml2's proof or the walk): the vocabulary findings (CDF211) and whether
+    the structure is one mavlinkcamera.xsd accepts (every CDF element where the XSD allows it, within
+    maxOccurs, nothing inside text elements, no processing instruction). xsd_structure_ok=True lets
+    schema.conforms_fast skip its structural XPath; False only means "not sure"."""
 
     vocabulary: tuple[Hit, ...]
     xsd_structure_ok: bool

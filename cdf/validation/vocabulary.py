@@ -44,7 +44,6 @@ VOCABULARY: dict[str, tuple[frozenset[str], frozenset[str]]] = {
     "strings": (frozenset(), frozenset({"original", "translated"})),
 }
 CDF_TAGS = frozenset(VOCABULARY)
-_PARAM_ATTRS = VOCABULARY["parameter"][1]
 TEXT_ELEMENTS = frozenset({"model", "vendor", "description", "update", "exclude"})
 
 _XSI = "http://www.w3.org/2001/XMLSchema-instance"
