@@ -193,8 +193,8 @@ def conforms_fast(root, structure_ok: bool | None = None, attributes: list[dict]
     """True only if the XSD would report nothing that _map keeps. False means "not sure": run xmlschema.
 
     Structure is checked by one compiled XPath (C speed; it also looks inside unknown elements, which the
-    XSD skips: stricter, so still safe), unless the caller already knows it from semantic.scan_tree's walk
-    (`structure_ok`, the same test in Python, done while the walk visits every element anyway); typed
+    XSD skips: stricter, so still safe), unless the caller already knows it from semantic.scan_tree
+    (`structure_ok`: libxml2's proof of the vocabulary, or the walk's structure test in Python); typed
     attribute values by Python on the parameters only, from `attributes` when the caller has read them
     (semantic.check_document does: one dict per parameter of the <parameters> section, which is the
     root's only one whenever the structure is sound, the only case that reads them).

@@ -197,7 +197,7 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
     if params.attributes is not None:
         params.attributes.append(a)
     name, ptype_raw = a.get("name"), a.get("type")
-    line = p.sourceline
+    line = _line(p)
     if name is None or ptype_raw is None:
         missing = " and ".join(a for a, v in (("name", name), ("type", ptype_raw)) if v is None)
         yield Hit("CDF109", line, name, f"<parameter> has no {missing} (QGC and MAVSDK reject the file)")
@@ -252,8 +252,8 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
                 gather[0].add(desc.text)
     if desc is None:
         yield Hit("CDF114", line, name, "no <description> child (QGC and MAVSDK reject the file)")
-    elif not desc.text:
-        yield Hit("CDF105", desc.sourceline, name, "<description> is empty (MAVSDK crashes on empty text)")
+    elif _text_empty(desc):
+        yield Hit("CDF105", _line(desc), name, "<description> is empty (MAVSDK crashes on empty text)")
 
     control, readonly = a.get("control"), a.get("readonly")
     if readonly == "1" and a.get("writeonly") == "1":

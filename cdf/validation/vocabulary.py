@@ -99,11 +99,12 @@ def _hidden_xpaths():
             etree.XPath(f"boolean(//@*[namespace-uri() = '{_XSI}'])"))
 
 
-def _hidden_from_xsd(root, data: bytes | None) -> bool:
+def _hidden_from_xsd(root, data: bytes | None, info) -> bool:
     """For a document that passed the XSD but for unknown attributes: True when it may hold what the XSD
     does not judge the way the walk does: a comment or processing instruction inside a text element or
     a processing instruction anywhere (the walk counts them as children or doubts the structure), an
-    attribute in the XSI namespace (a validator obeys xsi:type and xsi:nil instead of rejecting them)."""
+    attribute in the XSI namespace (a validator obeys xsi:type and xsi:nil instead of rejecting them).
+    `info`: the document's docinfo."""
     for el in root.iter(*TEXT_ELEMENTS):  # an element child has failed the XSD already
         if len(el):
             return True
@@ -112,7 +113,7 @@ def _hidden_from_xsd(root, data: bytes | None) -> bool:
     # instruction is spelled out, and an attribute can be in a namespace only through a prefix that an
     # xmlns: attribute binds (names take no character references; entities need a DTD, and a document
     # with one never gets here)
-    if data is None or (root.getroottree().docinfo.encoding or "").upper() not in ("UTF-8", "UTF8"):
+    if data is None or (info.encoding or "").upper() not in ("UTF-8", "UTF8"):
         return pi(root) or xsi(root)
     declaration = _XML_DECLARATION.match(data)
     # "?>" ends every processing instruction; "<?" would be sought among all the "<"s
@@ -139,4 +140,4 @@ def unknown_attributes(root, data: bytes | None = None) -> list[tuple[str, str]]
             return None
         if m.group(2).lower() != "decimalplaces":  # a misspelt decimalPlaces is CDF207, semantic.py
             pairs[(m.group(1), m.group(2))] = None
-    return None if _hidden_from_xsd(root, data) else list(pairs)
+    return None if _hidden_from_xsd(root, data, info) else list(pairs)
