@@ -105,20 +105,44 @@ def _hidden_from_xsd(root, data: bytes | None, info) -> bool:
     a processing instruction anywhere (the walk counts them as children or doubts the structure), an
     attribute in the XSI namespace (a validator obeys xsi:type and xsi:nil instead of rejecting them).
     `info`: the document's docinfo."""
-    for el in root.iter(*TEXT_ELEMENTS):  # an element child has failed the XSD already
-        if len(el):
-            return True
     pi, xsi = _hidden_xpaths()
-    # the bytes answer first where they can (the XPaths walk the whole tree): in UTF-8 a processing
-    # instruction is spelled out, and an attribute can be in a namespace only through a prefix that an
-    # xmlns: attribute binds (names take no character references; entities need a DTD, and a document
-    # with one never gets here)
+    # the bytes answer first where they can (the tree checks reach every text element, the XPaths walk
+    # the whole tree): in UTF-8 comments and processing instructions are spelled out, and an attribute
+    # can be in a namespace only through a prefix that an xmlns: attribute binds (names take no
+    # character references; entities need a DTD, and a document with one never gets here)
     if data is None or (info.encoding or "").upper() not in ("UTF-8", "UTF8"):
-        return pi(root) or xsi(root)
+        return _text_element_has_children(root) or pi(root) or xsi(root)
     declaration = _XML_DECLARATION.match(data)
     # "?>" ends every processing instruction; "<?" would be sought among all the "<"s
     return ((data.find(b"?>", declaration.end() if declaration else 0) >= 0 and pi(root))
-            or (b"xmlns:" in data and xsi(root)))
+            or (b"xmlns:" in data and xsi(root))
+            or (_comment_may_follow_text_start(data) and _text_element_has_children(root)))
+
+
+def _text_element_has_children(root) -> bool:
+    # an element child has failed the XSD already: what is left are comments and processing instructions
+    return any(len(el) for el in root.iter(*TEXT_ELEMENTS))
+
+
+_TEXT_START = re.compile(rb"<(?:" + b"|".join(t.encode() for t in sorted(TEXT_ELEMENTS)) + rb")[\s>]")
+
+
+def _comment_may_follow_text_start(data: bytes) -> bool:
+    """False when no comment in these UTF-8 bytes can be inside a text element: the markup before each
+    comment is not a text element's start tag. (The first comment inside a text element follows its start
+    tag and character data, which holds no "<" outside CDATA sections; entities need a DTD. With a CDATA
+    section anywhere the answer is True: not sure.)"""
+    at = data.find(b"<!--")
+    if at < 0:
+        return False
+    if b"<![CDATA[" in data:
+        return True
+    while at >= 0:
+        before = data.rfind(b"<", 0, at)
+        if before >= 0 and _TEXT_START.match(data, before):
+            return True
+        at = data.find(b"<!--", at + 4)
+    return False
 
 
 def unknown_attributes(root, data: bytes | None = None) -> list[tuple[str, str]] | None:

@@ -136,6 +136,27 @@ def test_deep_nesting_is_refused():
     moderately = b"<a>" * 100 + b"</a>" * 100  # below libxml2's own limit, above ours
     r = validate_bytes(GOOD.replace(b"</parameters>", b"</parameters>" + moderately), "deep2.xml")
     assert [f.rule for f in r.findings] == ["CDF006"]
+    # known elements only (the depth test is left out when libxml2's vocabulary proof settles a file)
+    known = b"<option><exclusions>" * 40 + b"</exclusions></option>" * 40
+    r = validate_bytes(GOOD.replace(b"<options>", b"<options>" + known), "deep3.xml")
+    assert [f.rule for f in r.findings] == ["CDF006"]
+
+
+@pytest.mark.parametrize("codec,declared", [("utf-8", "UTF-8"), ("utf-16-le", "UTF-16LE"),
+                                            ("utf-16-be", "UTF-16BE"), ("utf-16", "UTF-16"),
+                                            ("utf-32-le", "UTF-32LE")])
+def test_element_cap_counts_exactly_in_any_encoding(codec, declared):
+    # the cap is counted from the tree unless the bytes alone show it holds (xmlsafe._may_exceed): the
+    # smallest elements, in several encodings, one element under, at and over MAX_ELEMENTS
+    from cdf.xmlsafe import MAX_ELEMENTS
+
+    def doc(n: int) -> bytes:  # the root, <parameters> and n - 2 <a/>
+        return (f'<?xml version="1.0" encoding="{declared}"?><mavlinkcamera><parameters>{"<a/>" * (n - 2)}'
+                "</parameters></mavlinkcamera>").encode(codec)
+
+    for n, capped in ((MAX_ELEMENTS - 1, False), (MAX_ELEMENTS, False), (MAX_ELEMENTS + 1, True)):
+        rules = [f.rule for f in validate_bytes(doc(n), f"{declared}-{n}.xml", "qgc").findings]
+        assert "CDF004" not in rules and ("CDF006" in rules) == capped, (declared, n, rules)
 
 
 def test_invalid_utf8_is_not_well_formed():
