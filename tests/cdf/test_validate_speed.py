@@ -91,14 +91,6 @@ def test_scan_structure_verdict_on_the_corpus():
 
 @pytest.mark.parametrize("doc", [
     BASE.replace(b"<description>p</description>", b"<description>p<?pi x?></description>"),
-    # comments in text elements past what the byte test reads: after a CDATA section holding "<", after
-    # a start tag with a line break or an unknown attribute holding ">", in each kind of text element
-    BASE.replace(b"<description>p</description>", b"<description><![CDATA[a<b]]><!-- c --></description>"),
-    BASE.replace(b"<description>p</description>", b'<description\n z=">">p<!-- c --></description>'),
-    BASE.replace(b"<exclude>P</exclude>", b"<exclude>P<!-- c --></exclude>"),
-    BASE.replace(b"<update>CAM_MODE</update>", b"<update><!-- c -->CAM_MODE</update>"),
-    BASE.replace(b"<model>m</model>", b"<model>m<!-- c --><!-- d --></model>"),
-    BASE.replace(b"<vendor>v</vendor>", b"<vendor>\n<!-- c -->v</vendor>"),
     BASE.replace(b"</mavlinkcamera>", b"</mavlinkcamera><?pi x?>"),
     BASE.replace(b"<updates>", b"<x><option/></x><updates>"),
     BASE.replace(b"<model>m</model>", b"<model>m</model><model>n</model>"),
