@@ -41,8 +41,10 @@ def clear_caches() -> None:
     """Forget the values memoised across files: what a fresh process starts with (the bench starts every
     run cold)."""
     semantic._parse.cache_clear()
+    semantic._attribute_rules.cache_clear()
     semantic._condition_parts.cache_clear()
     schema._lexical_ok.cache_clear()
+    schema._attributes_conform.cache_clear()
 
 
 def validate_bytes(data: bytes, name: str = "<bytes>", profile: str = "strict", *,

@@ -214,23 +214,23 @@ def conforms_fast(root, structure_ok: bool | None = None, attributes: list[dict]
         # root.iterfind("parameters/parameter") without ElementPath's Python-level path handling
         attributes = [dict(p.items()) for section in root.iterchildren("parameters")
                       for p in section.iterchildren("parameter")]
-    for a in attributes:
-        get = a.get
-        for flag in ("control", "readonly", "writeonly"):  # also in the XPath: scan_tree leaves them here
-            v = get(flag)
-            if v is not None and v != "0" and v != "1":
-                return False
-        v = get("decimalPlaces")
-        if v is not None and not _DIGITS.fullmatch(v):
-            return False
-        ptype = get("type")
-        if ptype is None:
-            continue
-        for attr in ("default", "min", "max", "step"):
-            v = get(attr)
-            if v is not None and not _lexical_ok(v, ptype):
-                return False
-    return True
+    # the attributes the XSD types, as one tuple per parameter: parameters repeat them (type uint32,
+    # default 0, ...), so each distinct tuple is judged once (and memoised across files, like _lexical_ok)
+    return all(map(_attributes_conform, {tuple(map(a.get, _TYPED_ATTRS)) for a in attributes}))
+
+
+_TYPED_ATTRS = ("control", "readonly", "writeonly", "decimalPlaces", "type", "default", "min", "max", "step")
+
+
+@functools.lru_cache(maxsize=4096)
+def _attributes_conform(values: tuple[str | None, ...]) -> bool:
+    """Whether a parameter with these values of _TYPED_ATTRS passes the XSD's attribute types."""
+    *flags, decimal_places, ptype, default, lo, hi, step = values
+    if any(v is not None and v != "0" and v != "1" for v in flags):  # also in the XPath: scan_tree leaves them here
+        return False
+    if decimal_places is not None and not _DIGITS.fullmatch(decimal_places):
+        return False
+    return ptype is None or all(v is None or _lexical_ok(v, ptype) for v in (default, lo, hi, step))
 
 
 def schema_hits(root, structure_ok: bool | None = None, attributes: list[dict] | None = None) -> list[Hit]:

@@ -92,8 +92,7 @@ class _Params:
         # parameter checks read them anyway; None when not gathered (see check_document)
         self.strings: tuple[set[str], set[str]] | None = None
         self.attributes: list[dict] | None = None  # see check_document
-        self._typed: dict[str, frozenset | None] = {}
-        self._values: dict[str, list[str] | None] = {}
+        self._targets: dict[str, tuple] = {}
         for p in elements:
             n = p.get("name")
             if n is not None and n not in self.by_name:
@@ -103,22 +102,23 @@ class _Params:
         p = self.by_name.get(name)
         return (p.get("type") or "").lower() if p is not None else None
 
-    def typed_option_values(self, name: str) -> frozenset | None:
-        """The target's option values parsed by its type (cached: many ranges point at one target)."""
-        if name not in self._typed:
-            ttype, values = self.type_of(name), self.option_values(name)
-            self._typed[name] = None if values is None else frozenset(
-                _parse(v, ttype)[0] for v in values) if ttype in _NUMERIC else frozenset()
-        return self._typed[name]
-
-    def option_values(self, name: str) -> list[str] | None:
-        """The target's option values (cached like typed_option_values; callers do not mutate it)."""
-        if name not in self._values:
+    def range_target(self, name: str) -> tuple:
+        """What a <parameterrange> needs of its target, worked out once per target (many ranges point at
+        one): (type, option value texts or None without <options>, the options' typed values, whether the
+        type is numeric, the texts of options that parse by the type)."""
+        target = self._targets.get(name)
+        if target is None:
+            ttype = self.type_of(name)
             p = self.by_name.get(name)
             opts = _first(p, "options") if p is not None else None
-            values = None if opts is None else [o.get("value") for o in _children(opts, "option")]
-            self._values[name] = None if values is None else [v for v in values if v is not None]
-        return self._values[name]
+            values = None if opts is None else [v for v in (o.get("value") for o in _children(opts, "option"))
+                                                if v is not None]
+            numeric = ttype in _NUMERIC
+            parsed = {v: _parse(v, ttype) for v in values} if numeric and values is not None else {}
+            typed = frozenset(v for v, why in parsed.values() if why is None)
+            good = frozenset(t for t, (_v, why) in parsed.items() if why is None)
+            target = self._targets[name] = (ttype, values, typed, numeric, good)
+        return target
 
 
 def check_document(root, data: bytes, scan: TreeScan | None = None,
@@ -205,7 +205,7 @@ def _check_definition(d) -> Iterator[Hit]:
 
 
 def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
-    a = dict(p.items())  # one C call; lxml attribute lookups one by one (and dict(p.attrib)) cost more
+    a = dict(zip(p.keys(), p.values()))  # two C calls: 1.6x faster than dict(p.items()) or dict(p.attrib)
     if params.attributes is not None:
         params.attributes.append(a)
     name, ptype_raw = a.get("name"), a.get("type")
@@ -223,21 +223,6 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
             yield Hit("CDF117", line, name, f"duplicate parameter name (first at line {seen[name]})")
         else:
             seen[name] = line
-    ptype = (ptype_raw or "").lower()
-    if ptype_raw is not None:
-        if ptype == "elapsedseconds":
-            yield Hit("CDF133", line, name, f"type {ptype_raw!r} is known to QGC only (MAVSDK and MAVProxy reject "
-                                            "the file); use uint32 with unit=\"s\"")
-        elif ptype not in _KNOWN:
-            yield Hit("CDF110", line, name, f"unknown type {ptype_raw!r} (QGC and MAVSDK reject the file)")
-        elif ptype_raw != ptype:
-            yield Hit("CDF111", line, name, f"type {ptype_raw!r} is not lower case (MAVSDK rejects the file)")
-        if ptype == "string":
-            yield Hit("CDF112", line, name, "type string is not in the spec (MAVSDK skips it, MAVProxy rejects the file)")
-        elif ptype == "custom":
-            yield Hit("CDF113", line, name, "type custom is silently skipped by MAVSDK")
-        elif ptype == "uint16":
-            yield Hit("CDF115", line, name, "uint16 is broken in MAVSDK's camera plugin; use uint32 or int32")
     # one pass over the few children instead of a find()/findall() per tag: each costs a path lookup
     desc = options_el = updates_el = None
     stray: list = []
@@ -254,6 +239,10 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
                 updates_el = c
         elif ctag == "option":
             stray.append(c)
+    # before the options, whose CDF121s follow the attributes' (findings are sorted by line and rule later)
+    ptype, numeric, default, findings = _attribute_rules(tuple(map(a.get, _RULED_ATTRS)), options_el is not None)
+    for rule, message in findings:
+        yield Hit(rule, line, name, message)
     gather = params.strings
     if gather is not None:
         if stray:
@@ -267,30 +256,9 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
     elif _text_empty(desc):
         yield Hit("CDF105", _line(desc), name, "<description> is empty (MAVSDK crashes on empty text)")
 
-    control, readonly = a.get("control"), a.get("readonly")
-    if readonly == "1" and a.get("writeonly") == "1":
-        yield Hit("CDF131", line, name, 'readonly="1" and writeonly="1" together (MAVSDK rejects the file)')
-    if ptype in ("custom", "string") and control != "0":
-        yield Hit("CDF132", line, name, f'{ptype} parameter without control="0"')
     # only an attribute outside the vocabulary can be a misspelt decimalPlaces: skip the scan otherwise
     if not _PARAM_ATTRS.issuperset(a) and any(k.lower() == "decimalplaces" and k != "decimalPlaces" for k in a):
         yield Hit("CDF207", line, name, "attribute must be spelled decimalPlaces (QGC ignores other spellings)")
-
-    numeric = ptype in _NUMERIC and ptype_raw == ptype
-    default_text = a.get("default")
-    if default_text is None and ptype in _NUMERIC:
-        yield Hit("CDF119", line, name, "no default (MAVSDK silently skips the parameter: 'Default missing')")
-    # typed default/min/max/step, None when absent or invalid (invalid ones are the XSD's CDF120)
-    typed = {}
-    if numeric:
-        for k in ("default", "min", "max", "step"):
-            if k in a:
-                typed[k] = _parse(a[k], ptype)[0]
-    default = typed.get("default")
-    if numeric and ptype in _STOI:
-        for attr, v in typed.items():
-            if isinstance(v, int) and v > STOI_MAX:
-                yield Hit("CDF121", line, name, f"{attr}={v} exceeds 2147483647 (MAVSDK's std::stoi throws: crash)")
 
     if stray:
         yield Hit("CDF122", _line(stray[0]), name, f"{len(stray)} <option> element(s) directly under <parameter>, "
@@ -328,7 +296,7 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
         if hits != 1:
             listed = ", ".join(o.get("value") or "?" for o in options)
             yield Hit("CDF125", line, name,
-                      f"default {default_text!r} matches {'no' if hits == 0 else hits} option value(s) [{listed}] "
+                      f"default {a['default']!r} matches {'no' if hits == 0 else hits} option value(s) [{listed}] "
                       "(MAVSDK rejects the whole file: 'No default found')")
     if ptype == "bool":
         for o in with_refs:
@@ -337,27 +305,8 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
                                                     "(it renders bools as true/false); use uint8 with options")
                 break
 
-    # ranges (min/max/step) for parameters without options
-    if numeric and ptype != "bool":
-        lo_t, hi_t, st_t = a.get("min"), a.get("max"), a.get("step")
-        if options_el is None and (lo_t is None or hi_t is None):
-            yield Hit("CDF127", line, name, "no options and no min/max range "
-                                            "(MAVSDK silently skips the parameter: 'Range not found')")
-        lo, hi, st = typed.get("min"), typed.get("max"), typed.get("step")
-        if lo is not None and hi is not None and lo > hi:
-            yield Hit("CDF128", line, name, f"min {lo_t} > max {hi_t} (MAVProxy rejects the file)")
-        if st is not None and st <= 0:
-            yield Hit("CDF128", line, name, f"step {st_t} is not positive (MAVProxy rejects the file)")
-        if options_el is not None and (lo_t is not None or hi_t is not None):
-            yield Hit("CDF129", line, name, "min/max combined with <options> (MAVSDK ignores the range, the spec "
-                                            "forbids combining a range with exclusions or option ranges)")
-        if default is not None and options_el is None:
-            if (lo is not None and default < lo) or (hi is not None and default > hi):
-                yield Hit("CDF129", line, name, f"default {default_text} outside [{lo_t}, {hi_t}]")
-            elif lo is not None and st and st > 0 and ptype in INT_RANGES and (default - lo) % st:
-                yield Hit("CDF129", line, name, f"default {default_text} is not on the step grid {lo_t} + n*{st_t}")
-
-    if readonly == "1" and options and control not in ("0",):
+    control = a.get("control")
+    if options and a.get("readonly") == "1" and control != "0":
         yield Hit("CDF213", line, name, 'readonly="1" with options but not control="0": a control that never sends')
     if name == "CAM_MODE":
         vals = sorted(o.get("value") or "" for o in options)
@@ -371,6 +320,72 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
         yield from _check_updates(updates_el, name, params, gather)
     for o in with_refs:
         yield from _check_option_refs(o, p, name, ptype, params, gather)
+
+
+# the attributes _attribute_rules judges, in the order of its argument
+_RULED_ATTRS = ("type", "default", "min", "max", "step", "control", "readonly", "writeonly")
+
+
+@functools.lru_cache(maxsize=4096)  # parameters repeat their attributes (type uint32, default 0, ...)
+def _attribute_rules(values: tuple[str | None, ...], has_options: bool) -> tuple[str, bool, object, tuple]:
+    """What a parameter's attributes decide by themselves (with whether it has <options>): its type in lower
+    case, whether its values are typed by it, its typed default (None when absent or invalid: CDF120 is the
+    XSD's), and the findings as (rule, message) pairs, all at the parameter's line."""
+    ptype_raw, default_text, lo_t, hi_t, st_t, control, readonly, writeonly = values
+    ptype = (ptype_raw or "").lower()
+    out = []
+    if ptype_raw is not None:
+        if ptype == "elapsedseconds":
+            out.append(("CDF133", f"type {ptype_raw!r} is known to QGC only (MAVSDK and MAVProxy reject "
+                                  "the file); use uint32 with unit=\"s\""))
+        elif ptype not in _KNOWN:
+            out.append(("CDF110", f"unknown type {ptype_raw!r} (QGC and MAVSDK reject the file)"))
+        elif ptype_raw != ptype:
+            out.append(("CDF111", f"type {ptype_raw!r} is not lower case (MAVSDK rejects the file)"))
+        if ptype == "string":
+            out.append(("CDF112", "type string is not in the spec (MAVSDK skips it, MAVProxy rejects the file)"))
+        elif ptype == "custom":
+            out.append(("CDF113", "type custom is silently skipped by MAVSDK"))
+        elif ptype == "uint16":
+            out.append(("CDF115", "uint16 is broken in MAVSDK's camera plugin; use uint32 or int32"))
+    if readonly == "1" and writeonly == "1":
+        out.append(("CDF131", 'readonly="1" and writeonly="1" together (MAVSDK rejects the file)'))
+    if ptype in ("custom", "string") and control != "0":
+        out.append(("CDF132", f'{ptype} parameter without control="0"'))
+
+    numeric = ptype in _NUMERIC and ptype_raw == ptype
+    if default_text is None and ptype in _NUMERIC:
+        out.append(("CDF119", "no default (MAVSDK silently skips the parameter: 'Default missing')"))
+    typed = {}
+    if numeric:
+        for k, text in (("default", default_text), ("min", lo_t), ("max", hi_t), ("step", st_t)):
+            if text is not None:
+                typed[k] = _parse(text, ptype)[0]
+    default = typed.get("default")
+    if numeric and ptype in _STOI:
+        for attr, v in typed.items():
+            if isinstance(v, int) and v > STOI_MAX:
+                out.append(("CDF121", f"{attr}={v} exceeds 2147483647 (MAVSDK's std::stoi throws: crash)"))
+
+    # ranges (min/max/step) for parameters without options
+    if numeric and ptype != "bool":
+        if not has_options and (lo_t is None or hi_t is None):
+            out.append(("CDF127", "no options and no min/max range "
+                                  "(MAVSDK silently skips the parameter: 'Range not found')"))
+        lo, hi, st = typed.get("min"), typed.get("max"), typed.get("step")
+        if lo is not None and hi is not None and lo > hi:
+            out.append(("CDF128", f"min {lo_t} > max {hi_t} (MAVProxy rejects the file)"))
+        if st is not None and st <= 0:
+            out.append(("CDF128", f"step {st_t} is not positive (MAVProxy rejects the file)"))
+        if has_options and (lo_t is not None or hi_t is not None):
+            out.append(("CDF129", "min/max combined with <options> (MAVSDK ignores the range, the spec "
+                                  "forbids combining a range with exclusions or option ranges)"))
+        if default is not None and not has_options:
+            if (lo is not None and default < lo) or (hi is not None and default > hi):
+                out.append(("CDF129", f"default {default_text} outside [{lo_t}, {hi_t}]"))
+            elif lo is not None and st and st > 0 and ptype in INT_RANGES and (default - lo) % st:
+                out.append(("CDF129", f"default {default_text} is not on the step grid {lo_t} + n*{st_t}"))
+    return ptype, numeric, default, tuple(out)
 
 
 def _check_updates(updates, name, params: _Params, gather) -> Iterator[Hit]:
@@ -417,30 +432,19 @@ def _check_option_refs(o, p, name, ptype, params: _Params, gather) -> Iterator[H
                 for r in _children(pr, "roption"):
                     _gather_attributes(r, gather)
             continue
-        ttype = params.type_of(target)
-        tvalues = params.option_values(target)
+        ttype, tvalues, typed_targets, numeric_target, good = params.range_target(target)
         if tvalues is None:
             yield Hit("CDF204", _line(pr), name, f"range target {target} has no <options> to restrict")
-        typed_targets = params.typed_option_values(target) or frozenset()
-        numeric_target = ttype in _NUMERIC
-        for r in _children(pr, "roption"):
-            rname, rval = r.get("name"), r.get("value")
-            if gather is not None:
-                if rname:
-                    gather[0].add(rname)
-                if rval:
-                    gather[1].add(rval)
-            if rname is None or rval is None:
-                what = " and ".join(a for a, v in (("name", rname), ("value", rval)) if v is None)
-                yield Hit("CDF123", _line(r), name, f"<roption> without {what} "
-                                                    "(QGC rejects the file, MAVSDK skips the parameter)")
-                continue
-            if numeric_target:
-                v, why = _parse(rval, ttype)
-                if why:
-                    yield Hit("CDF120", _line(r), name, f"roption value for {target} ({ttype}): {why}")
-                elif tvalues is not None and v not in typed_targets:
-                    yield Hit("CDF204", _line(r), name, f"roption value {rval} is not an option of {target}")
+        roptions = _children(pr, "roption")
+        # the common case in one pass per attribute: every roption complete and its value the text of an
+        # option of the target that parses (then the loop below would find nothing)
+        rnames = [r.get("name") for r in roptions]
+        rvalues = [r.get("value") for r in roptions]
+        if gather is not None:
+            gather[0].update(filter(None, rnames))
+            gather[1].update(filter(None, rvalues))
+        if None in rnames or None in rvalues or (numeric_target and not good.issuperset(rvalues)):
+            yield from _check_roptions(roptions, name, target, ttype, tvalues, typed_targets, numeric_target)
         cond = pr.get("condition")
         if cond is not None:
             yield from _check_condition(cond, pr, name, params)
@@ -452,6 +456,22 @@ def _check_option_refs(o, p, name, ptype, params: _Params, gather) -> Iterator[H
         elif val is not None and ptype in ("float", "double"):
             yield Hit("CDF206", _line(o), name, f"{ptype} option {val!r} triggers exclusions/ranges; QGC matches it "
                                                 "only if written exactly as it renders the value")
+
+
+def _check_roptions(roptions, name, target, ttype, tvalues, typed_targets, numeric_target) -> Iterator[Hit]:
+    for r in roptions:
+        rname, rval = r.get("name"), r.get("value")
+        if rname is None or rval is None:
+            what = " and ".join(a for a, v in (("name", rname), ("value", rval)) if v is None)
+            yield Hit("CDF123", _line(r), name, f"<roption> without {what} "
+                                                "(QGC rejects the file, MAVSDK skips the parameter)")
+            continue
+        if numeric_target:
+            v, why = _parse(rval, ttype)
+            if why:
+                yield Hit("CDF120", _line(r), name, f"roption value for {target} ({ttype}): {why}")
+            elif tvalues is not None and v not in typed_targets:
+                yield Hit("CDF204", _line(r), name, f"roption value {rval} is not an option of {target}")
 
 
 def _gather_attributes(el, gather) -> None:

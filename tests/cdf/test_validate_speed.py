@@ -201,6 +201,45 @@ def test_comments_outside_text_elements_need_no_look_at_the_tree():
     assert not any(vocabulary._comment_may_follow_text_start(d) for d in commented)
 
 
+@pytest.mark.parametrize("data, needle, rare, start, found", [
+    (b"a?b?>c", b"?>", b"?", 0, True),  # the first "?" is not the needle's: search on from there
+    (b"a?b?c>", b"?>", b"?", 0, False),
+    (b"<?xml?>x", b"?>", b"?", 7, False),  # only the declaration's, before start
+    (b"<?xml?>x?>", b"?>", b"?", 7, True),
+    (b"a:b xmlns:i=", b"xmlns:", b":", 0, True),  # the needle's rare byte is not its first
+    (b"xmlns", b"xmlns:", b":", 0, False),
+    (b"", b"?>", b"?", 0, False),
+])
+def test_has_finds_exactly_what_find_finds(data, needle, rare, start, found):
+    assert vocabulary._has(data, needle, rare, start) is found is (data.find(needle, start) >= 0)
+
+
+@pytest.mark.parametrize("doc, may", [
+    (b"<!-- a --><m/>", False),  # a comment at the very start
+    (b"<m>Hi! there<!-- a --></m>", False),  # "!" in text, then a comment not in a text element
+    (b"<model>Hi!<!-- a --></model>", True),
+    (b"<m><![CDATA[x]]></m><!-- a -->", True),  # CDATA anywhere: not sure, in either order
+    (b"<!-- a --><m><![CDATA[x]]></m>", True),
+    (b"<m><![CDATA[x]]></m>", False),  # no comment at all
+])
+def test_comment_byte_test_reads_every_bang(doc, may):
+    assert vocabulary._comment_may_follow_text_start(doc) is may
+
+
+def test_attribute_rules_are_a_pure_function_of_the_attribute_values():
+    # memoised across parameters and files: the same values give the same answer wherever they stand
+    rules = semantic._attribute_rules
+    assert rules(("uint32", "0", None, None, None, "0", None, None), True) == ("uint32", True, 0, ())
+    ptype, numeric, default, findings = rules(("UINT16", "70000", "5", "1", "0", None, "1", "1"), False)
+    assert (ptype, numeric, default) == ("uint16", False, None)
+    assert [r for r, _m in findings] == ["CDF111", "CDF115", "CDF131"]
+    _p, _n, default, findings = rules(("int32", "3000000000", "5", "1", "0", None, None, None), False)
+    assert default is None and [r for r, _m in findings] == ["CDF128", "CDF128"]  # invalid default: the XSD's
+    _p, _n, default, findings = rules(("uint32", "7", "0", "10", "2", None, None, None), False)
+    assert default == 7 and [m for _r, m in findings] == ["default 7 is not on the step grid 0 + n*2"]
+    assert rules(("uint32", "7", "0", "10", "2", None, None, None), True)[3][0][0] == "CDF129"  # range + options
+
+
 def test_vocabulary_proof_reports_unknown_attributes_once_in_document_order():
     doc = (BASE.replace(b'<option name="Photo" value="0">', b'<option name="Photo" value="0" z="1" y="2">')
            .replace(b'<option name="Video" value="1">', b'<option name="Video" value="1" y="3">')
