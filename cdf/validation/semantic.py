@@ -87,16 +87,14 @@ class _Params:
 
     def __init__(self, elements) -> None:
         self.elements = elements
-        self.by_name: dict[str, object] = {}
         # (texts, structural): the strings the localization rule compares with, gathered while the
         # parameter checks read them anyway; None when not gathered (see check_document)
         self.strings: tuple[set[str], set[str]] | None = None
         self.attributes: list[dict] | None = None  # see check_document
         self._targets: dict[str, tuple] = {}
-        for p in elements:
-            n = p.get("name")
-            if n is not None and n not in self.by_name:
-                self.by_name[n] = p
+        # the first parameter of each name: built backwards, so that the first one is written last
+        self.by_name: dict[str, object] = dict(zip(reversed([p.get("name") for p in elements]), reversed(elements)))
+        self.by_name.pop(None, None)
 
     def type_of(self, name: str) -> str | None:
         p = self.by_name.get(name)
@@ -209,7 +207,7 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
     if params.attributes is not None:
         params.attributes.append(a)
     name, ptype_raw = a.get("name"), a.get("type")
-    line = _line(p)
+    line = p.sourceline
     if name is None or ptype_raw is None:
         missing = " and ".join(a for a, v in (("name", name), ("type", ptype_raw)) if v is None)
         yield Hit("CDF109", line, name, f"<parameter> has no {missing} (QGC and MAVSDK reject the file)")
@@ -243,18 +241,19 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
     ptype, numeric, default, findings = _attribute_rules(tuple(map(a.get, _RULED_ATTRS)), options_el is not None)
     for rule, message in findings:
         yield Hit(rule, line, name, message)
+    desc_text = desc.text if desc is not None else None  # each .text read builds a new str
     gather = params.strings
     if gather is not None:
         if stray:
             params.strings = gather = None  # stray <option>s hold strings too: the XPaths find them
         else:
-            gather[1].update(v for v in (name, ptype_raw, a.get("default")) if v)
-            if desc is not None and desc.text:
-                gather[0].add(desc.text)
+            gather[1].update(filter(None, (name, ptype_raw, a.get("default"))))
+            if desc_text:
+                gather[0].add(desc_text)
     if desc is None:
         yield Hit("CDF114", line, name, "no <description> child (QGC and MAVSDK reject the file)")
-    elif _text_empty(desc):
-        yield Hit("CDF105", _line(desc), name, "<description> is empty (MAVSDK crashes on empty text)")
+    elif not desc_text:
+        yield Hit("CDF105", desc.sourceline, name, "<description> is empty (MAVSDK crashes on empty text)")
 
     # only an attribute outside the vocabulary can be a misspelt decimalPlaces: skip the scan otherwise
     if not _PARAM_ATTRS.issuperset(a) and any(k.lower() == "decimalplaces" and k != "decimalPlaces" for k in a):
