@@ -143,6 +143,10 @@ def _comment_may_follow_text_start(data: bytes) -> bool:
     comment = cdata = False
     at = data.find(b"!", 1)  # every comment and CDATA section holds a "!", which is rare elsewhere (see _has)
     while at >= 0:
+        if data[at - 1] != 0x3C:  # a "!" in text: on to the next "<!" (so a text full of "!" costs no loop)
+            at = data.find(b"<!", at) + 1
+            if not at:
+                break
         if data.startswith(b"<!--", at - 1):
             if cdata:
                 return True

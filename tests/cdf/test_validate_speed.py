@@ -221,6 +221,8 @@ def test_has_finds_exactly_what_find_finds(data, needle, rare, start, found):
     (b"<m><![CDATA[x]]></m><!-- a -->", True),  # CDATA anywhere: not sure, in either order
     (b"<!-- a --><m><![CDATA[x]]></m>", True),
     (b"<m><![CDATA[x]]></m>", False),  # no comment at all
+    (b"<m>" + b"!" * 5000 + b"</m><!-- a --><model>!!<!-- b --></model>", True),  # "!"s in text skipped
+    (b"<m>" + b"!" * 5000 + b"</m><!-- a -->", False),
 ])
 def test_comment_byte_test_reads_every_bang(doc, may):
     assert vocabulary._comment_may_follow_text_start(doc) is may

@@ -140,13 +140,15 @@ def build(model_ids: tuple[str, ...], all_models: bool, output: str, base_url: s
 @click.option("--prefix", default=None, metavar="PATH",
               help="URL path DIR appears under [default: the path of manifest.json's URIs, else /].")
 def serve(directory: str, host: str, port: int, prefix: str | None) -> None:
-    """Serve a bundle over HTTP until Ctrl-C (read-only: GET and HEAD, no escape out of DIR)."""
+    """Serve a bundle over HTTP until Ctrl-C or SIGTERM (read-only: GET and HEAD, no escape out of DIR)."""
+    from wiris_tools.cli.stopping import sigterm_interrupts
     from wiris_tools.serve import make_server, server_url
 
     server = make_server(directory, host, port, prefix=prefix)
     click.echo(f"serving {directory} at {server_url(server)} (Ctrl-C stops)", err=True)
     try:
-        server.serve_forever()
+        with sigterm_interrupts():
+            server.serve_forever()
     except KeyboardInterrupt:
         click.echo("stopped", err=True)
     finally:

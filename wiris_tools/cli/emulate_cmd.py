@@ -37,6 +37,7 @@ def emulate(model: str, url: str, component: int | None, system: int, http_port:
     A WIRIS answers the Workswell manual's commands and PARAM_EXT, and serves its camera definition over
     HTTP; a RedEdge speaks its serial API (MAVLink 1, DIGICAM_CONTROL message, classic parameters).
     """
+    from wiris_tools.cli.stopping import sigterm_interrupts
     from wiris_tools.emulate.runner import start_emulator
     from wiris_tools.signing import load_signing_key
 
@@ -56,7 +57,8 @@ def emulate(model: str, url: str, component: int | None, system: int, http_port:
         click.echo(f"camera definition: {emu.definition_uri}", err=True)
     click.echo("Ctrl-C stops it" if not duration else f"stopping after {duration:g} s", err=True)
     try:
-        emu.wait(duration or None)
+        with sigterm_interrupts():
+            emu.wait(duration or None)
     except KeyboardInterrupt:
         pass
     finally:
