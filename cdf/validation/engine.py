@@ -25,7 +25,7 @@ def _hits(data: bytes, name: str, camera_info: CameraInfo | None) -> tuple[list[
     scan = scan_tree(root, loaded.data)  # the vocabulary rule and the XSD fast path's structure test
     if not scan.proved and too_deep(root):  # before anything recursive (xmlschema) sees the tree
         return hits + [Hit(TOO_DEEP.rule, TOO_DEEP.line, None, TOO_DEEP.message)], 0
-    attributes: list[dict] = []  # each parameter's, read once for both
+    attributes: list[tuple] = []  # each parameter's typed attributes, read once for both
     hits += check_document(root, loaded.data, scan, attributes)
     hits += schema_hits(root, scan.xsd_structure_ok, attributes)
     if camera_info is not None:

@@ -189,15 +189,15 @@ def _violation_xpath():
 _DIGITS = re.compile(r"[0-9]+")
 
 
-def conforms_fast(root, structure_ok: bool | None = None, attributes: list[dict] | None = None) -> bool:
+def conforms_fast(root, structure_ok: bool | None = None, attributes: list[tuple] | None = None) -> bool:
     """True only if the XSD would report nothing that _map keeps. False means "not sure": run xmlschema.
 
     Structure is checked by one compiled XPath (C speed; it also looks inside unknown elements, which the
     XSD skips: stricter, so still safe), unless the caller already knows it from semantic.scan_tree
     (`structure_ok`: libxml2's proof of the vocabulary, or the walk's structure test in Python); typed
     attribute values by Python on the parameters only, from `attributes` when the caller has read them
-    (semantic.check_document does: one dict per parameter of the <parameters> section, which is the
-    root's only one whenever the structure is sound, the only case that reads them).
+    (semantic.check_document does: one tuple of TYPED_ATTRS values per parameter of the <parameters>
+    section, which is the root's only one whenever the structure is sound, the only case that reads them).
     """
     if root.tag != "mavlinkcamera":
         return True  # schema_hits does not run on other roots
@@ -212,19 +212,21 @@ def conforms_fast(root, structure_ok: bool | None = None, attributes: list[dict]
         return False
     if attributes is None:
         # root.iterfind("parameters/parameter") without ElementPath's Python-level path handling
-        attributes = [dict(p.items()) for section in root.iterchildren("parameters")
+        attributes = [tuple(map(p.get, TYPED_ATTRS)) for section in root.iterchildren("parameters")
                       for p in section.iterchildren("parameter")]
-    # the attributes the XSD types, as one tuple per parameter: parameters repeat them (type uint32,
-    # default 0, ...), so each distinct tuple is judged once (and memoised across files, like _lexical_ok)
-    return all(map(_attributes_conform, {tuple(map(a.get, _TYPED_ATTRS)) for a in attributes}))
+    # parameters repeat these values (type uint32, default 0, ...): each distinct tuple is judged once
+    # (and memoised across files, like _lexical_ok)
+    return all(map(_attributes_conform, set(attributes)))
 
 
-_TYPED_ATTRS = ("control", "readonly", "writeonly", "decimalPlaces", "type", "default", "min", "max", "step")
+# A parameter's attributes that the XSD types, in the order of the tuples conforms_fast takes; semantic.py's
+# attribute rules read the same tuple, so one read per parameter serves both.
+TYPED_ATTRS = ("control", "readonly", "writeonly", "decimalPlaces", "type", "default", "min", "max", "step")
 
 
 @functools.lru_cache(maxsize=4096)
 def _attributes_conform(values: tuple[str | None, ...]) -> bool:
-    """Whether a parameter with these values of _TYPED_ATTRS passes the XSD's attribute types."""
+    """Whether a parameter with these values of TYPED_ATTRS passes the XSD's attribute types."""
     *flags, decimal_places, ptype, default, lo, hi, step = values
     if any(v is not None and v != "0" and v != "1" for v in flags):  # also in the XPath: scan_tree leaves them here
         return False
@@ -233,7 +235,7 @@ def _attributes_conform(values: tuple[str | None, ...]) -> bool:
     return ptype is None or all(v is None or _lexical_ok(v, ptype) for v in (default, lo, hi, step))
 
 
-def schema_hits(root, structure_ok: bool | None = None, attributes: list[dict] | None = None) -> list[Hit]:
+def schema_hits(root, structure_ok: bool | None = None, attributes: list[tuple] | None = None) -> list[Hit]:
     """XSD findings for a document whose root is <mavlinkcamera> (other roots: CDF101, semantic.py).
     `structure_ok`, `attributes`: see conforms_fast."""
     if root.tag != "mavlinkcamera" or conforms_fast(root, structure_ok, attributes):

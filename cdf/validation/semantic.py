@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from typing import Iterator, Mapping
 
 from cdf.validation import vocabulary
-from cdf.validation.schema import Hit
+from cdf.validation.schema import TYPED_ATTRS, Hit
 from cdf.validation.values import (INT_RANGES, KNOWN_TYPES, NUMERIC_TYPES, STOI_MAX, STOI_TYPES,
                                    canonical_int, parse_typed)
 from cdf.validation.vocabulary import CDF_TAGS, TEXT_ELEMENTS, VOCABULARY
@@ -90,15 +90,11 @@ class _Params:
         # (texts, structural): the strings the localization rule compares with, gathered while the
         # parameter checks read them anyway; None when not gathered (see check_document)
         self.strings: tuple[set[str], set[str]] | None = None
-        self.attributes: list[dict] | None = None  # see check_document
+        self.attributes: list[tuple] | None = None  # see check_document
         self._targets: dict[str, tuple] = {}
         # the first parameter of each name: built backwards, so that the first one is written last
         self.by_name: dict[str, object] = dict(zip(reversed([p.get("name") for p in elements]), reversed(elements)))
         self.by_name.pop(None, None)
-
-    def type_of(self, name: str) -> str | None:
-        p = self.by_name.get(name)
-        return (p.get("type") or "").lower() if p is not None else None
 
     def range_target(self, name: str) -> tuple:
         """What a <parameterrange> needs of its target, worked out once per target (many ranges point at
@@ -106,8 +102,8 @@ class _Params:
         type is numeric, the texts of options that parse by the type)."""
         target = self._targets.get(name)
         if target is None:
-            ttype = self.type_of(name)
             p = self.by_name.get(name)
+            ttype = (p.get("type") or "").lower() if p is not None else None
             opts = _first(p, "options") if p is not None else None
             values = None if opts is None else [v for v in (o.get("value") for o in _children(opts, "option"))
                                                 if v is not None]
@@ -120,9 +116,9 @@ class _Params:
 
 
 def check_document(root, data: bytes, scan: TreeScan | None = None,
-                   attributes: list[dict] | None = None) -> Iterator[Hit]:
+                   attributes: list[tuple] | None = None) -> Iterator[Hit]:
     """All Python checks of one parsed document; `scan` is scan_tree(root) when the caller has it.
-    `attributes`: a list to receive each parameter's attributes as a dict (for schema.conforms_fast)."""
+    `attributes`: a list to receive each parameter's schema.TYPED_ATTRS values (for schema.conforms_fast)."""
     yield from _check_encoding(data)
     if root.tag != "mavlinkcamera":
         yield Hit("CDF101", _line(root), None,
@@ -204,8 +200,9 @@ def _check_definition(d) -> Iterator[Hit]:
 
 def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
     a = dict(zip(p.keys(), p.values()))  # two C calls: 1.6x faster than dict(p.items()) or dict(p.attrib)
+    typed_attrs = tuple(map(a.get, TYPED_ATTRS))  # for _attribute_rules and schema.conforms_fast
     if params.attributes is not None:
-        params.attributes.append(a)
+        params.attributes.append(typed_attrs)
     name, ptype_raw = a.get("name"), a.get("type")
     line = p.sourceline
     if name is None or ptype_raw is None:
@@ -238,7 +235,7 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
         elif ctag == "option":
             stray.append(c)
     # before the options, whose CDF121s follow the attributes' (findings are sorted by line and rule later)
-    ptype, numeric, default, findings = _attribute_rules(tuple(map(a.get, _RULED_ATTRS)), options_el is not None)
+    ptype, numeric, default, findings = _attribute_rules(typed_attrs, options_el is not None)
     for rule, message in findings:
         yield Hit(rule, line, name, message)
     desc_text = desc.text if desc is not None else None  # each .text read builds a new str
@@ -321,16 +318,13 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
         yield from _check_option_refs(o, p, name, ptype, params, gather)
 
 
-# the attributes _attribute_rules judges, in the order of its argument
-_RULED_ATTRS = ("type", "default", "min", "max", "step", "control", "readonly", "writeonly")
-
-
 @functools.lru_cache(maxsize=4096)  # parameters repeat their attributes (type uint32, default 0, ...)
 def _attribute_rules(values: tuple[str | None, ...], has_options: bool) -> tuple[str, bool, object, tuple]:
-    """What a parameter's attributes decide by themselves (with whether it has <options>): its type in lower
-    case, whether its values are typed by it, its typed default (None when absent or invalid: CDF120 is the
-    XSD's), and the findings as (rule, message) pairs, all at the parameter's line."""
-    ptype_raw, default_text, lo_t, hi_t, st_t, control, readonly, writeonly = values
+    """What a parameter's attributes (`values`: those of schema.TYPED_ATTRS) decide by themselves, with
+    whether it has <options>: its type in lower case, whether its values are typed by it, its typed default
+    (None when absent or invalid: CDF120 is the XSD's), and the findings as (rule, message) pairs, all at
+    the parameter's line."""
+    control, readonly, writeonly, _decimal_places, ptype_raw, default_text, lo_t, hi_t, st_t = values
     ptype = (ptype_raw or "").lower()
     out = []
     if ptype_raw is not None:
@@ -419,6 +413,12 @@ def _check_option_refs(o, p, name, ptype, params: _Params, gather) -> Iterator[H
     for pr in o.iter("parameterrange"):
         is_trigger = True
         target = pr.get("parameter")
+        roptions = _children(pr, "roption")
+        rnames = [r.get("name") for r in roptions]
+        rvalues = [r.get("value") for r in roptions]
+        if gather is not None:
+            gather[0].update(filter(None, rnames))
+            gather[1].update(filter(None, rvalues))
         if target is None or target == name or target not in params.by_name:
             if target is None:
                 yield Hit("CDF123", _line(pr), name, "<parameterrange> without parameter "
@@ -427,21 +427,12 @@ def _check_option_refs(o, p, name, ptype, params: _Params, gather) -> Iterator[H
                 why = "its own parameter" if target == name else f"unknown parameter {target!r}"
                 yield Hit("CDF203", _line(pr), name, f"<parameterrange> targets {why} "
                                                      "(MAVSDK skips the parameter: 'Unknown roption type')")
-            if gather is not None:
-                for r in _children(pr, "roption"):
-                    _gather_attributes(r, gather)
             continue
         ttype, tvalues, typed_targets, numeric_target, good = params.range_target(target)
         if tvalues is None:
             yield Hit("CDF204", _line(pr), name, f"range target {target} has no <options> to restrict")
-        roptions = _children(pr, "roption")
-        # the common case in one pass per attribute: every roption complete and its value the text of an
-        # option of the target that parses (then the loop below would find nothing)
-        rnames = [r.get("name") for r in roptions]
-        rvalues = [r.get("value") for r in roptions]
-        if gather is not None:
-            gather[0].update(filter(None, rnames))
-            gather[1].update(filter(None, rvalues))
+        # one by one only when some roption is incomplete or its value is not the text of an option of the
+        # target that parses (otherwise _check_roptions finds nothing)
         if None in rnames or None in rvalues or (numeric_target and not good.issuperset(rvalues)):
             yield from _check_roptions(roptions, name, target, ttype, tvalues, typed_targets, numeric_target)
         cond = pr.get("condition")
@@ -471,14 +462,6 @@ def _check_roptions(roptions, name, target, ttype, tvalues, typed_targets, numer
                 yield Hit("CDF120", _line(r), name, f"roption value for {target} ({ttype}): {why}")
             elif tvalues is not None and v not in typed_targets:
                 yield Hit("CDF204", _line(r), name, f"roption value {rval} is not an option of {target}")
-
-
-def _gather_attributes(el, gather) -> None:
-    n, v = el.get("name"), el.get("value")
-    if n:
-        gather[0].add(n)
-    if v:
-        gather[1].add(v)
 
 
 def _check_condition(cond: str, pr, name, params: _Params) -> Iterator[Hit]:

@@ -77,7 +77,7 @@ def test_scan_structure_verdict_equals_the_xpath(ops):
     assert schema.conforms_fast(root, scan.xsd_structure_ok) == schema.conforms_fast(root), etree.tostring(root)
     assert list(scan.vocabulary) == list(semantic._vocabulary_walk(root))
     # the parameters' attributes as check_document read them serve conforms_fast like its own reading
-    attributes: list[dict] = []
+    attributes: list[tuple] = []
     list(semantic.check_document(root, etree.tostring(root), scan, attributes))
     assert schema.conforms_fast(root, scan.xsd_structure_ok, attributes) == schema.conforms_fast(root)
 
@@ -230,16 +230,18 @@ def test_comment_byte_test_reads_every_bang(doc, may):
 
 def test_attribute_rules_are_a_pure_function_of_the_attribute_values():
     # memoised across parameters and files: the same values give the same answer wherever they stand
+    # (values in the order of schema.TYPED_ATTRS: control, readonly, writeonly, decimalPlaces, type, default,
+    # min, max, step)
     rules = semantic._attribute_rules
-    assert rules(("uint32", "0", None, None, None, "0", None, None), True) == ("uint32", True, 0, ())
-    ptype, numeric, default, findings = rules(("UINT16", "70000", "5", "1", "0", None, "1", "1"), False)
+    assert rules(("0", None, None, None, "uint32", "0", None, None, None), True) == ("uint32", True, 0, ())
+    ptype, numeric, default, findings = rules((None, "1", "1", None, "UINT16", "70000", "5", "1", "0"), False)
     assert (ptype, numeric, default) == ("uint16", False, None)
     assert [r for r, _m in findings] == ["CDF111", "CDF115", "CDF131"]
-    _p, _n, default, findings = rules(("int32", "3000000000", "5", "1", "0", None, None, None), False)
+    _p, _n, default, findings = rules((None, None, None, None, "int32", "3000000000", "5", "1", "0"), False)
     assert default is None and [r for r, _m in findings] == ["CDF128", "CDF128"]  # invalid default: the XSD's
-    _p, _n, default, findings = rules(("uint32", "7", "0", "10", "2", None, None, None), False)
+    _p, _n, default, findings = rules((None, None, None, None, "uint32", "7", "0", "10", "2"), False)
     assert default == 7 and [m for _r, m in findings] == ["default 7 is not on the step grid 0 + n*2"]
-    assert rules(("uint32", "7", "0", "10", "2", None, None, None), True)[3][0][0] == "CDF129"  # range + options
+    assert rules((None, None, None, None, "uint32", "7", "0", "10", "2"), True)[3][0][0] == "CDF129"  # range + options
 
 
 def test_vocabulary_proof_reports_unknown_attributes_once_in_document_order():
