@@ -9,8 +9,6 @@ import json
 import os
 import signal
 import socket
-import subprocess
-import sys
 import threading
 from pathlib import Path
 
@@ -18,6 +16,7 @@ import pytest
 
 from cdf.bundle import build_bundle
 from cdf.errors import WirisError
+from cli_child import stop, wiris_child
 from wiris_tools.serve import make_server, prefix_from_manifest, server_url
 
 PRO = "workswell_wiris-pro_v1.xml"
@@ -199,12 +198,7 @@ def test_missing_directory_and_busy_port_are_errors(tmp_path, bundle):
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_cli_serve_runs_until_interrupted(bundle, signum):
     """The real command in a subprocess: it prints its URL, serves, and stops on Ctrl-C or SIGTERM."""
-    # the child gets Python's Ctrl-C handler as a terminal would start it: a test run in a background job
-    # inherits SIGINT ignored, and Python then never raises KeyboardInterrupt (SIGTERM works either way)
-    code = ("import signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
-            "from wiris_tools.cli import main; sys.argv=['wiris','cdf','serve',sys.argv[1],'--port','0']; main()")
-    proc = subprocess.Popen([sys.executable, "-c", code, str(bundle)], stderr=subprocess.PIPE, text=True)
-    try:
+    with wiris_child("cdf", "serve", str(bundle), "--port", "0") as proc:
         first = proc.stderr.readline()
         assert first.startswith(f"serving {bundle} at http://127.0.0.1:") and "/cdf/" in first
         port = int(first.split("127.0.0.1:")[1].split("/")[0])
@@ -213,13 +207,7 @@ def test_cli_serve_runs_until_interrupted(bundle, signum):
         assert conn.getresponse().status == 200
         conn.close()
         assert proc.stderr.readline().strip() == f"GET /cdf/{PRO} 200 {(bundle / PRO).stat().st_size}"
-        proc.send_signal(signum)
-        assert proc.wait(30) == 0
-        assert "stopped" in proc.stderr.read()
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait(5)
+        assert "stopped" in stop(proc, signum)
 
 
 def test_random_paths_never_leave_the_bundle(server, bundle):

@@ -257,22 +257,13 @@ def test_emulate_command_runs_and_stops():
 def test_emulate_command_stops_on_sigterm():
     """Run until stopped: SIGTERM (kill, systemd, docker) stops the real command like Ctrl-C, exit 0."""
     import signal
-    import subprocess
-    import sys
 
-    code = "import sys; from wiris_tools.cli import main; sys.argv = ['wiris'] + sys.argv[1:]; main()"
-    proc = subprocess.Popen([sys.executable, "-c", code, "emulate", "wiris-security", "--connect",
-                             "udpin:127.0.0.1:0"], stderr=subprocess.PIPE, text=True)
-    try:
+    from cli_child import stop, wiris_child
+
+    with wiris_child("emulate", "wiris-security", "--connect", "udpin:127.0.0.1:0") as proc:
         lines = [proc.stderr.readline() for _ in range(3)]
         assert lines[-1].strip() == "Ctrl-C stops it", lines
-        proc.send_signal(signal.SIGTERM)
-        assert proc.wait(30) == 0
-        assert "emulator stopped" in proc.stderr.read()
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait(5)
+        assert "emulator stopped" in stop(proc, signal.SIGTERM)
 
 
 def test_settings_report_a_camera_that_disagrees_with_its_definition(pro):
