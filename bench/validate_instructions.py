@@ -90,18 +90,21 @@ def main() -> None:
         return
     if shutil.which("valgrind") is None:
         raise SystemExit("valgrind is not installed (apt install valgrind)")
-    now = measure(REPO, "working tree")
-    if args.against:
-        with tempfile.TemporaryDirectory() as tmp:
-            archive = subprocess.run(["git", "-C", str(REPO), "archive", args.against], capture_output=True,
-                                     check=True).stdout
+    with tempfile.TemporaryDirectory() as tmp:
+        tree = None
+        if args.against:  # extracted first: a bad revision fails before minutes of measuring
+            got = subprocess.run(["git", "-C", str(REPO), "archive", args.against], capture_output=True)
+            if got.returncode:
+                raise SystemExit(f"--against {args.against}: git archive failed: "
+                                 f"{got.stderr.decode(errors='replace').strip()} (name a commit, tag or branch)")
             tree = Path(tmp) / "rev"
             tree.mkdir()
-            with tarfile.open(fileobj=io.BytesIO(archive)) as tar:
+            with tarfile.open(fileobj=io.BytesIO(got.stdout)) as tar:
                 tar.extractall(tree, filter="data")
+        now = measure(REPO, "working tree")
+        if tree is not None:
             before = measure(tree, args.against)
-        print(f"validate: working tree / {args.against} = {now / before:.3f}")
-
+            print(f"validate: working tree / {args.against} = {now / before:.3f}")
 
 if __name__ == "__main__":
     main()
