@@ -145,9 +145,9 @@ def serve(directory: str, host: str, port: int, prefix: str | None) -> None:
     from wiris_tools.serve import make_server, server_url
 
     server = make_server(directory, host, port, prefix=prefix)
-    click.echo(f"serving {directory} at {server_url(server)} (Ctrl-C stops)", err=True)
     try:
-        with sigterm_interrupts():
+        with sigterm_interrupts():  # before the ready line: whoever reads it may send SIGTERM at once
+            click.echo(f"serving {directory} at {server_url(server)} (Ctrl-C stops)", err=True)
             server.serve_forever()
     except KeyboardInterrupt:
         click.echo("stopped", err=True)

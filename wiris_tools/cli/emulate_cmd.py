@@ -51,13 +51,13 @@ def emulate(model: str, url: str, component: int | None, system: int, http_port:
     comp_id = comp.component if comp is not None else emu.state.component
     port = emu.link.local_port
     shown = url if not url.startswith("udpin:") or port is None else f"{url.rsplit(':', 1)[0]}:{port}"
-    click.echo(f"emulating {cam.vendor} {cam.model} as component {comp_id} on {shown}"
-               + (" (MAVLink 1)" if cam.mavlink_version == 1 else ""), err=True)
-    if emu.definition_uri:
-        click.echo(f"camera definition: {emu.definition_uri}", err=True)
-    click.echo("Ctrl-C stops it" if not duration else f"stopping after {duration:g} s", err=True)
     try:
-        with sigterm_interrupts():
+        with sigterm_interrupts():  # before the first line: whoever reads it may send SIGTERM at once
+            click.echo(f"emulating {cam.vendor} {cam.model} as component {comp_id} on {shown}"
+                       + (" (MAVLink 1)" if cam.mavlink_version == 1 else ""), err=True)
+            if emu.definition_uri:
+                click.echo(f"camera definition: {emu.definition_uri}", err=True)
+            click.echo("Ctrl-C stops it" if not duration else f"stopping after {duration:g} s", err=True)
             emu.wait(duration or None)
     except KeyboardInterrupt:
         pass

@@ -22,6 +22,7 @@ from cdf.errors import CdfError
 from wiris_tools.errors import LinkError
 
 TICK_S = 0.02
+WAIT_STEP_S = 0.1  # how soon wait() notices a close() from another thread (signals cut a step short)
 
 
 class _DefinitionServer:
@@ -60,7 +61,8 @@ class _DefinitionServer:
         self.httpd.daemon_threads = True
         self.port = self.httpd.server_address[1]
         self.uri = f"http://{host}:{self.port}{served_path}"
-        self._thread = threading.Thread(target=self.httpd.serve_forever, name="cdf-http", daemon=True)
+        # shutdown() waits for the loop's next poll: 0.5 s by default, every time an emulator stops
+        self._thread = threading.Thread(target=self.httpd.serve_forever, args=(0.05,), name="cdf-http", daemon=True)
         self._thread.start()
 
     def close(self) -> None:
@@ -113,8 +115,18 @@ class Emulator:
             self._stop.wait(TICK_S)
 
     def wait(self, duration_s: float | None = None) -> None:
-        """Block until close() (or `duration_s` seconds; None = forever)."""
-        self._stop.wait(duration_s)
+        """Block until close() (or `duration_s` seconds; None = forever).
+
+        Sleeps in short steps instead of blocking in self._stop.wait: Ctrl-C and SIGTERM raise
+        KeyboardInterrupt wherever the main thread is, and raised inside Event.wait it can leave the
+        Event's lock held, so that close() then hangs for ever (seen once in 40 SIGTERMs). A sleep holds
+        no lock, and a signal cuts it short at once."""
+        deadline = None if duration_s is None else time.monotonic() + duration_s
+        while not self._stop.is_set():  # is_set reads a flag: no lock
+            left = WAIT_STEP_S if deadline is None else min(WAIT_STEP_S, deadline - time.monotonic())
+            if left <= 0:
+                return
+            time.sleep(left)
 
     def close(self) -> None:
         self._stop.set()
