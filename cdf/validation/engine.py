@@ -40,7 +40,7 @@ def _hits(data: bytes, name: str, camera_info: CameraInfo | None) -> tuple[list[
 def clear_caches() -> None:
     """Forget the values memoised across files: what a fresh process starts with (the bench starts every
     run cold)."""
-    semantic._parse.cache_clear()
+    semantic._PARSED.clear()
     semantic._attribute_rules.cache_clear()
     semantic._condition_parts.cache_clear()
     schema._lexical_ok.cache_clear()

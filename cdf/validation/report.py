@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 from cdf.validation.rules import RULES_BY_ID, Severity
 
 
-@dataclass(frozen=True)
-class Finding:
-    """One problem: the rule it breaks, its severity in the report's profile, where, and what."""
+class Finding(NamedTuple):
+    """One problem: the rule it breaks, its severity in the report's profile, where, and what. (A named
+    tuple: built, hashed and compared in C; a report removes duplicates by hash.)"""
 
     rule: str
     severity: Severity

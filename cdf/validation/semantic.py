@@ -34,7 +34,20 @@ _LOCALE = re.compile(r"[a-z]{2}_[A-Z]{2}")
 _MARKUP = re.compile(r'[&<>"]')
 # option values repeat (0, 1, 2, ... in every parameter of every file): parse each (text, type) once per
 # process; the results are immutable (engine.clear_caches forgets them)
-_parse = functools.lru_cache(maxsize=8192)(parse_typed)
+_PARSED: dict[str, dict[str, tuple]] = {}  # type -> text -> parse_typed(text, type)
+_NO_VALUES: dict = {}
+
+
+def _parse(text: str, ptype: str) -> tuple:
+    """parse_typed, memoised per type (the options loop reads the type's dict directly: a lookup by a str,
+    whose hash is cached, where a cache keyed by (text, type) builds and hashes a tuple on every call)."""
+    cache = _PARSED.setdefault(ptype, {})
+    parsed = cache.get(text)
+    if parsed is None:
+        if len(cache) >= 8192:  # bounded across the files of a long run
+            cache.clear()
+        parsed = cache[text] = parse_typed(text, ptype)
+    return parsed
 
 
 _ENCODING = re.compile(rb"<\?xml[^>]*encoding\s*=\s*[\"']([A-Za-z0-9._-]+)[\"']")
@@ -263,6 +276,7 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
     with_refs = []  # options with children: the only ones _check_option_refs can report on
     stoi = numeric and ptype in _STOI
     values: list = []  # the options' typed values, for the duplicate and default checks
+    typed_cache = _PARSED.setdefault(ptype, {}) if numeric else _NO_VALUES
     for o in options:
         oname, oval = o.get("name"), o.get("value")
         if gather is not None:
@@ -274,7 +288,8 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
             what = " and ".join(a for a, v in (("name", oname), ("value", oval)) if v is None)
             yield Hit("CDF123", _line(o), name, f"<option> without {what} (QGC rejects the file, MAVSDK skips the parameter)")
         if oval is not None and numeric:
-            v, why = _parse(oval, ptype)
+            parsed = typed_cache.get(oval)
+            v, why = parsed if parsed is not None else _parse(oval, ptype)
             if why:
                 yield Hit("CDF120", _line(o), name, f"option value: {why}")
             else:
