@@ -33,9 +33,9 @@ _COND_TEST = re.compile(r"([A-Za-z0-9_\-]+)(!=|=|>|<)(\S+)")
 _LOCALE = re.compile(r"[a-z]{2}_[A-Z]{2}")
 _MARKUP = re.compile(r'[&<>"]')
 # option values repeat (0, 1, 2, ... in every parameter of every file): parse each (text, type) once per
-# process; the results are immutable (engine.clear_caches forgets them)
+# process; the results are immutable (engine.clear_caches forgets them). Only numeric types are parsed,
+# so the outer dict has at most their dozen keys.
 _PARSED: dict[str, dict[str, tuple]] = {}  # type -> text -> parse_typed(text, type)
-_NO_VALUES: dict = {}
 
 
 def _parse(text: str, ptype: str) -> tuple:
@@ -276,7 +276,7 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
     with_refs = []  # options with children: the only ones _check_option_refs can report on
     stoi = numeric and ptype in _STOI
     values: list = []  # the options' typed values, for the duplicate and default checks
-    typed_cache = _PARSED.setdefault(ptype, {}) if numeric else _NO_VALUES
+    parsed_values = _PARSED.setdefault(ptype, {}) if numeric else None
     for o in options:
         oname, oval = o.get("name"), o.get("value")
         if gather is not None:
@@ -288,7 +288,7 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
             what = " and ".join(a for a, v in (("name", oname), ("value", oval)) if v is None)
             yield Hit("CDF123", _line(o), name, f"<option> without {what} (QGC rejects the file, MAVSDK skips the parameter)")
         if oval is not None and numeric:
-            parsed = typed_cache.get(oval)
+            parsed = parsed_values.get(oval)
             v, why = parsed if parsed is not None else _parse(oval, ptype)
             if why:
                 yield Hit("CDF120", _line(o), name, f"option value: {why}")
