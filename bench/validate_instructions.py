@@ -106,5 +106,6 @@ def main() -> None:
             before = measure(tree, args.against)
             print(f"validate: working tree / {args.against} = {now / before:.3f}")
 
+
 if __name__ == "__main__":
     main()

@@ -449,7 +449,8 @@ def _check_option_refs(o, p, name, ptype, params: _Params, gather) -> Iterator[H
         # one by one only when some roption is incomplete or its value is not the text of an option of the
         # target that parses (otherwise _check_roptions finds nothing)
         if None in rnames or None in rvalues or (numeric_target and not good.issuperset(rvalues)):
-            yield from _check_roptions(roptions, name, target, ttype, tvalues, typed_targets, numeric_target)
+            yield from _check_roptions(zip(roptions, rnames, rvalues), name, target, ttype, tvalues, typed_targets,
+                                       numeric_target)
         cond = pr.get("condition")
         if cond is not None:
             yield from _check_condition(cond, pr, name, params)
@@ -464,8 +465,8 @@ def _check_option_refs(o, p, name, ptype, params: _Params, gather) -> Iterator[H
 
 
 def _check_roptions(roptions, name, target, ttype, tvalues, typed_targets, numeric_target) -> Iterator[Hit]:
-    for r in roptions:
-        rname, rval = r.get("name"), r.get("value")
+    """`roptions`: (element, name, value) of each <roption>, as _check_option_refs read them."""
+    for r, rname, rval in roptions:
         if rname is None or rval is None:
             what = " and ".join(a for a, v in (("name", rname), ("value", rval)) if v is None)
             yield Hit("CDF123", _line(r), name, f"<roption> without {what} "
