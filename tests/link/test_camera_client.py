@@ -263,9 +263,10 @@ def test_emulate_command_stops_on_sigterm():
     with wiris_child("emulate", "wiris-security", "--connect", "udpin:127.0.0.1:0") as proc:
         first = proc.stderr.readline()
         assert first.startswith("emulating WORKSWELL WIRIS Security"), first
-        # at once, as a supervisor that waits for the first line may: the handler is in place before it
+        # at once, as a supervisor that waits for the first line may: the handler is in place before it, so
+        # the signal may land before or after the remaining start lines, and either way takes the stop path
         rest = stop(proc, signal.SIGTERM)
-        assert "Ctrl-C stops it" in rest and rest.rstrip().endswith("emulator stopped"), rest
+        assert rest.rstrip().endswith("emulator stopped"), rest
 
 
 def test_emulator_wait_survives_an_interrupt_at_any_point():
