@@ -48,6 +48,7 @@ counted in `stats["rejected_signature"]` - they never reach an inbox or callback
 
 from __future__ import annotations
 
+import importlib
 import os
 import queue
 import select
@@ -57,10 +58,25 @@ from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from pymavlink import mavutil
-from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from wiris_tools.errors import LinkError
+def _import_optional(*names: str) -> None:
+    for name in names:
+        try:
+            importlib.import_module(name)
+        except ImportError:  # pymavlink runs without them
+            pass
+
+
+# pymavlink imports two optional modules inside bare `except:` clauses (mavextra: its quaternion module
+# and numpy, 0.12 s; mavutil: curses.ascii), which swallow a Ctrl-C that lands during those imports: the
+# command then runs on to its own timeout (reproduced: 3 of 40 `wiris camera info` runs interrupted
+# 0.05-0.83 s after start). Imported here first, a Ctrl-C propagates; pymavlink then finds them loaded.
+_import_optional("pymavlink.quaternion", "curses.ascii")
+
+from pymavlink import mavutil  # noqa: E402
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2  # noqa: E402
+
+from wiris_tools.errors import LinkError  # noqa: E402
 
 Message = Any  # a pymavlink MAVLink_message
 Filter = Callable[[Message], bool]

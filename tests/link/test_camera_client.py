@@ -373,3 +373,27 @@ def test_cli_set_json_and_mftp_definition():
         assert json.loads(r.output) == {"name": "AGC_HOT_REJ", "value": 12.5, "option": None, "acknowledged": True}
         with emu.lock:
             assert emu.state.value("hot_rejection_pct") == 12.5
+
+
+@pytest.mark.parametrize("module", ["numpy", "curses"])
+def test_ctrl_c_while_pymavlink_loads_stops_the_command(module):
+    """pymavlink imports numpy (through its quaternion module) and curses inside bare `except:` clauses: a
+    Ctrl-C landing there was swallowed and `wiris camera info` ran on to its own timeout (3 of 40 runs
+    interrupted in the first 0.8 s). Here the interrupt is raised as `module` starts to load: the command
+    must stop with 130, not report a missing camera after --wait."""
+    import subprocess
+    import sys
+
+    code = ("import sys\n"
+            "class Interrupt:\n"
+            "    def find_spec(self, name, path=None, target=None):\n"
+            f"        if name == {module!r}:\n"
+            "            sys.meta_path.remove(self)\n"
+            "            raise KeyboardInterrupt\n"
+            "sys.meta_path.insert(0, Interrupt())\n"
+            "from wiris_tools.cli import main\n"
+            "sys.argv = ['wiris', 'camera', 'info', '--connect', 'udpin:127.0.0.1:0', '--wait', '3']\n"
+            "main()\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 130, proc.stderr
+    assert "HEARTBEAT" not in proc.stderr
