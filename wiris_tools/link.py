@@ -146,14 +146,18 @@ class Inbox:
 
     def __init__(self, link: "Link", match: _Match, maxsize: int = 10000) -> None:
         self._link = link
-        self._queue: queue.Queue = queue.Queue(maxsize)
+        self._maxsize = maxsize
+        # SimpleQueue waits in C, where a Ctrl-C cannot leave a lock held. queue.Queue waits in Python
+        # through threading.Condition: a KeyboardInterrupt landing just after its lock was taken left it
+        # held, and the next get() and the receive thread's next put then blocked for ever
+        # (tests/test_cli_errors.py raises the interrupt at every place of a wait where one can land)
+        self._queue: queue.SimpleQueue = queue.SimpleQueue()
         self._sub = link._add(Subscription(match, self._put))
 
     def _put(self, msg: Message) -> None:
-        try:
-            self._queue.put_nowait(msg)
-        except queue.Full:  # a stuck consumer must not stall the receive thread
-            pass
+        # a stuck consumer must not fill the memory (only the receive thread puts: no race at the bound)
+        if self._queue.qsize() < self._maxsize:
+            self._queue.put(msg)
 
     def get(self, timeout: float | None = 1.0) -> Message | None:
         """The next matching message, or None after `timeout` seconds (0: don't wait)."""
@@ -219,7 +223,7 @@ class Link:
         self._send_lock = threading.Lock()
         self._closed = threading.Event()
         self._heartbeats: dict[tuple[int, int], Message] = {}
-        self._hb_cond = threading.Condition()
+        self._hb_lock = threading.Lock()  # held for a dict read or write only, never waited on (see Inbox)
         self._reader = threading.Thread(target=self._read_loop, name=f"link-rx {url}", daemon=True)
         self._reader.start()
         self._heartbeat_s = heartbeat_s
@@ -330,9 +334,8 @@ class Link:
             return
         self._stats.counts["received"] += 1
         if mtype == "HEARTBEAT":
-            with self._hb_cond:
+            with self._hb_lock:  # before the subscribers: wait_heartbeat's inbox wakes to a dict that has it
                 self._heartbeats[(msg.get_srcSystem(), msg.get_srcComponent())] = msg
-                self._hb_cond.notify_all()
         with self._subs_lock:
             subs = list(self._subs)
         for sub in subs:
@@ -378,21 +381,22 @@ class Link:
 
     def heartbeats(self) -> dict[tuple[int, int], Message]:
         """The last HEARTBEAT seen from each (system, component)."""
-        with self._hb_cond:
+        with self._hb_lock:
             return dict(self._heartbeats)
 
     def wait_heartbeat(self, timeout: float = 5.0, *, system: int | None = None,
                        component: int | None = None) -> Message:
         """A HEARTBEAT from a peer (already seen or arriving within `timeout`), else LinkError."""
         def pick() -> Message | None:
-            for (s, c), hb in self._heartbeats.items():
+            for (s, c), hb in self.heartbeats().items():
                 if (system is None or s == system) and (component is None or c == component) \
                         and (s, c) != (self.system, self.component):
                     return hb
             return None
 
         deadline = time.monotonic() + timeout
-        with self._hb_cond:
+        # woken by every HEARTBEAT from now on (an Inbox, not a threading.Condition: see Inbox.__init__)
+        with self.inbox("HEARTBEAT") as arrivals:
             while True:
                 hb = pick()
                 if hb is not None:
@@ -404,7 +408,7 @@ class Link:
                     raise LinkError(f"no HEARTBEAT from {who} within {timeout:g} s", where=self.url,
                                     hint="check the connection string, that the vehicle/camera is powered, "
                                          "and the signing key if the link is signed")
-                self._hb_cond.wait(left)
+                arrivals.get(left)
 
     # -- the command protocol ------------------------------------------------------------------
     def command_long(self, target_system: int, target_component: int, command: int,

@@ -272,46 +272,28 @@ def test_emulate_command_stops_on_sigterm():
 def test_emulator_wait_survives_an_interrupt_at_any_point():
     """Ctrl-C and SIGTERM raise KeyboardInterrupt wherever the main thread is. Raised inside Event.wait it
     could leave the Event's lock held, and close() then hung for ever (seen once in 40 SIGTERMs to
-    `wiris emulate`). Here the interrupt is raised at each trace event (call, line, return, in every frame)
-    of wait() in turn, and close() must still finish."""
-    import sys
+    `wiris emulate`). Here the interrupt is raised at each place of wait() where Python checks for signals
+    (tests/interrupts.py), in turn, and close() must still finish."""
     import threading
 
-    def interrupt_at(n: int, fn, *args) -> bool:
-        """Run fn(*args) with KeyboardInterrupt raised at its n-th trace event; whether it was raised."""
-        count, fired = 0, False
-
-        def tracer(frame, event, arg):
-            nonlocal count, fired
-            if fired:
-                return None
-            if count == n:
-                fired = True
-                raise KeyboardInterrupt
-            count += 1
-            return tracer
-
-        sys.settrace(tracer)
-        try:
-            fn(*args)
-        except KeyboardInterrupt:
-            assert fired
-        finally:
-            sys.settrace(None)
-        return fired
+    from interrupts import InterruptAt
 
     n = 0
     while True:
         emu = start_emulator("wiris-security", "udpin:127.0.0.1:0")
-        fired = interrupt_at(n, emu.wait, 0.05)
+        with InterruptAt(n) as at:
+            try:
+                emu.wait(0.05)
+            except KeyboardInterrupt:
+                assert at.fired
         closer = threading.Thread(target=emu.close, daemon=True)
         closer.start()
         closer.join(10)
-        assert not closer.is_alive(), f"close() hangs after an interrupt at trace event {n} of wait()"
-        if not fired:
+        assert not closer.is_alive(), f"close() hangs after an interrupt at signal check {n} of wait()"
+        if not at.fired:
             break
         n += 1
-    assert n > 5  # wait() ran through several events before it returned uninterrupted
+    assert n > 5  # wait() passed several signal checks before it returned uninterrupted
 
 
 def test_settings_report_a_camera_that_disagrees_with_its_definition(pro):

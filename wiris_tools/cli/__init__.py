@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import sys
+from typing import NoReturn
 
 import click
 
@@ -15,25 +16,47 @@ from cdf.errors import WirisError
 
 
 class WirisGroup(click.Group):
-    """A group that turns WirisError (and anything unexpected) into a one-line message and exit 1."""
+    """A group that turns WirisError (and anything unexpected) into a one-line message and exit 1, and a
+    Ctrl-C into "interrupted" and exit 130."""
 
     def invoke(self, ctx: click.Context):
         try:
             return super().invoke(ctx)
-        except WirisError as err:
-            click.echo(f"error: {err}", err=True)
-            ctx.exit(1)
         except (click.exceptions.Exit, click.ClickException, click.Abort):
             raise
         except KeyboardInterrupt:
-            click.echo("interrupted", err=True)
-            ctx.exit(130)
-        except Exception as err:  # a bug of ours: still no traceback unless asked for
-            if os.environ.get("WIRIS_DEBUG"):
+            _interrupted(ctx)
+        except Exception as err:
+            if _raised_by_an_interrupt(err):
+                _interrupted(ctx)
+            if isinstance(err, WirisError):
+                click.echo(f"error: {err}", err=True)
+                ctx.exit(1)
+            if os.environ.get("WIRIS_DEBUG"):  # a bug of ours: still no traceback unless asked for
                 raise
             click.echo(f"internal error: {type(err).__name__}: {err}\n"
                        "  hint: rerun with WIRIS_DEBUG=1 for a traceback and report it", err=True)
             ctx.exit(1)
+
+
+def _interrupted(ctx: click.Context) -> NoReturn:
+    click.echo("interrupted", err=True)
+    ctx.exit(130)
+
+
+def _raised_by_an_interrupt(err: BaseException) -> bool:
+    """Whether `err` was raised while a Ctrl-C (KeyboardInterrupt) was being handled. One that lands in
+    threading.Condition.wait (queue.Queue.get, Event.wait) after the lock is released and before the
+    try that takes it back surfaces as RuntimeError('cannot release un-acquired lock') from the `with`
+    around the wait: it is still the user's Ctrl-C, not a bug to report."""
+    seen: set[int] = set()
+    cause = err.__context__
+    while cause is not None and id(cause) not in seen:
+        if isinstance(cause, KeyboardInterrupt):
+            return True
+        seen.add(id(cause))
+        cause = cause.__context__
+    return False
 
 
 @click.group(cls=WirisGroup, context_settings={"help_option_names": ["-h", "--help"]})
