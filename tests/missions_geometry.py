@@ -40,7 +40,11 @@ def star_polygons(draw, max_radius: float = 400.0):
 def convex_polygons(draw, max_size: float = 600.0):
     from hypothesis import assume
     from shapely.geometry import MultiPoint
-    pts = draw(st.lists(st.tuples(st.floats(0, max_size), st.floats(0, max_size)), min_size=3, max_size=10))
+    # on a 1 mm grid, as real areas are: projected from degrees (a double near 50 deg steps by 7e-15 deg,
+    # 1e-9 m), a vertex is never 1e-300 m from another, which st.floats draws now and then and which
+    # makes GEOS fail ("non-noded intersection") or numpy warn inside shapely's buffer
+    coord = st.integers(0, round(max_size * 1000)).map(lambda mm: mm / 1000)
+    pts = draw(st.lists(st.tuples(coord, coord), min_size=3, max_size=10))
     hull = MultiPoint(pts).convex_hull
     assume(hull.geom_type == "Polygon" and hull.area > 2000)
     # thin slivers are covered too, but keep the width sensible for a survey

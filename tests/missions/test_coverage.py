@@ -52,8 +52,8 @@ def test_turned_photos_use_true_rectangle_intersection() -> None:
     assert min_front_overlap(photos, FP20) == pytest.approx(100 / 200)
 
 
-@given(st.lists(st.tuples(st.integers(0, 5), st.floats(0, 30), st.sampled_from([0.0, 90.0, 33.0])),
-                min_size=1, max_size=25))
+@given(st.lists(st.tuples(st.integers(0, 5), st.integers(0, 30_000).map(lambda mm: mm / 1000),  # see convex_polygons
+                          st.sampled_from([0.0, 90.0, 33.0])), min_size=1, max_size=25))
 @settings(max_examples=60, deadline=None)
 def test_run_merging_equals_brute_force_union(spec) -> None:
     # photos on a few lines, some with gaps larger than a footprint, in arbitrary headings
