@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dis
 import functools
+import gc
 import sys
 
 _CHECKED_AFTER = frozenset({dis.opmap["CALL"], dis.opmap["JUMP_BACKWARD"]})
@@ -68,11 +69,18 @@ class InterruptAt:
         return self._trace
 
     def __enter__(self) -> "InterruptAt":
+        # no garbage collection inside the block: a callback it runs there (a WeakSet's, as a cycle dies)
+        # would be interrupted now and then, and Python drops an exception raised in a callback with a
+        # warning, so the count of places would vary from run to run
+        self._gc_was_enabled = gc.isenabled()
+        gc.disable()
         sys.settrace(self._trace)
         return self
 
     def __exit__(self, *exc: object) -> None:
         sys.settrace(None)
+        if self._gc_was_enabled:
+            gc.enable()
 
 
 _EXIT = InterruptAt.__exit__.__code__
