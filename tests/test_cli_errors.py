@@ -3,7 +3,6 @@ else a one-line internal error, both exit 1; a Ctrl-C is "interrupted" and exit 
 
 from __future__ import annotations
 
-import click
 import pytest
 from click.testing import CliRunner
 
@@ -55,7 +54,8 @@ def test_ctrl_c_anywhere_in_an_inbox_wait_exits_130_and_leaves_the_inbox_working
     there after the lock was released made the `with` around the wait raise RuntimeError('cannot release
     un-acquired lock'), reported as an internal error (exit 1); one landing just after the lock was taken
     left it held, and the next get() blocked for ever. The interrupt is raised at each place of a wait
-    where Python checks for signals, in turn: every one must exit 130, and the inbox must still answer afterwards."""
+    where Python checks for signals, in turn: every one must exit 130, and the inbox must still answer
+    afterwards."""
     import threading
 
     from wiris_tools.link import Link
