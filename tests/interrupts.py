@@ -19,6 +19,7 @@ import dis
 import functools
 import gc
 import sys
+import threading
 
 _CHECKED_AFTER = frozenset({dis.opmap["CALL"], dis.opmap["JUMP_BACKWARD"]})
 
@@ -84,3 +85,12 @@ class InterruptAt:
 
 
 _EXIT = InterruptAt.__exit__.__code__
+
+
+def finishes(fn, *args, within_s: float = 10.0) -> bool:
+    """Whether fn(*args) returns within `within_s`, run on a helper thread: after an interrupt, a lock left
+    held then fails the test instead of hanging it."""
+    helper = threading.Thread(target=fn, args=args, daemon=True)
+    helper.start()
+    helper.join(within_s)
+    return not helper.is_alive()

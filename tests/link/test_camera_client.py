@@ -274,9 +274,7 @@ def test_emulator_wait_survives_an_interrupt_at_any_point():
     could leave the Event's lock held, and close() then hung for ever (seen once in 40 SIGTERMs to
     `wiris emulate`). Here the interrupt is raised at each place of wait() where Python checks for signals
     (tests/interrupts.py), in turn, and close() must still finish."""
-    import threading
-
-    from interrupts import InterruptAt
+    from interrupts import InterruptAt, finishes
 
     n = 0
     while True:
@@ -286,10 +284,7 @@ def test_emulator_wait_survives_an_interrupt_at_any_point():
                 emu.wait(0.05)
             except KeyboardInterrupt:
                 assert at.fired
-        closer = threading.Thread(target=emu.close, daemon=True)
-        closer.start()
-        closer.join(10)
-        assert not closer.is_alive(), f"close() hangs after an interrupt at signal check {n} of wait()"
+        assert finishes(emu.close), f"close() hangs after an interrupt at signal check {n} of wait()"
         if not at.fired:
             break
         n += 1
