@@ -28,7 +28,6 @@ Targets: cov ≥ 99.5 %, side ≥ 69 %, front ≥ 79 % (requested − 1 point), 
 
 from __future__ import annotations
 
-import math
 import sys
 import time
 from pathlib import Path

@@ -21,7 +21,7 @@ import math
 from typing import Any
 
 from missions.compiled import Compiled
-from missions.report import Simulation, footprint_ring
+from missions.report import Simulation
 
 # A 100 km² survey has ~10^6 photos; a GIS tool opening a GeoJSON of a million rectangles is unusable.
 # Past this count, footprints are left out (the collection says so); photo points are always written.

@@ -57,7 +57,7 @@ def _file_params(data: bytes) -> list[tuple[str, str, bytes]]:
         if not name:
             continue
         if ptype in WIRE:
-            ext, fmt = WIRE[ptype]
+            fmt = WIRE[ptype][1]
             try:
                 text = p.get("default", "0")
                 val = float(text) if fmt in ("<f", "<d") else int(float(text))
@@ -65,7 +65,7 @@ def _file_params(data: bytes) -> list[tuple[str, str, bytes]]:
             except (ValueError, struct.error, OverflowError):
                 raw = struct.pack(fmt, 0)
         else:
-            ext, raw = mav.MAV_PARAM_EXT_TYPE_CUSTOM, (p.get("default") or "").encode()[:128]
+            raw = (p.get("default") or "").encode()[:128]
         out.append((name, ptype, raw.ljust(128, b"\0")))
     return out
 

@@ -12,7 +12,7 @@ from shapely.geometry import box
 
 from missions_geometry import WIRIS_60M, area_from_xy, convex_polygons, leg_crossings, star_polygons
 from missions.coverage import coverage_fraction, footprint_polygons, measure, min_front_overlap, min_side_overlap
-from missions.footprint import Footprint, transect_spacing_m, trigger_distance_m
+from missions.footprint import Footprint, transect_spacing_m
 from missions.survey import plan_survey
 from missions.triggers import PhotoPoint
 

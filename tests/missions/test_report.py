@@ -190,7 +190,7 @@ def test_px4_interval_trigger_shoots_only_while_enabled(tmp_path):
 
 
 def test_flight_time_of_one_leg_follows_the_stated_model():
-    from missions.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem, deg_to_e7
+    from missions.items import FRAME_GLOBAL_RELATIVE_ALT, MissionItem, deg_to_e7
     from missions.geo import LocalProjection
     from missions.report import ACCEL_MPS2, CLIMB_MPS, DESCENT_MPS, LAND_FINAL_M, LAND_MPS
     home = (50.0, 14.0, 300.0)

@@ -15,7 +15,6 @@ from missions.area import load_area
 from missions.corridor import plan_corridor
 from missions.coverage import measure
 from missions.errors import PlanError
-from missions.footprint import Footprint
 from missions.geo import unwrap_lons
 from missions.survey import plan_survey
 from missions.triggers import simulate_distance_trigger

@@ -11,8 +11,7 @@ from shapely.geometry import LineString, Polygon, box
 from shapely import affinity
 
 from missions_geometry import WIRIS_60M, area_from_xy, leg_crossings, star_polygons
-from missions.errors import PlanError
-from missions.route import KIND_VIA, build_cells, order_legs
+from missions.route import build_cells, order_legs
 from missions.survey import plan_survey
 from missions.swaths import generate_swaths, line_offsets, normalise_angle
 
