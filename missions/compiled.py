@@ -61,14 +61,16 @@ class SetupStep:
 
     description: str
     target_component: int
-    kind: str                                   # "command_long" | "param_ext_set" | "param_set"
+    kind: str                                   # "command_long" | "param_ext_set" | "param_set" | "message"
     command: str | None = None                  # MAV_CMD name for command_long
     params: tuple[float | None, ...] = ()       # 7 values; None = NaN ("keep")
     param_id: str | None = None                 # for param_ext_set / param_set
     value: float | int | None = None
     type: str | None = None                     # CDF / MAV_PARAM_TYPE name of the value
-    expect: str = "MAV_RESULT_ACCEPTED"         # or PARAM_ACK_ACCEPTED / PARAM_VALUE echo
+    expect: str = "MAV_RESULT_ACCEPTED"         # or PARAM_ACK_ACCEPTED / PARAM_VALUE echo / UNACKNOWLEDGED
     payload: str = ""
+    message: str | None = None                  # for "message": a MAVLink message name (DIGICAM_CONFIGURE)
+    fields: tuple[tuple[str, int | float], ...] = ()   # its fields; those not given are sent as 0
 
     def to_json(self) -> dict:
         out: dict[str, Any] = {"description": self.description, "payload": self.payload,
@@ -76,6 +78,9 @@ class SetupStep:
         if self.kind == "command_long":
             out["command"] = self.command
             out["params"] = list(self.params)
+        elif self.kind == "message":
+            out["message"] = self.message
+            out["fields"] = dict(self.fields)
         else:
             out.update(param_id=self.param_id, value=self.value, type=self.type)
         out["expect"] = {"result": self.expect}

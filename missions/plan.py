@@ -278,7 +278,7 @@ def _parse_yaml(text: str, file: str, problems: list[Problem]) -> tuple[Any, _Ya
         problems.append(Problem(file, f"invalid YAML: {e}"))
         return None, conv
     except RecursionError:
-        problems.append(Problem(file, f"the YAML is nested too deeply"))
+        problems.append(Problem(file, "the YAML is nested too deeply"))
         return None, conv
     if node is None:
         problems.append(Problem(file, "the plan is empty", "start from `wiris mission schema` or examples/"))
@@ -508,6 +508,21 @@ def _check_settings(camera: Any, settings: Any, path: tuple, conv: _Yaml, proble
                     problems.append(Problem(_at(conv, path + (key,), key=True),
                                             f"{key} takes effect only with {wkey}: {opt}",
                                             f"add `{wkey}: {opt}` to the same settings"))
+    # A message such as DIGICAM_CONFIGURE sends every field at once and, unlike a MAV_CMD (NaN), has no
+    # value meaning "keep": a field whose `when` holds must be given, or the camera would get a made-up one.
+    given = dict(values)
+    for s in camera.settings:
+        slot = s.command
+        if slot is None or slot.message in (None, "PARAM_SET") or not slot.when or s.key in merged:
+            continue
+        trigger = next((k for k, v in slot.when if k in given and given[k] == v), None)
+        if trigger is not None and all(merged.get(k) == v for k, v in slot.when):
+            ts, value = camera.setting(trigger), given[trigger]
+            opt = ts.enum.by_value(value).key if ts.enum and ts.enum.by_value(value) else value
+            problems.append(Problem(_at(conv, path + (trigger,)),
+                                    f"{trigger}: {opt} also needs {s.key} ({s.label}): the {slot.message} message "
+                                    "carries it and has no value meaning 'keep'",
+                                    f"add `{s.key}` to the same settings"))
     state.update(dict(values))
     return tuple(raw), tuple(values)
 
@@ -591,7 +606,7 @@ def _meaning(data: dict, conv: _Yaml, problems: list[Problem], base_dir: Path) -
             if has_rededge or cid != cam.default_component_id:
                 notes.append(f"payload {name}: component_id not given, using {cid}"
                              + (" (100 is the RedEdge's)" if has_rededge else "")
-                             + f"; set the same id in the camera's menu")
+                             + "; set the same id in the camera's menu")
         comp[name] = cid
         taken.setdefault(cid, name)
 

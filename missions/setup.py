@@ -16,7 +16,11 @@ ArduPilot, DO_DIGICAM_CONFIGURE on PX4) can never travel in a mission (reference
 
 RedEdge settings are classic PARAM_SET (its serial API; MAVLink 1). For a RedEdge flown in a survey the
 sequence also puts it in its own overlap capture mode (autoCapMode 2), the mode MicaSense recommends
-(reference §5.2), with operatingAlt/overlapAlongTrk/overlapCrossTrk from the plan.
+(reference §5.2), with operatingAlt/overlapAlongTrk/overlapCrossTrk from the plan. Its exposure settings
+travel in one DIGICAM_CONFIGURE message (154) for all imagers (extra_param 255, "Set to 255 for all"), the
+fields the API ignores set to 0 as it asks; the RedEdge answers that message with nothing, so the step is
+sent, not acknowledged (the plan loader has already required shutter and gain with manual mode: a message
+has no "keep" value).
 
 JSON: {"format": "wiris-setup", "version": 1, "plan": NAME, "steps": [SetupStep.to_json(), ...]}.
 """
@@ -111,7 +115,6 @@ def message_settings(camera: Any, values: Iterable[tuple[str, Any]]) -> list[tup
 def _describe(cmd: CameraCommand, camera: Any, values: Mapping[str, Any]) -> str:
     parts = []
     for k in cmd.keys:
-        s = camera.setting(k)
         v = values[k]
         shown = v if not isinstance(v, (list, tuple)) else "+".join(map(str, v))
         parts.append(f"{k}={shown}")
@@ -160,11 +163,18 @@ def _param_step(p: Any, param_id: str, value: float, why: str) -> SetupStep:
                      value=float(value), type="MAV_PARAM_TYPE_REAL32", expect="PARAM_VALUE", payload=p.name)
 
 
+# DIGICAM_CONFIGURE's value for "every imager" in its extra_param field (serial API: "Set to 255 for all")
+ALL_IMAGERS = 255
+
+
 def _rededge_steps(p: Any, cam: Any, survey: RedEdgeSurvey | None) -> list[SetupStep]:
     steps = []
     user = dict(p.values)
+    digicam: dict[str, float] = {}
     for key, value, s in message_settings(cam, p.values):
-        if s.command.message != "PARAM_SET":
+        if s.command.message == "DIGICAM_CONFIGURE":
+            digicam[key] = value
+        elif s.command.message != "PARAM_SET":
             raise PlanError(f"payload {p.name}: {key} travels in the {s.command.message} message, which the setup "
                             "sequence does not send", hint="set it in the RedEdge web page (http://192.168.10.254)")
     if survey is not None:
@@ -186,7 +196,15 @@ def _rededge_steps(p: Any, cam: Any, survey: RedEdgeSurvey | None) -> list[Setup
                 s.check(value)
             steps.append(_param_step(p, key, value, why))
     for key, value, s in message_settings(cam, p.values):
-        steps.append(_param_step(p, s.param, value, f"{key} = {dict(p.settings).get(key)!r} (plan setting)"))
+        if s.command.message == "PARAM_SET":
+            steps.append(_param_step(p, s.param, value, f"{key} = {dict(p.settings).get(key)!r} (plan setting)"))
+    if digicam:
+        fields = {cam.setting(k).command.field: int(v) for k, v in digicam.items()}
+        fields["extra_param"] = ALL_IMAGERS
+        shown = ", ".join(f"{k} = {dict(p.settings).get(k)!r}" for k in digicam)
+        steps.append(SetupStep(description=f"exposure of every imager: {shown} (the RedEdge does not answer)",
+                               target_component=p.component_id, kind="message", message="DIGICAM_CONFIGURE",
+                               fields=tuple(sorted(fields.items())), expect="UNACKNOWLEDGED", payload=p.name))
     return steps
 
 

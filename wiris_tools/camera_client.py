@@ -11,7 +11,8 @@ capture, and running a pre-flight command sequence.
         values = cam.read_settings(d.definition)     # PARAM_EXT_REQUEST_LIST, then reads of what is missing
         cam.set_setting(d.definition, "LAYOUT", "Blended")   # PARAM_EXT_SET, waits for PARAM_EXT_ACK
         for shot in cam.capture(interval_s=2, count=3): ...   # IMAGE_START_CAPTURE, CAMERA_IMAGE_CAPTURED
-        cam.apply(load_setup("flight.setup.json"))   # each step acknowledged; stops at the first refusal
+        cam.apply(load_setup("flight.setup.json"))   # each step acknowledged (or sent, where the camera
+                                                     # answers nothing); stops at the first refusal
 
 Every wait is bounded; errors are LinkError naming the step, setting or command and saying what to do.
 """
@@ -106,6 +107,8 @@ class Step:
     param_id: str = ""
     value: float | int | None = None
     type: str = ""
+    message: str = ""                              # kind "message": the MAVLink message and its fields
+    fields: tuple[tuple[str, float | int], ...] = ()
 
     @property
     def label(self) -> str:
@@ -515,6 +518,8 @@ class CameraClient:
                 raise LinkError(f"{where}: {command_name(step.command)} answered {result_name(got)}, expected "
                                 f"{step.expect}", where=where)
             return StepResult(step, result_name(got))
+        if step.kind == "message":
+            return self._send_message(step, target)
         if step.kind == "param_ext_set":
             comp = self.component
             self.component = target
@@ -537,9 +542,65 @@ class CameraClient:
             self.component = comp
         return StepResult(step, "PARAM_VALUE", f"{step.param_id} = {held:g}")
 
+    def _send_message(self, step: Step, target: int) -> StepResult:
+        """A message the camera answers with nothing (a RedEdge's DIGICAM_CONFIGURE): sent as many times as a
+        request is tried, MESSAGE_GAP_S apart, so that one lost frame on a radio link does not lose the step
+        (it sets absolute values, so a repeat changes nothing). Arrival cannot be confirmed, and the result
+        says so."""
+        names, _types = _message_fields(step.message)
+        values = dict.fromkeys(names, 0)
+        values.update(step.fields)
+        msg = getattr(self.link.mav, f"{step.message.lower()}_encode")(self.system, target, **values)
+        tries = self.retries + 1
+        for n in range(tries):
+            if n:
+                time.sleep(MESSAGE_GAP_S)
+            self.link.send(msg)
+        return StepResult(step, "SENT", f"{step.message} sent {tries} times; the camera does not answer it, so "
+                                        "its arrival is not confirmed")
+
 
 # -- setup files ---------------------------------------------------------------------------------
-KINDS = ("command_long", "param_ext_set", "param_set")
+KINDS = ("command_long", "param_ext_set", "param_set", "message")
+# Messages a "message" step may send: commands that a camera takes without answering. Only these, so that
+# a setup file cannot send just any message (a DIGICAM_CONTROL would take photos, for one).
+MESSAGES = ("DIGICAM_CONFIGURE",)
+MESSAGE_GAP_S = 0.1
+_INT_RANGES = {"uint8_t": (0, 255), "int8_t": (-128, 127), "uint16_t": (0, 65535), "int16_t": (-32768, 32767),
+               "uint32_t": (0, 2**32 - 1), "int32_t": (-2**31, 2**31 - 1)}
+
+
+def _message_fields(name: str) -> tuple[tuple[str, ...], dict[str, str]]:
+    """A message's settable fields (all but the target ids) and their C types, from pymavlink's dialect."""
+    cls = getattr(mavlink2, f"MAVLink_{name.lower()}_message")
+    types = {f: t for f, t in zip(cls.fieldnames, cls.fieldtypes) if f not in ("target_system", "target_component")}
+    return tuple(types), types
+
+
+def _parse_message_step(s: dict, loc: str) -> tuple[str, tuple[tuple[str, float | int], ...]]:
+    name = s.get("message")
+    if name not in MESSAGES:
+        raise LinkError(f"a setup step cannot send message {name!r}", where=loc,
+                        hint=f"messages: {', '.join(MESSAGES)}")
+    fields = s.get("fields", {})
+    if not isinstance(fields, dict):
+        raise LinkError("fields must be a JSON object of field name -> number", where=loc)
+    names, types = _message_fields(name)
+    out = []
+    for key, value in fields.items():
+        ctype = types.get(key)
+        if ctype is None:
+            raise LinkError(f"{name} has no field {key!r} a step may set", where=loc,
+                            hint=f"fields: {', '.join(names)}")
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise LinkError(f"{key} = {value!r} is not a finite number", where=loc)
+        if ctype in _INT_RANGES:
+            lo, hi = _INT_RANGES[ctype]
+            if value != int(value) or not lo <= value <= hi:
+                raise LinkError(f"{key} = {value!r} is not an integer {lo}–{hi} ({ctype})", where=loc)
+            value = int(value)
+        out.append((key, value))
+    return name, tuple(out)
 
 
 def parse_setup(data: Any, where: str = "setup") -> list[Step]:
@@ -585,6 +646,10 @@ def parse_setup(data: Any, where: str = "setup") -> list[Step]:
             if not isinstance(getattr(mavlink2, str(expect), None), int) or not str(expect).startswith("MAV_RESULT_"):
                 raise LinkError(f"unknown expected result {expect!r}", where=loc, hint="e.g. MAV_RESULT_ACCEPTED")
             steps.append(Step(i, desc, kind, comp, cmd, tuple(_nan_params(params)), str(expect)))
+            continue
+        if kind == "message":
+            name, fields = _parse_message_step(s, loc)
+            steps.append(Step(i, desc, kind, comp, expect="UNACKNOWLEDGED", message=name, fields=fields))
             continue
         pid = s.get("param_id")
         if not isinstance(pid, str) or not 1 <= len(pid) <= 16 or not pid.isascii():

@@ -6,7 +6,9 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import socket
+import time
 
 import pytest
 from click.testing import CliRunner
@@ -14,7 +16,7 @@ from click.testing import CliRunner
 from cdf.catalogue import catalogue
 from missions.compiled import SetupStep
 from missions.setup import dumps_setup
-from wiris_tools.camera_client import CameraClient, load_setup
+from wiris_tools.camera_client import CameraClient, load_setup, parse_setup
 from wiris_tools.cli import cli
 from wiris_tools.emulate.runner import start_emulator
 from wiris_tools.errors import LinkError
@@ -241,6 +243,53 @@ def test_rededge_parameters_through_the_client(tmp_path):
         assert "step 3 (impossible mode)" in result.output and "kept 2" in result.output
         with emu.lock:
             assert emu.state.values["autoCapMode"] == 2 and emu.state.values["operatingAlt"] == 90
+
+
+def test_rededge_exposure_reaches_every_imager(tmp_path):
+    """A compiled plan's RedEdge exposure settings: one DIGICAM_CONFIGURE, which the camera never answers, sent
+    retries + 1 times over the wire (counted where the emulator receives it) and applied to all five bands."""
+    from missions.plan import Payload
+    from missions.setup import setup_steps
+
+    cam = catalogue().get("rededge-mx")
+    settings = {"exposure_mode": "manual", "shutter_divisor": 2000, "iso": "iso800"}
+    p = Payload(name="ms", camera="rededge-mx", component_id=100, settings=tuple(settings.items()),
+                values=tuple((k, cam.setting(k).check(v)) for k, v in settings.items()))
+    path = _setup_file(tmp_path, setup_steps([p], {"ms": cam}))
+    with start_emulator("rededge-mx", "udpin:127.0.0.1:0") as emu:
+        received = []
+        real = emu.state._on_digicam_configure
+        emu.state._on_digicam_configure = lambda msg, now: received.append(msg) or real(msg, now)
+        result = CliRunner().invoke(cli, ["camera", "apply", path, "--connect", _url(emu), "--mavlink1"])
+        assert result.exit_code == 0, result.output
+        assert "step 1 (exposure of every imager" in result.output and ": SENT" in result.output
+        assert "0 acknowledged, 1 sent to a camera that does not answer them" in result.output
+        deadline = time.monotonic() + 2.0
+        while len(received) < 4 and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert len(received) == 4                     # CameraClient's default retries=3: four sends
+        assert all(m.get_msgId() == 154 and m.target_component == 100 for m in received)
+        with emu.lock:
+            assert emu.state.exposure_mode == 2
+            # serial API: "to specify 1/60sec, send 60"; ISO "4. ISO800"
+            assert [(e.shutter_divisor, e.iso) for e in emu.state.exposures] == [(2000, 4)] * 5
+
+
+@pytest.mark.parametrize("step,message", [
+    ({"message": "DIGICAM_CONTROL", "fields": {}}, "cannot send message 'DIGICAM_CONTROL'"),
+    ({"message": "DIGICAM_CONFIGURE", "fields": {"shutter": 60}}, "has no field 'shutter'"),
+    ({"message": "DIGICAM_CONFIGURE", "fields": {"target_system": 1}}, "has no field 'target_system'"),
+    ({"message": "DIGICAM_CONFIGURE", "fields": {"iso": 256}}, "not an integer 0–255 (uint8_t)"),
+    ({"message": "DIGICAM_CONFIGURE", "fields": {"shutter_speed": 1.5}}, "not an integer 0–65535"),
+    ({"message": "DIGICAM_CONFIGURE", "fields": {"mode": True}}, "not a finite number"),
+    ({"message": "DIGICAM_CONFIGURE", "fields": [2]}, "fields must be a JSON object"),
+])
+def test_a_bad_message_step_is_refused_before_anything_is_sent(step, message):
+    doc = {"steps": [{"kind": "param_set", "param_id": "autoCapMode", "value": 2},
+                     {"kind": "message", "target_component": 100, **step}]}
+    with pytest.raises(LinkError, match=re.escape(message)) as ei:
+        parse_setup(doc, "f.setup.json")
+    assert ei.value.where.startswith("f.setup.json: step 2")
 
 
 def test_emulate_command_runs_and_stops():

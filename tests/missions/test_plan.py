@@ -108,6 +108,27 @@ def test_when_condition_of_a_slot(tmp_path):
     assert "range_mode: manual" in p.hint
 
 
+REDEDGE_ONLY = BASE.replace("    camera: wiris-pro\n    lens_mm: 13\n    component_id: 101\n"
+                            "    settings: {layout: fullscreen}", "    camera: rededge-mx\n    settings: {SETTINGS}")
+
+
+def test_rededge_exposure_settings_load_and_need_manual_mode(tmp_path):
+    path = tmp_path / "ok.yaml"
+    path.write_text(REDEDGE_ONLY.replace("SETTINGS", "exposure_mode: manual, shutter_divisor: 2000, iso: iso200"))
+    assert load_plan(path).payload("thermal").values == (("exposure_mode", 2), ("shutter_divisor", 2000), ("iso", 2))
+    p = one(REDEDGE_ONLY.replace("SETTINGS", "shutter_divisor: 2000"), tmp_path, "shutter_divisor takes effect only")
+    assert "exposure_mode: manual" in p.hint
+
+
+def test_rededge_manual_exposure_needs_every_field_of_the_message(tmp_path):
+    # DIGICAM_CONFIGURE has no "keep" value: manual mode without a gain would send a made-up one
+    text = REDEDGE_ONLY.replace("SETTINGS", "exposure_mode: manual, shutter_divisor: 2000")
+    p = one(text, tmp_path, "exposure_mode: manual also needs iso")
+    assert "DIGICAM_CONFIGURE" in p.message and "add `iso`" in p.hint
+    assert line_col(p.where) == (8, 31)             # at the value that asks for manual mode
+    assert len(problems_of(text, tmp_path)) == 1
+
+
 @pytest.mark.parametrize("alt,word", [(1, "below the 2 m minimum"), (1.5, "below"), (501, "above the 500 m maximum")])
 def test_altitude_limits(tmp_path, alt, word):
     one(BASE.replace("altitude_m: 40", f"altitude_m: {alt}"), tmp_path, word)

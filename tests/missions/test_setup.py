@@ -96,15 +96,35 @@ def test_rededge_overlap_mode_params():
     assert all(s.kind == "param_set" and s.target_component == 100 and s.expect == "PARAM_VALUE" for s in steps)
 
 
-def test_rededge_plan_setting_wins_and_digicam_refused():
+def test_rededge_plan_setting_wins():
     cam = catalogue().get("rededge-mx")
     p = Payload(name="ms", camera="rededge-mx", component_id=100, settings=(("auto_capture", "timer"),),
                 values=(("auto_capture", 1),))
     steps = setup_steps([p], {"ms": cam}, {"ms": RedEdgeSurvey(60.0, 15.0, 80.0, 70.0)})
     assert [s.value for s in steps if s.param_id == "autoCapMode"] == [1.0]
-    p2 = Payload(name="ms", camera="rededge-mx", component_id=100, settings=(("iso", "iso200"),), values=(("iso", 2),))
-    with pytest.raises(PlanError, match="DIGICAM_CONFIGURE"):
-        setup_steps([p2], {"ms": cam})
+
+
+def rededge(settings: dict) -> Payload:
+    cam = catalogue().get("rededge-mx")
+    return Payload(name="ms", camera="rededge-mx", component_id=100, settings=tuple(settings.items()),
+                   values=tuple((k, cam.setting(k).check(v)) for k, v in settings.items()))
+
+
+def test_rededge_exposure_is_one_digicam_configure_for_every_imager():
+    p = rededge({"exposure_mode": "manual", "shutter_divisor": 2000, "iso": "iso400"})
+    steps = setup_steps([p], {"ms": catalogue().get("rededge-mx")}, {"ms": RedEdgeSurvey(60.0, 15.0, 80.0, 70.0)})
+    (s,) = [s for s in steps if s.kind == "message"]
+    assert steps[-1] is s                         # after the overlap-mode PARAM_SETs
+    # serial API, DIGICAM_CONFIGURE (154): Mode "2. Manual"; Shutter Speed "to specify 1/60sec, send 60";
+    # ISO "3. ISO400"; Extra Command "Set to 255 for all"; the fields it ignores are left out (sent as 0)
+    assert s.message == "DIGICAM_CONFIGURE" and s.target_component == 100 and s.expect == "UNACKNOWLEDGED"
+    assert dict(s.fields) == {"mode": 2, "shutter_speed": 2000, "iso": 3, "extra_param": 255}
+    doc = json.loads(dumps_setup("demo", steps))["steps"][-1]
+    assert doc["kind"] == "message" and doc["fields"] == {"extra_param": 255, "iso": 3, "mode": 2,
+                                                          "shutter_speed": 2000}
+    assert doc["expect"] == {"result": "UNACKNOWLEDGED"}
+    (auto,) = setup_steps([rededge({"exposure_mode": "auto"})], {"ms": catalogue().get("rededge-mx")})
+    assert dict(auto.fields) == {"mode": 1, "extra_param": 255}     # "1. Auto gain/exposure"
 
 
 def test_json_format():

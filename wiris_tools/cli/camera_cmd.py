@@ -195,7 +195,8 @@ def capture(url, component, system, signing_key, mavlink1, timeout, find_s, inte
 @_link_options
 @click.option("--json", "as_json", is_flag=True, help="Print the step results as JSON.")
 def apply(setup_file, url, component, system, signing_key, mavlink1, timeout, find_s, as_json) -> None:
-    """Run the pre-flight command sequence of SETUP_FILE (NAME.setup.json), each step acknowledged."""
+    """Run the pre-flight command sequence of SETUP_FILE (NAME.setup.json), each step acknowledged (a RedEdge's
+    DIGICAM_CONFIGURE, which it never answers, is sent repeatedly instead)."""
     from wiris_tools.camera_client import load_setup
 
     steps = load_setup(setup_file)       # checked completely before anything is sent
@@ -218,4 +219,9 @@ def apply(setup_file, url, component, system, signing_key, mavlink1, timeout, fi
     if as_json:
         _echo_json({"file": setup_file, "completed": [r.to_json() for r in done], "ok": True})
     else:
-        click.echo(f"all {len(steps)} steps acknowledged")
+        unanswered = sum(1 for r in done if r.outcome == "SENT")
+        if unanswered:
+            click.echo(f"all {len(steps)} steps done: {len(steps) - unanswered} acknowledged, {unanswered} sent to "
+                       "a camera that does not answer them")
+        else:
+            click.echo(f"all {len(steps)} steps acknowledged")
