@@ -546,7 +546,13 @@ class CameraClient:
         """A message the camera answers with nothing (a RedEdge's DIGICAM_CONFIGURE): sent as many times as a
         request is tried, MESSAGE_GAP_S apart, so that one lost frame on a radio link does not lose the step
         (it sets absolute values, so a repeat changes nothing). Arrival cannot be confirmed, and the result
-        says so."""
+        says so. Refused when the camera speaks MAVLink 1 (a RedEdge) and the link does not: nothing would
+        show that it dropped the MAVLink 2 frames."""
+        hb = self.link.heartbeats().get((self.system, target))
+        if hb is not None and not self.link.mavlink1 and hb.get_msgbuf()[:1] == b"\xfe":
+            raise LinkError(f"component {target} speaks MAVLink 1 and does not answer {step.message}, so a "
+                            "MAVLink 2 frame it cannot read would be lost without a trace; nothing was sent",
+                            where=step.label, hint="run again with --mavlink1")
         names, _types = _message_fields(step.message)
         values = dict.fromkeys(names, 0)
         values.update(step.fields)

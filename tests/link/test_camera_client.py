@@ -273,6 +273,14 @@ def test_rededge_exposure_reaches_every_imager(tmp_path):
             assert emu.state.exposure_mode == 2
             # serial API: "to specify 1/60sec, send 60"; ISO "4. ISO800"
             assert [(e.shutter_divisor, e.iso) for e in emu.state.exposures] == [(2000, 4)] * 5
+        # without --mavlink1 the frames would be MAVLink 2, which the RedEdge API does not promise to read:
+        # with no answer to miss, that would pass unnoticed, so the step is refused before sending
+        received.clear()
+        result = CliRunner().invoke(cli, ["camera", "apply", path, "--connect", _url(emu)])
+        assert result.exit_code == 1 and "speaks MAVLink 1" in result.output and "--mavlink1" in result.output
+        assert "0 of 1 steps done" in result.output
+        time.sleep(0.3)
+        assert received == []
 
 
 @pytest.mark.parametrize("step,message", [
