@@ -497,34 +497,39 @@ def _check_settings(camera: Any, settings: Any, path: tuple, conv: _Yaml, proble
             continue
         raw.append((key, value))
         values.append((key, checked))
-    merged = {**state, **dict(values)}
+    given = dict(values)
+    merged = {**state, **given}
     for key, _ in values:
         s = camera.setting(key)
         if s.command and s.command.when:
             for wkey, wval in s.command.when:
                 if merged.get(wkey) != wval:
-                    ws = camera.setting(wkey)
-                    opt = ws.enum.by_value(wval).key if ws is not None and ws.enum and ws.enum.by_value(wval) else wval
+                    opt = _option_key(camera, wkey, wval)
                     problems.append(Problem(_at(conv, path + (key,), key=True),
                                             f"{key} takes effect only with {wkey}: {opt}",
                                             f"add `{wkey}: {opt}` to the same settings"))
     # A message such as DIGICAM_CONFIGURE sends every field at once and, unlike a MAV_CMD (NaN), has no
     # value meaning "keep": a field whose `when` holds must be given, or the camera would get a made-up one.
-    given = dict(values)
     for s in camera.settings:
         slot = s.command
         if slot is None or slot.message in (None, "PARAM_SET") or not slot.when or s.key in merged:
             continue
         trigger = next((k for k, v in slot.when if k in given and given[k] == v), None)
         if trigger is not None and all(merged.get(k) == v for k, v in slot.when):
-            ts, value = camera.setting(trigger), given[trigger]
-            opt = ts.enum.by_value(value).key if ts.enum and ts.enum.by_value(value) else value
+            opt = _option_key(camera, trigger, given[trigger])
             problems.append(Problem(_at(conv, path + (trigger,)),
                                     f"{trigger}: {opt} also needs {s.key} ({s.label}): the {slot.message} message "
                                     "carries it and has no value meaning 'keep'",
                                     f"add `{s.key}` to the same settings"))
-    state.update(dict(values))
+    state.update(given)
     return tuple(raw), tuple(values)
+
+
+def _option_key(camera: Any, key: str, value: Any) -> Any:
+    """How a plan writes `value` of setting `key`: its option's key when the setting has one for it."""
+    s = camera.setting(key)
+    option = s.enum.by_value(value) if s is not None and s.enum else None
+    return option.key if option is not None else value
 
 
 def _meaning(data: dict, conv: _Yaml, problems: list[Problem], base_dir: Path) -> tuple[dict, list[str]]:

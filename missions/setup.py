@@ -169,12 +169,17 @@ ALL_IMAGERS = 255
 
 def _rededge_steps(p: Any, cam: Any, survey: RedEdgeSurvey | None) -> list[SetupStep]:
     steps = []
-    user = dict(p.values)
-    digicam: dict[str, float] = {}
+    user, written = dict(p.values), dict(p.settings)
+    param_sets: list[SetupStep] = []
+    digicam: dict[str, int] = {}      # DIGICAM_CONFIGURE field -> value
+    shown: list[str] = []             # the plan's settings behind them, for the step's description
     for key, value, s in message_settings(cam, p.values):
-        if s.command.message == "DIGICAM_CONFIGURE":
-            digicam[key] = value
-        elif s.command.message != "PARAM_SET":
+        if s.command.message == "PARAM_SET":
+            param_sets.append(_param_step(p, s.param, value, f"{key} = {written.get(key)!r} (plan setting)"))
+        elif s.command.message == "DIGICAM_CONFIGURE":
+            digicam[s.command.field] = int(value)
+            shown.append(f"{key} = {written.get(key)!r}")
+        else:
             raise PlanError(f"payload {p.name}: {key} travels in the {s.command.message} message, which the setup "
                             "sequence does not send", hint="set it in the RedEdge web page (http://192.168.10.254)")
     if survey is not None:
@@ -195,16 +200,13 @@ def _rededge_steps(p: Any, cam: Any, survey: RedEdgeSurvey | None) -> list[Setup
             if s is not None:
                 s.check(value)
             steps.append(_param_step(p, key, value, why))
-    for key, value, s in message_settings(cam, p.values):
-        if s.command.message == "PARAM_SET":
-            steps.append(_param_step(p, s.param, value, f"{key} = {dict(p.settings).get(key)!r} (plan setting)"))
+    steps += param_sets
     if digicam:
-        fields = {cam.setting(k).command.field: int(v) for k, v in digicam.items()}
-        fields["extra_param"] = ALL_IMAGERS
-        shown = ", ".join(f"{k} = {dict(p.settings).get(k)!r}" for k in digicam)
-        steps.append(SetupStep(description=f"exposure of every imager: {shown} (the RedEdge does not answer)",
+        fields = tuple(sorted({**digicam, "extra_param": ALL_IMAGERS}.items()))
+        steps.append(SetupStep(description=f"exposure of every imager: {', '.join(shown)} (the RedEdge does not "
+                                           "answer)",
                                target_component=p.component_id, kind="message", message="DIGICAM_CONFIGURE",
-                               fields=tuple(sorted(fields.items())), expect="UNACKNOWLEDGED", payload=p.name))
+                               fields=fields, expect="UNACKNOWLEDGED", payload=p.name))
     return steps
 
 

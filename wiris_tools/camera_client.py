@@ -572,8 +572,11 @@ KINDS = ("command_long", "param_ext_set", "param_set", "message")
 # a setup file cannot send just any message (a DIGICAM_CONTROL would take photos, for one).
 MESSAGES = ("DIGICAM_CONFIGURE",)
 MESSAGE_GAP_S = 0.1
-_INT_RANGES = {"uint8_t": (0, 255), "int8_t": (-128, 127), "uint16_t": (0, 65535), "int16_t": (-32768, 32767),
-               "uint32_t": (0, 2**32 - 1), "int32_t": (-2**31, 2**31 - 1)}
+
+
+def _is_number(value: Any) -> bool:
+    """A finite JSON number (true and false are not numbers here)."""
+    return not isinstance(value, bool) and isinstance(value, (int, float)) and math.isfinite(value)
 
 
 def _message_fields(name: str) -> tuple[tuple[str, ...], dict[str, str]]:
@@ -584,6 +587,8 @@ def _message_fields(name: str) -> tuple[tuple[str, ...], dict[str, str]]:
 
 
 def _parse_message_step(s: dict, loc: str) -> tuple[str, tuple[tuple[str, float | int], ...]]:
+    from cdf.validation.values import INT_RANGES  # here: the package loads the whole validator (70 ms)
+
     name = s.get("message")
     if name not in MESSAGES:
         raise LinkError(f"a setup step cannot send message {name!r}", where=loc,
@@ -598,10 +603,11 @@ def _parse_message_step(s: dict, loc: str) -> tuple[str, tuple[tuple[str, float 
         if ctype is None:
             raise LinkError(f"{name} has no field {key!r} a step may set", where=loc,
                             hint=f"fields: {', '.join(names)}")
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        if not _is_number(value):
             raise LinkError(f"{key} = {value!r} is not a finite number", where=loc)
-        if ctype in _INT_RANGES:
-            lo, hi = _INT_RANGES[ctype]
+        int_range = INT_RANGES.get(ctype.removesuffix("_t"))    # pymavlink's uint8_t is the CDF's uint8
+        if int_range is not None:
+            lo, hi = int_range
             if value != int(value) or not lo <= value <= hi:
                 raise LinkError(f"{key} = {value!r} is not an integer {lo}–{hi} ({ctype})", where=loc)
             value = int(value)
@@ -661,7 +667,7 @@ def parse_setup(data: Any, where: str = "setup") -> list[Step]:
         if not isinstance(pid, str) or not 1 <= len(pid) <= 16 or not pid.isascii():
             raise LinkError(f"param_id {pid!r} must be 1–16 ASCII characters", where=loc)
         value = s.get("value")
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        if not _is_number(value):
             raise LinkError(f"value {value!r} is not a finite number", where=loc)
         ptype = str(s.get("type") or ("float" if kind == "param_set" else ""))
         if kind == "param_ext_set":
