@@ -473,6 +473,15 @@ def _num(v: Any) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
+def _is_file(p: Path) -> tuple[bool, str]:
+    """Whether p is a readable-looking file, and if not, why in a few words. Path.is_file() raises for a
+    name the system refuses (longer than NAME_MAX, a NUL byte) instead of answering False."""
+    try:
+        return (True, "") if p.is_file() else (False, "not found")
+    except (OSError, ValueError) as e:
+        return False, f"cannot be looked up ({getattr(e, 'strerror', None) or e})"
+
+
 def _check_settings(camera: Any, settings: Any, path: tuple, conv: _Yaml, problems: list[Problem],
                     state: dict[str, float | int]) -> tuple[tuple[tuple[str, Any], ...], tuple[tuple[str, Any], ...]]:
     """Check settings against the catalogue; return (as written, checked values)."""
@@ -657,13 +666,16 @@ def _meaning(data: dict, conv: _Yaml, problems: list[Problem], base_dir: Path) -
                     and data["vehicle"].get("frame") == "plane":
                 problems.append(Problem(_at(conv, base + ("trigger",)), "a plane cannot hover",
                                         "use trigger: distance"))
-            area = body.get("area")
-            for j, src in enumerate([area] + list(body.get("exclude") or []) if kind == "survey" else []):
+            area, exclude = body.get("area"), body.get("exclude")
+            # a wrong type of either (exclude: 5) is the schema's finding: only strings are looked up here
+            sources = [area] + (exclude if isinstance(exclude, list) else []) if kind == "survey" else []
+            for j, src in enumerate(sources):
                 if isinstance(src, str) and src:
                     p = Path(src) if Path(src).is_absolute() else base_dir / src
-                    if not p.is_file():
+                    found, why = _is_file(p)
+                    if not found:
                         at = base + ("area",) if j == 0 else base + ("exclude", j - 1)
-                        problems.append(Problem(_at(conv, at), f"area file {src!r} not found (looked at {p})",
+                        problems.append(Problem(_at(conv, at), f"area file {src!r} {why} (looked at {p})",
                                                 "paths in a plan are relative to the plan file"))
         elif kind == "waypoint":
             payload_ref(body.get("capture"), base + ("capture",))

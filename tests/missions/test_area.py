@@ -132,6 +132,9 @@ def test_missing_and_unknown_files(tmp_path: Path) -> None:
     (tmp_path / "a.shp").write_bytes(b"x")
     with pytest.raises(PlanError, match="unknown area file type"):
         load_area(tmp_path / "a.shp")
+    (tmp_path / "dir.geojson").mkdir()  # passes stat(), fails to read
+    with pytest.raises(PlanError, match="cannot read area file: Is a directory"):
+        load_area(tmp_path / "dir.geojson")
 
 
 def test_oversized_file_is_refused(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

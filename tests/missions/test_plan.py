@@ -211,6 +211,22 @@ def test_area_file_relative_to_plan(tmp_path):
     one(text, tmp_path, "area file 'areas/field.geojson' not found")
 
 
+def test_area_name_the_system_refuses_is_a_located_problem(tmp_path):
+    # Path.is_file() raises for a name longer than NAME_MAX (255 bytes) instead of answering False
+    long = "x" * 300 + ".geojson"
+    text = BASE.replace("area: [[50.1100, 14.5000], [50.1100, 14.5030], [50.1120, 14.5030], [50.1120, 14.5000]]",
+                        f"area: {long}")
+    p = one(text, tmp_path, "cannot be looked up")
+    assert line_col(p.where) == (14, 13) and "relative to the plan file" in p.hint
+
+
+@pytest.mark.parametrize("exclude", ["5", "0.5", "true", "{a: 1}", "areas/one.geojson"])
+def test_exclude_of_the_wrong_type_is_the_schemas_finding(tmp_path, exclude):
+    text = BASE.replace("      payloads: [thermal]\n", f"      exclude: {exclude}\n      payloads: [thermal]\n", 1)
+    p = one(text, tmp_path, "exclude must be a list")
+    assert line_col(p.where)[0] == 15
+
+
 def test_yaml_syntax_error_located(tmp_path):
     p = one(BASE.replace("home: {lat", "home: [lat"), tmp_path, "invalid YAML")
     assert line_col(p.where)[0] >= 4

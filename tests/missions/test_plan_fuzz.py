@@ -72,3 +72,48 @@ def test_good_plan_mutated(edits):
         pos = min(pos, len(text))
         text = text[:pos] + ins + text[pos + cut:]
     check(text)
+
+
+# Every leaf of the bundled examples, replaced by a value of the wrong kind or size, or removed: the
+# shapes a user's edit produces (this found `exclude: 0.5` crashing the area-file lookup).
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+EXAMPLE_DOCS = {p.name: yaml.safe_load(p.read_text()) for p in sorted(EXAMPLES.glob("*.yaml"))}
+ODD = [0, -1, 0.5, 1e308, -1e308, float("nan"), float("inf"), "", [], {}, True, None, "x" * 300, 2**64, [0],
+       [[0, 0]], {"a": 1}, 100, 360, "auto"]
+
+
+def _leaf_paths(node, path=()):
+    if isinstance(node, dict):
+        for k, v in node.items():
+            yield from _leaf_paths(v, path + (k,))
+    elif isinstance(node, list):
+        for i, v in enumerate(node):
+            yield from _leaf_paths(v, path + (i,))
+    if path:
+        yield path
+
+
+EXAMPLE_PATHS = sorted((name, path) for name, doc in EXAMPLE_DOCS.items() for path in _leaf_paths(doc))
+
+
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.sampled_from(EXAMPLE_PATHS), st.one_of(st.sampled_from(ODD), st.just(KeyError)))
+def test_example_with_one_part_replaced_or_removed(where, value):
+    import copy
+
+    name, path = where
+    doc = copy.deepcopy(EXAMPLE_DOCS[name])
+    parent = doc
+    for key in path[:-1]:
+        parent = parent[key]
+    if value is KeyError:
+        del parent[path[-1]]
+    else:
+        parent[path[-1]] = value
+    try:
+        result = parse_plan(yaml.safe_dump(doc, allow_unicode=True), NAME, EXAMPLES)
+    except PlanError as e:
+        for p in getattr(e, "problems", None) or [e]:
+            assert p.where and p.where.startswith(NAME), p
+        return
+    assert isinstance(result, Plan)
