@@ -161,8 +161,11 @@ def build_bundle(directory: str | Path, models: Iterable[str] = (), *, all_model
 
         cat = catalogue()
     directory = Path(directory)
-    if directory.exists() and not directory.is_dir():
-        raise CdfError("the output path exists and is not a directory", where=str(directory))
+    try:
+        if directory.exists() and not directory.is_dir():
+            raise CdfError("the output path exists and is not a directory", where=str(directory))
+    except OSError as err:  # exists() answers only "no such file"; a name too long raises
+        raise CdfError(f"cannot use the output directory: {err.strerror}", where=str(directory)) from None
     if base_url is not None:
         check_base_url(base_url)
     cameras, skipped = select_cameras(cat, models, all_models)
@@ -233,7 +236,12 @@ def build_bundle(directory: str | Path, models: Iterable[str] = (), *, all_model
     merged = {(e.id, e.version): e for e in existing if (directory / e.file).is_file()}
     merged.update(built)
     manifest = tuple(sorted(merged.values(), key=lambda e: (e.id, e.version, e.file)))
-    _write_atomically(directory, {n: outputs[n] for n in written}, manifest_bytes(manifest))
+    try:
+        _write_atomically(directory, {n: outputs[n] for n in written}, manifest_bytes(manifest))
+    except OSError as err:
+        raise CdfError(f"cannot write the bundle: {err.strerror or err}", where=str(directory),
+                       hint="nothing was changed; the directory's parent must exist or be creatable, "
+                            "and be writable") from None
     return BuildResult(directory=directory, entries=tuple(entries), manifest=manifest, written=tuple(written),
                        unchanged=tuple(unchanged), skipped=tuple(skipped))
 

@@ -104,9 +104,12 @@ def write_outputs(compiled: Compiled, out_dir: str | Path, rep: dict | None = No
     from missions.report import report, simulate
 
     out_dir = Path(out_dir)
-    if out_dir.exists() and not out_dir.is_dir():
-        raise PlanError("the output path exists and is not a directory", where=str(out_dir),
-                        hint="give a directory for -o")
+    try:
+        if out_dir.exists() and not out_dir.is_dir():
+            raise PlanError("the output path exists and is not a directory", where=str(out_dir),
+                            hint="give a directory for -o")
+    except OSError as e:  # exists() answers only "no such file"; a name too long raises
+        raise PlanError(f"cannot use the output directory: {e.strerror}", where=str(out_dir)) from None
     if sim is None:
         sim = simulate(compiled)
     if rep is None:

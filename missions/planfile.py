@@ -231,19 +231,50 @@ def write_plan(items, home=None, /, *, firmware: str | int | None = None, vehicl
     return json.dumps(doc, indent=4, sort_keys=True, allow_nan=False) + "\n"
 
 
-def atomic_write(path: Path, text: str) -> None:
-    """Write `text` to `path` via a temporary file in the same directory and a rename."""
+def _temp_beside(path: Path) -> tuple[int, str]:
+    # its name is the target's and a few more characters: where it can be made, the target can be too
+    return tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+
+
+def _cannot_write(path: Path, err: OSError) -> PlanError:
+    return PlanError(f"cannot write the file: {err.strerror or err}", where=str(path),
+                     hint="the directory must exist and be writable, the name at most 240 bytes")
+
+
+def check_writable(path: str | Path) -> None:
+    """Raise PlanError unless atomic_write(path, ...) can make its temporary file: asked before a long
+    operation (a download) so that its result is not lost at the last step."""
     path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        fd, tmp = _temp_beside(path)
+    except OSError as err:
+        if not os.path.isdir(path.parent):  # isdir() answers False for any error
+            raise PlanError("the output directory does not exist", where=str(path.parent),
+                            hint="create it first") from None
+        raise _cannot_write(path, err) from None
+    os.close(fd)
+    os.unlink(tmp)
+
+
+def atomic_write(path: Path, text: str) -> None:
+    """Write `text` to `path` via a temporary file in the same directory and a rename; PlanError when
+    that fails (nothing is left behind, an existing file at `path` is unchanged)."""
+    path = Path(path)
+    try:
+        fd, tmp = _temp_beside(path)
+    except OSError as err:
+        raise _cannot_write(path, err) from None
     try:
         with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as fh:
             fh.write(text)
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as err:
         try:
             os.unlink(tmp)
         except OSError:
             pass
+        if isinstance(err, OSError):
+            raise _cannot_write(path, err) from None
         raise
 
 

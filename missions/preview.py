@@ -455,10 +455,13 @@ def write_preview(compiled: Compiled, out: str | Path) -> Path:
     sim = simulate(compiled)
     rep = report(compiled, sim)
     pic = build_picture(compiled, sim, rep)
-    parent = out.resolve().parent
-    if not parent.is_dir():
-        raise PlanError("the output directory does not exist", where=str(out), hint="create it first")
-    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=parent)
+    try:
+        parent = out.resolve().parent
+        if not parent.is_dir():
+            raise PlanError("the output directory does not exist", where=str(out), hint="create it first")
+        fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=parent)
+    except OSError as err:  # is_dir() answers False only for "no such file"; a name too long raises
+        raise PlanError(f"cannot write the preview: {err.strerror}", where=str(out)) from None
     os.close(fd)
     try:
         if suffix == ".png":
@@ -467,7 +470,9 @@ def write_preview(compiled: Compiled, out: str | Path) -> Path:
             text = render_svg(pic) if suffix == ".svg" else render_html(pic, rep)
             Path(tmp).write_text(text, encoding="utf-8")
         os.replace(tmp, out)
-    except BaseException:
+    except BaseException as err:
         Path(tmp).unlink(missing_ok=True)
+        if isinstance(err, OSError):
+            raise PlanError(f"cannot write the preview: {err.strerror or err}", where=str(out)) from None
         raise
     return out

@@ -697,7 +697,7 @@ def download_file(link: Link, out: str, *, target_system: int | None = None, tar
     from pathlib import Path
 
     from missions.errors import PlanError
-    from missions.planfile import atomic_write, write_plan
+    from missions.planfile import atomic_write, check_writable, write_plan
     from missions.wpl import write_wpl
 
     p = Path(out)
@@ -705,8 +705,7 @@ def download_file(link: Link, out: str, *, target_system: int | None = None, tar
     if suffix not in PLAN_SUFFIXES + WPL_SUFFIXES:
         raise PlanError(f"unknown output type {suffix or '(no suffix)'!r}", where=str(p),
                         hint="write a .plan or a .waypoints file")
-    if not p.parent.is_dir():
-        raise PlanError("the output directory does not exist", where=str(p.parent))
+    check_writable(p)  # before the download, not after it
     hb = find_autopilot(link, target_system, timeout)
     system = hb.get_srcSystem()
     ardupilot = hb.autopilot == mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA

@@ -236,8 +236,9 @@ def test_a_failure_while_moving_files_rolls_back(tmp_path, monkeypatch):
             raise OSError(28, "No space left on device")
         return real_replace(src, dst)
     monkeypatch.setattr(os, "replace", failing)
-    with pytest.raises(OSError):
+    with pytest.raises(CdfError, match="cannot write the bundle: No space left on device") as ei:
         build_bundle(out, all_models=True, base_url=BASE)
+    assert "nothing was changed" in ei.value.hint
     assert snapshot(out) == before
     assert not [p for p in out.iterdir() if p.name.startswith(".wiris-build-")]
 
@@ -246,6 +247,14 @@ def test_output_path_that_is_a_file_is_refused(tmp_path):
     (tmp_path / "f").write_text("x")
     with pytest.raises(CdfError, match="not a directory"):
         build_bundle(tmp_path / "f", ["wiris-pro"])
+
+
+@pytest.mark.parametrize("out", ["d" * 300, "/proc/wiris-bundle"])
+def test_an_output_directory_the_system_refuses_is_an_error(tmp_path, out):
+    before = sorted(tmp_path.iterdir())
+    r = CliRunner().invoke(cli, ["cdf", "build", "--all", "-o", str(tmp_path / out)])
+    assert r.exit_code == 1 and "internal error" not in r.output and "cannot" in r.output, r.output
+    assert sorted(tmp_path.iterdir()) == before
 
 
 # ----------------------------------------------------------------------------------------------- CLI

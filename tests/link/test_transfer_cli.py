@@ -135,6 +135,19 @@ def test_no_vehicle_is_exit_1_and_download_writes_nothing(tmp_path, plan_file):
     assert r.exit_code == 1 and not out.exists()
 
 
+@pytest.mark.parametrize("out,text", [("m" * 250 + ".plan", "cannot write the file"),
+                                      ("/proc/wiris.waypoints", "cannot write the file"),
+                                      ("no-such-dir/got.plan", "directory does not exist")])
+def test_download_checks_the_output_before_it_starts(tmp_path, out, text):
+    target = tmp_path / out  # an absolute `out` stays itself
+    with VehicleSim(flavour="px4") as sim:
+        sim.set_items(ITEMS)
+        r = run("mission", "download", "--connect", f"udpout:127.0.0.1:{sim.port}", "-o", str(target))
+        assert r.exit_code == 1 and text in r.output and "hint:" in r.output, r.output
+        assert sim.stats["downloads"] == 0  # nothing fetched only to be lost at the last step
+    assert not any(p.name.endswith(".tmp") for p in tmp_path.iterdir())
+
+
 @pytest.mark.parametrize("args,code,text", [
     (["mission", "upload", "m.kml", "--connect", "udpout:127.0.0.1:9"], 1, "unknown file type"),
     (["mission", "upload", "missing.plan", "--connect", "udpout:127.0.0.1:9"], 2, "does not exist"),

@@ -94,6 +94,18 @@ def test_bad_plans_exit_1_with_location_and_write_nothing(tmp_path, key):
     assert p.exit_code == 1 and not (tmp_path / "x.svg").exists()
 
 
+def test_outputs_the_system_refuses_are_errors_not_crashes(tmp_path):
+    plan = small_plan(tmp_path)
+    before = sorted(p.name for p in tmp_path.iterdir())
+    long = "d" * 300  # longer than NAME_MAX: Path.exists() raises instead of answering
+    for args in (["compile", plan, "-o", tmp_path / long], ["compile", plan, "-o", "/proc/wiris-out"],
+                 ["preview", plan, "-o", tmp_path / f"{long}.svg"], ["preview", plan, "-o", tmp_path / long / "p.svg"],
+                 ["preview", plan, "-o", "/proc/wiris.svg"]):
+        r = run("mission", *args)
+        assert r.exit_code == 1 and "internal error" not in r.output and "error:" in r.output, (args, r.output)
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+
+
 def test_check_json_on_a_bad_plan_is_still_json(tmp_path):
     plan, _ = bad_plan(tmp_path, "unknown_payload")
     r = run("mission", "check", plan, "--json")
