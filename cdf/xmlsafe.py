@@ -119,7 +119,10 @@ def fetch_url(url: str, *, timeout_s: float = HTTP_TIMEOUT_S) -> bytes:
     The download runs in a daemon thread the caller stops waiting for at the deadline: a server can
     trickle header lines slowly enough that no single socket operation times out.
     """
-    scheme = urllib.parse.urlsplit(url).scheme.lower()
+    try:
+        scheme = urllib.parse.urlsplit(url).scheme.lower()
+    except ValueError as err:  # "Invalid IPv6 URL"
+        raise CdfError(f"malformed URL: {err}", where=url, hint="check the host part of the URL") from None
     if scheme not in ("http", "https"):
         raise CdfError(f"unsupported URL scheme {scheme!r}", where=url,
                        hint="use http:// or https:// (mftp:// needs a MAVLink link: download it first)")
@@ -187,8 +190,9 @@ def _read_bounded(resp, url: str, deadline: float) -> bytes:
 
 
 def is_url(source: str) -> bool:
-    return "://" in source and urllib.parse.urlsplit(source).scheme.lower() in ("http", "https", "file", "ftp",
-                                                                                "mftp", "mavlinkftp")
+    # the scheme as urlsplit would find it, without urlsplit's ValueError for a broken host ("http://[::1")
+    scheme, sep, _rest = source.partition("://")
+    return bool(sep) and scheme.lower() in ("http", "https", "file", "ftp", "mftp", "mavlinkftp")
 
 
 def read_source(source: str | Path, *, timeout_s: float = HTTP_TIMEOUT_S) -> bytes:

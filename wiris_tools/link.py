@@ -235,6 +235,11 @@ class Link:
     # -- opening -------------------------------------------------------------------------------
     @staticmethod
     def _open(url: str, baud: int):
+        kind, port = url.partition(":")[0], url.rpartition(":")[2]
+        if kind in ("udp", "udpin", "udpout", "udpbcast", "tcp", "tcpin") and port.isdigit() and int(port) > 65535:
+            # pymavlink would take it and fail later: in a thread at udpout's first send, or in tcp's retries
+            raise LinkError(f"port {port} is not 0-65535", where=url,
+                            hint="e.g. udpin:127.0.0.1:14550 or udpout:127.0.0.1:14550")
         device = url
         if "," in url and not url.startswith(("udp", "tcp")):
             device, _, b = url.partition(",")
@@ -245,7 +250,7 @@ class Link:
         try:
             return mavutil.mavlink_connection(device, baud=baud, autoreconnect=False,
                                               source_system=255, source_component=0)
-        except (OSError, ValueError, ImportError) as err:
+        except (OSError, ValueError, OverflowError, ImportError) as err:  # OverflowError: a port over 65535
             raise LinkError(f"cannot open the link: {err}", where=url,
                             hint="use a pymavlink connection string such as udpin:127.0.0.1:14550, "
                                  "udpout:HOST:PORT, tcp:HOST:PORT or /dev/ttyUSB0,57600") from None
@@ -278,7 +283,7 @@ class Link:
             self.mav.total_bytes_sent += len(buf)
             try:
                 self._conn.write(buf)
-            except OSError as err:
+            except (OSError, OverflowError) as err:  # OverflowError: sendto() to a port over 65535
                 raise LinkError(f"cannot send {msg.get_type()}: {err}", where=self.url) from None
             self._stats.counts["sent"] += 1
             self._stats.counts["bytes_sent"] += len(buf)

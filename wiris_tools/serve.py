@@ -122,7 +122,10 @@ class BundleHandler(http.server.BaseHTTPRequestHandler):
     # ------------------------------------------------------------------ resolution
     def _resolve(self) -> tuple[int, Path | None]:
         """(status, file): 200 and a regular file inside the root, or an error status."""
-        raw_path = urllib.parse.urlsplit(self.path).path
+        try:
+            raw_path = urllib.parse.urlsplit(self.path).path
+        except ValueError:  # e.g. an absolute-form target with a broken IPv6 host: "GET http://[::1/x"
+            return 400, None
         prefix = self.config.prefix
         if not raw_path.startswith(prefix):
             return 404, None
@@ -156,7 +159,7 @@ class BundleHandler(http.server.BaseHTTPRequestHandler):
     def _serve(self, body: bool) -> None:
         status, path = self._resolve()
         if path is None:
-            self._plain(status, "forbidden" if status == 403 else "not found")
+            self._plain(status, {400: "bad request", 403: "forbidden"}.get(status, "not found"))
             return
         try:
             st = path.stat()
@@ -214,6 +217,19 @@ class BundleServer(http.server.ThreadingHTTPServer):
     daemon_threads = True
     block_on_close = False
 
+    def handle_error(self, request, client_address) -> None:
+        """One log line instead of socketserver's traceback on stderr: a client that hangs up while it
+        is answered is routine, anything else is reported (WIRIS_DEBUG=1 keeps the traceback)."""
+        err = sys.exc_info()[1]
+        if isinstance(err, ConnectionError):
+            line = f"client hung up ({type(err).__name__})"
+        else:
+            if os.environ.get("WIRIS_DEBUG"):
+                super().handle_error(request, client_address)
+            line = f"internal error: {type(err).__name__}: {err} (rerun with WIRIS_DEBUG=1 for a traceback)"
+        host, port = client_address[:2]
+        self.RequestHandlerClass.config.log(f"- {host}:{port} {line}")
+
 
 def make_server(directory: str | Path, host: str = "127.0.0.1", port: int = 8000, *, prefix: str | None = None,
                 log: Callable[[str], None] | None = None) -> BundleServer:
@@ -222,7 +238,7 @@ def make_server(directory: str | Path, host: str = "127.0.0.1", port: int = 8000
     from wiris_tools.errors import LinkError
 
     root = Path(directory)
-    if not root.is_dir():
+    if not os.path.isdir(root):  # False for any error (a name too long), where Path.is_dir() raises
         raise LinkError("not a directory", where=str(directory),
                         hint="build a bundle first: wiris cdf build --all -o DIR")
     root = Path(os.path.realpath(root))

@@ -210,6 +210,19 @@ def test_redirect_to_other_schemes_is_refused(server):
         validate_source(f"{base}/a.xml")
 
 
+def test_redirect_to_a_malformed_url_is_refused(server):
+    base, handler = server
+    handler.routes["/bad.xml"] = (302, {"Location": "http://[::1/x.xml"}, b"")
+    with pytest.raises(CdfError, match="Invalid IPv6 URL"):
+        validate_source(f"{base}/bad.xml")
+
+
+@pytest.mark.parametrize("url", ["http://[::1", "https://[::1/cdf.xml", "http://[zz]/cdf.xml"])
+def test_a_malformed_url_is_a_cdf_error(url):
+    with pytest.raises(CdfError, match="malformed URL"):
+        validate_source(url)
+
+
 def test_redirect_to_http_is_followed(server):
     base, handler = server
     handler.routes["/old.xml"] = (302, {"Location": f"{base}/new.xml"}, b"")

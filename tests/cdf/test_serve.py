@@ -155,6 +155,32 @@ def test_a_malformed_request_gets_an_error_not_a_crash(server):
     assert lines[0] == "- - 400 " + lines[0].rsplit(" ", 1)[1]
 
 
+def test_a_broken_absolute_target_is_400_not_a_dropped_connection(server):
+    srv, lines = server
+    with socket.create_connection(("127.0.0.1", srv.server_address[1]), timeout=5) as s:
+        s.sendall(b"GET http://[::1/cdf/x.xml HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n")
+        answer = s.recv(1024)
+    assert answer.startswith(b"HTTP/1.1 400")
+    assert lines == ["GET http://[::1/cdf/x.xml 400 12"]
+
+
+def test_a_client_hanging_up_is_one_log_line_not_a_traceback(server, capfd):
+    import struct
+    import time
+
+    srv, lines = server
+    with socket.create_connection(("127.0.0.1", srv.server_address[1]), timeout=5) as s:
+        s.sendall(b"GET /cdf/" + PRO.encode() + b" HTTP/1.1\r\n")  # the headers never come
+        time.sleep(0.2)  # the server is now reading them
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))  # close with a reset
+    deadline = time.monotonic() + 5
+    while not lines and time.monotonic() < deadline:
+        time.sleep(0.02)
+    assert len(lines) == 1 and "client hung up (ConnectionResetError)" in lines[0], lines
+    assert "Traceback" not in capfd.readouterr().err
+    assert request(srv, "GET", f"/cdf/{PRO}")[0] == 200   # still serving
+
+
 def test_concurrent_requests_are_served(server):
     srv, _ = server
     results = []
@@ -184,8 +210,9 @@ def test_explicit_prefix_and_root_prefix(bundle):
 
 
 def test_missing_directory_and_busy_port_are_errors(tmp_path, bundle):
-    with pytest.raises(WirisError, match="not a directory"):
-        make_server(tmp_path / "missing", "127.0.0.1", 0)
+    for missing in (tmp_path / "missing", tmp_path / ("d" * 300)):  # the second: a name too long
+        with pytest.raises(WirisError, match="not a directory"):
+            make_server(missing, "127.0.0.1", 0)
     srv = make_server(bundle, "127.0.0.1", 0, log=lambda _l: None)
     try:
         with pytest.raises(WirisError, match="cannot listen") as err:
