@@ -152,6 +152,9 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
                                     f"to its minimum of {info.min_interval_s:g} s; a gust of tail wind loses photos")
             turnaround = step.turnaround_m if step.turnaround_m is not None else TURNAROUND_DEFAULT_M[plan.vehicle.frame]
             start = em.s.last_pos[:2] if em.s.last_pos else (plan.home.lat, plan.home.lon)
+            from missions.survey import MAX_PHOTOS
+
+            photos_left = max(0, MAX_PHOTOS - sum(len(g.photos) for g in intent))
             try:
                 if kind == "survey":
                     from missions.area import load_area
@@ -162,7 +165,7 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
                     geo = plan_survey(area, fp, step.front_pct, step.side_pct, angle_deg=step.angle_deg,
                                       turnaround_m=turnaround, speed_mps=speed,
                                       min_interval_s=info.min_interval_s, refly_90=step.refly_90,
-                                      hover=step.trigger == "hover", start_latlon=start)
+                                      hover=step.trigger == "hover", start_latlon=start, photos_left=photos_left)
                 else:
                     from missions.corridor import plan_corridor
 
@@ -171,7 +174,7 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
                                         where=plan.step_where(step, "trigger"), hint="use trigger: distance")
                     geo = plan_corridor(step.line, step.width_m, fp, step.front_pct, step.side_pct,
                                         turnaround_m=turnaround, speed_mps=speed, min_interval_s=info.min_interval_s,
-                                        where=plan.step_where(step, "line"))
+                                        where=plan.step_where(step, "line"), photos_left=photos_left)
                     area = geo.area
             except PlanError as e:
                 raise _relocate(e, here) from None

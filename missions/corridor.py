@@ -28,7 +28,8 @@ from missions.errors import PlanError
 from missions.footprint import Footprint, transect_spacing_m, trigger_distance_m
 from missions.geo import LocalProjection
 from missions.route import KIND_ENTRY, KIND_EXIT, KIND_TURN_IN
-from missions.survey import (DEFAULT_EXIT_MARGIN_M, PlanWarning, SurveyStats, Waypoint, estimated_time_s)
+from missions.survey import (DEFAULT_EXIT_MARGIN_M, MAX_PHOTOS, PlanWarning, SurveyStats, Waypoint,
+                             check_photo_budget, estimated_time_s)
 from missions.swaths import DEFAULT_EDGE_MARGIN_M, line_offsets
 from missions.triggers import PhotoPoint, TriggerSpan, simulate_distance_trigger
 
@@ -69,7 +70,7 @@ def _extend_end(xy: np.ndarray, extra: float) -> np.ndarray:
 def plan_corridor(line: Sequence[Sequence[float]], width_m: float, footprint: Footprint, front_pct: float,
                   side_pct: float, turnaround_m: float = 10.0, speed_mps: float = 5.0,
                   min_interval_s: float | None = None, where: str = "corridor.line",
-                  exit_margin_m: float = DEFAULT_EXIT_MARGIN_M) -> CorridorPlan:
+                  exit_margin_m: float = DEFAULT_EXIT_MARGIN_M, photos_left: int = MAX_PHOTOS) -> CorridorPlan:
     from shapely.geometry import LineString
     from shapely.geometry.polygon import orient
 
@@ -93,6 +94,12 @@ def plan_corridor(line: Sequence[Sequence[float]], width_m: float, footprint: Fo
     xy = xy[keep]
     if len(xy) < 2:
         raise PlanError("the corridor line has no length (all points coincide)", where=where)
+    from missions.geo import MAX_EXTENT_M  # the limit areas have: the local projection's accuracy
+
+    size = float(max(np.ptp(xy[:, 0]), np.ptp(xy[:, 1])))
+    if not size <= MAX_EXTENT_M:
+        raise PlanError(f"the corridor line spans {size / 1000:.0f} km, more than the {MAX_EXTENT_M / 1000:.0f} km "
+                        "one plan can hold", where=where, hint="split it into several plans")
     centre = LineString(xy)
     if not centre.is_simple:
         raise PlanError("the corridor line crosses itself", where=where,
@@ -102,6 +109,7 @@ def plan_corridor(line: Sequence[Sequence[float]], width_m: float, footprint: Fo
     area = Area(corridor, proj, where)
 
     offsets = line_offsets(width_m, footprint.across_m, spacing, DEFAULT_EDGE_MARGIN_M) - width_m / 2.0
+    check_photo_budget(centre.length * len(offsets) / trig, "corridor", photos_left)
     lines: list[np.ndarray] = []
     for o in offsets:
         g = centre if abs(o) < 1e-9 else centre.offset_curve(float(o), quad_segs=4, join_style="round")

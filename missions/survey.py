@@ -56,6 +56,20 @@ from missions.triggers import PhotoPoint, TriggerSpan, simulate_distance_trigger
 DEFAULT_ACCEL_MPS2 = 2.0
 # ArduCopter accepts a waypoint within WPNAV_RADIUS (200 cm default) — before the vehicle is on it.
 DEFAULT_EXIT_MARGIN_M = 2.0
+# The photos of one plan's survey and corridor steps together: at the WIRIS's 1 s minimum interval this is
+# 28 h of shooting, beyond any one vehicle's mission, while planning and measuring it stays within seconds
+# and a few hundred MB (both grow with the photo count). Checked per step from an estimate, before anything
+# is generated.
+MAX_PHOTOS = 100_000
+
+
+def check_photo_budget(estimate: float, what: str, left: int = MAX_PHOTOS) -> None:
+    """PlanError when a step's estimated photos exceed what the plan has `left` of MAX_PHOTOS."""
+    if estimate > left:
+        earlier = f" after {MAX_PHOTOS - left:,} in earlier steps" if left < MAX_PHOTOS else ""
+        raise PlanError(f"this {what} would take about {estimate:,.0f} photos{earlier}, more than the "
+                        f"{MAX_PHOTOS:,} one plan can hold",
+                        hint="split it into several plans, or fly higher (fewer, larger photos)")
 HOVER_HOLD_S = 4.0        # QGC's _hoverAndCaptureDelaySeconds
 
 
@@ -214,8 +228,9 @@ def plan_survey(area: Area, footprint: Footprint, front_pct: float, side_pct: fl
                 angle_deg: float | str = "auto", turnaround_m: float = 10.0, speed_mps: float = 5.0,
                 min_interval_s: float | None = None, refly_90: bool = False, hover: bool = False,
                 start_latlon: tuple[float, float] | None = None,
-                exit_margin_m: float = DEFAULT_EXIT_MARGIN_M) -> SurveyPlan:
-    """Plan a survey of `area` (see module doc)."""
+                exit_margin_m: float = DEFAULT_EXIT_MARGIN_M, photos_left: int = MAX_PHOTOS) -> SurveyPlan:
+    """Plan a survey of `area` (see module doc); `photos_left`: what the plan's earlier steps left of
+    MAX_PHOTOS."""
     spacing = transect_spacing_m(footprint, side_pct)
     trig = trigger_distance_m(footprint, front_pct)
     if not (isinstance(speed_mps, (int, float)) and math.isfinite(speed_mps) and speed_mps > 0):
@@ -229,6 +244,8 @@ def plan_survey(area: Area, footprint: Footprint, front_pct: float, side_pct: fl
                         hint=f"fly at most {trig / min_interval_s:.1f} m/s, lower the front overlap or fly higher")
     warnings: list[PlanWarning] = []
     geom = area.geometry
+    # a photo adds about spacing x trigger distance of new ground
+    check_photo_budget(geom.area / (spacing * trig) * (2 if refly_90 else 1), "survey", photos_left)
     if isinstance(angle_deg, str):
         if angle_deg != "auto":
             raise PlanError(f"angle_deg must be a number or 'auto', got {angle_deg!r}", where="angle_deg")

@@ -300,6 +300,38 @@ def test_corridor_compiles(tmp_path):
     assert any(it.command == m.MAV_CMD_DO_SET_CAM_TRIGG_DIST and it.param1 > 0 for it in c.items)
 
 
+def test_corridor_longer_than_a_plan_can_hold_is_refused_before_planning(tmp_path):
+    # one vertex's longitude typed wrong: a 12 000 km line (planning it held 9 GB before this was checked)
+    def ch(doc):
+        doc["mission"][1] = {"corridor": {"line": [[-35.261, 149.04], [-35.2578, 0.5], [-35.2561, 149.0539]],
+                                          "width_m": 50, "payloads": ["thermal"], "altitude_m": 50,
+                                          "overlap": {"front": 70, "side": 50}}}
+    with pytest.raises(PlanError, match=r"corridor line spans \d+ km, more than the 200 km") as ei:
+        build(tmp_path, ch)
+    assert "plan.yaml:" in ei.value.where and "several plans" in ei.value.hint
+
+
+def test_survey_with_more_photos_than_a_plan_can_hold_is_refused_before_planning(tmp_path):
+    # 4 km x 4 km at 40 m: about 300 000 photos (planning it took 8 s and 290 MB; an 86 km square, 4 GB and more)
+    big = [[50.0, 14.0], [50.0, 14.05584], [50.03597, 14.05584], [50.03597, 14.0]]
+    with pytest.raises(PlanError, match=r"this survey would take about [\d,]+ photos, more than the 100,000") as ei:
+        build(tmp_path, lambda d: survey(d).update(area=big))
+    assert "plan.yaml:" in ei.value.where and "fly higher" in ei.value.hint
+
+
+def test_the_photo_budget_is_the_whole_plans(tmp_path, monkeypatch):
+    import missions.survey
+
+    one = len(build(tmp_path).intent[0].photos)
+    monkeypatch.setattr(missions.survey, "MAX_PHOTOS", int(one * 1.5))   # room for one survey, not two
+
+    def twice(doc):
+        doc["mission"].insert(2, copy.deepcopy(doc["mission"][1]))
+    with pytest.raises(PlanError, match=rf"after {one:,} in earlier steps") as ei:
+        build(tmp_path, twice)
+    assert "plan.yaml:" in ei.value.where
+
+
 def test_px4_params(tmp_path):
     c = build(tmp_path, firmware="px4")
     params = {n: v for n, v, _ in c.params}
