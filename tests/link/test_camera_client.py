@@ -224,6 +224,10 @@ def test_cli_info_settings_set_capture(pro):
     assert ok.exit_code == 0 and "LAYOUT = 3 (Blended)" in ok.output
     bad = r.invoke(cli, ["camera", "set", "LAYOUT", "9", "--connect", _url(pro)])
     assert bad.exit_code == 1 and "not one of the options" in bad.output
+    # a negative value is the value, not an option (a thermal range starts below zero)
+    cold = r.invoke(cli, ["camera", "set", "RANGE_MIN_C", "-20", "--connect", _url(pro)])
+    assert cold.exit_code == 0 and "RANGE_MIN_C = -20 (acknowledged)" in cold.output, cold.output
+    assert r.invoke(cli, ["camera", "set", "LAYOUT", "1", "--tiemout", "2", "--connect", _url(pro)]).exit_code == 2
     cap = r.invoke(cli, ["camera", "capture", "--connect", _url(pro), "--json"])
     assert cap.exit_code == 0, cap.output
     assert json.loads(cap.output.splitlines()[0])["ok"] is True

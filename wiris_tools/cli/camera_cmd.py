@@ -141,13 +141,15 @@ def settings(url, component, system, signing_key, mavlink1, timeout, find_s, as_
         click.echo(f"the camera did not report: {', '.join(missing)}", err=True)
 
 
-@camera.command(name="set")
+# ignore_unknown_options: a negative VALUE ("-20", a temperature) is taken as the value, not as an option
+@camera.command(name="set", context_settings={"ignore_unknown_options": True})
 @click.argument("name")
 @click.argument("value")
 @_link_options
 @click.option("--json", "as_json", is_flag=True, help="Print the acknowledged value as JSON.")
 def set_(name, value, url, component, system, signing_key, mavlink1, timeout, find_s, as_json) -> None:
-    """Set NAME (a definition parameter) to VALUE (an option name or a number): PARAM_EXT_SET, waits for the ACK."""
+    """Set NAME (a definition parameter) to VALUE (an option name or a number, also a negative one such as
+    -20): PARAM_EXT_SET, waits for the ACK."""
     with _camera(url, component, system, signing_key, mavlink1, timeout, find_s) as cam:
         information = cam.information()
         loaded = cam.definition(information, progress=_progress(as_json))
