@@ -42,6 +42,20 @@ def _relocate(err: PlanError, where: str) -> PlanError:
     return err
 
 
+def _check_reach(home: Any, lat: float, lon: float, what: str, where: str) -> None:
+    """A step must lie within MAX_EXTENT_M of home, like an area's own extent: farther is a typo in a
+    coordinate, and the flight there (along which a RedEdge keeps shooting) would be thousands of km."""
+    from pyproj import Geod
+
+    from missions.geo import MAX_EXTENT_M
+
+    distance = Geod(ellps="WGS84").inv(home.lon, home.lat, lon, lat)[2]
+    if not distance <= MAX_EXTENT_M:
+        raise PlanError(f"this {what} lies {distance / 1000:,.0f} km from home, more than the "
+                        f"{MAX_EXTENT_M / 1000:.0f} km one plan may reach", where=where,
+                        hint="check the coordinates of home and of this step (latitude and longitude swapped?)")
+
+
 def _rededge_tolerance(alts: list[float]) -> tuple[float, float]:
     """operatingAlt and opAltTolerance covering every survey altitude the RedEdge flies. The tolerance keeps it
     from shooting while climbing; a quarter of the altitude (at least 10 m) is our choice, not MicaSense's."""
@@ -162,6 +176,7 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
 
                     area = load_area(step.area, exclude=step.exclude, base_dir=plan.base_dir,
                                      where=plan.step_where(step, "area"))
+                    _check_reach(plan.home, area.projection.lat0, area.projection.lon0, "area", here)
                     geo = plan_survey(area, fp, step.front_pct, step.side_pct, angle_deg=step.angle_deg,
                                       turnaround_m=turnaround, speed_mps=speed,
                                       min_interval_s=info.min_interval_s, refly_90=step.refly_90,
@@ -172,6 +187,7 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
                     if step.trigger == "hover":
                         raise PlanError("corridors are flown with distance or interval triggering",
                                         where=plan.step_where(step, "trigger"), hint="use trigger: distance")
+                    _check_reach(plan.home, *step.line[0], "corridor", here)
                     geo = plan_corridor(step.line, step.width_m, fp, step.front_pct, step.side_pct,
                                         turnaround_m=turnaround, speed_mps=speed, min_interval_s=info.min_interval_s,
                                         where=plan.step_where(step, "line"), photos_left=photos_left)
@@ -192,6 +208,7 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
                                   trigger=step.trigger, trigger_distance_m=geo.trigger_distance_m))
             intent.append(geo)
         elif isinstance(step, WaypointStep):
+            _check_reach(plan.home, step.lat, step.lon, "waypoint", here)
             em.waypoint(step.lat, step.lon, step.alt_m, step.hold_s, step.capture,
                         where=plan.step_where(step, "capture"))
             altitudes.append((step.alt_m, plan.step_where(step, "alt_m")))
@@ -200,6 +217,8 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
         elif isinstance(step, RtlStep):
             em.rtl()
         elif isinstance(step, LandStep):
+            if step.lat is not None:
+                _check_reach(plan.home, step.lat, step.lon, "landing point", here)
             em.land(step.lat, step.lon, where=here)
 
     emitted = em.result()

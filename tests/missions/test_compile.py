@@ -303,6 +303,7 @@ def test_corridor_compiles(tmp_path):
 def test_corridor_longer_than_a_plan_can_hold_is_refused_before_planning(tmp_path):
     # one vertex's longitude typed wrong: a 12 000 km line (planning it held 9 GB before this was checked)
     def ch(doc):
+        doc["home"].update(lat=-35.2615, lon=149.0394)
         doc["mission"][1] = {"corridor": {"line": [[-35.261, 149.04], [-35.2578, 0.5], [-35.2561, 149.0539]],
                                           "width_m": 50, "payloads": ["thermal"], "altitude_m": 50,
                                           "overlap": {"front": 70, "side": 50}}}
@@ -317,6 +318,21 @@ def test_survey_with_more_photos_than_a_plan_can_hold_is_refused_before_planning
     with pytest.raises(PlanError, match=r"this survey would take about [\d,]+ photos, more than the 100,000") as ei:
         build(tmp_path, lambda d: survey(d).update(area=big))
     assert "plan.yaml:" in ei.value.where and "fly higher" in ei.value.hint
+
+
+@pytest.mark.parametrize("step,what", [
+    ({"survey": {"area": [[1.0, 14.5], [1.0, 14.503], [1.002, 14.503], [1.002, 14.5]], "payloads": ["thermal"],
+                 "altitude_m": 40, "overlap": {"front": 80, "side": 70}}}, "area"),
+    ({"corridor": {"line": [[50.11, 41.5], [50.113, 41.504]], "width_m": 40, "payloads": ["thermal"],
+                   "altitude_m": 40, "overlap": {"front": 80, "side": 60}}}, "corridor"),
+    ({"waypoint": {"lat": 14.5, "lon": 50.11, "alt_m": 30}}, "waypoint"),
+    ({"land": {"lat": 50.11, "lon": 41.5}}, "landing point")])
+def test_a_step_far_from_home_is_refused(tmp_path, step, what):
+    # a coordinate typed wrong: the flight there would be thousands of km (a RedEdge shoots all the way,
+    # and measuring its million photos took 30 s)
+    with pytest.raises(PlanError, match=rf"this {what} lies [\d,]+ km from home, more than the 200 km") as ei:
+        build(tmp_path, lambda d: d["mission"].insert(1, step))
+    assert "plan.yaml:" in ei.value.where and "swapped" in ei.value.hint
 
 
 def test_the_photo_budget_is_the_whole_plans(tmp_path, monkeypatch):
