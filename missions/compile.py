@@ -69,6 +69,7 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     from missions.lua import render_script
     from missions.params import autopilot_params
     from missions.setup import RedEdgeSurvey, setup_steps
+    from missions.survey import MAX_PHOTOS
 
     plan = path_or_plan if isinstance(path_or_plan, Plan) else load_plan(path_or_plan)
     fw = firmware or plan.vehicle.firmware
@@ -166,8 +167,6 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
                                     f"to its minimum of {info.min_interval_s:g} s; a gust of tail wind loses photos")
             turnaround = step.turnaround_m if step.turnaround_m is not None else TURNAROUND_DEFAULT_M[plan.vehicle.frame]
             start = em.s.last_pos[:2] if em.s.last_pos else (plan.home.lat, plan.home.lon)
-            from missions.survey import MAX_PHOTOS
-
             photos_left = max(0, MAX_PHOTOS - sum(len(g.photos) for g in intent))
             try:
                 if kind == "survey":

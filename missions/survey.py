@@ -56,6 +56,7 @@ from missions.triggers import PhotoPoint, TriggerSpan, simulate_distance_trigger
 DEFAULT_ACCEL_MPS2 = 2.0
 # ArduCopter accepts a waypoint within WPNAV_RADIUS (200 cm default) — before the vehicle is on it.
 DEFAULT_EXIT_MARGIN_M = 2.0
+HOVER_HOLD_S = 4.0        # QGC's _hoverAndCaptureDelaySeconds
 # The photos of one plan's survey and corridor steps together: at the WIRIS's 1 s minimum interval this is
 # 28 h of shooting, beyond any one vehicle's mission, while planning and measuring it stays within seconds
 # and a few hundred MB (both grow with the photo count). Checked per step from an estimate, before anything
@@ -70,7 +71,6 @@ def check_photo_budget(estimate: float, what: str, left: int = MAX_PHOTOS) -> No
         raise PlanError(f"this {what} would take about {estimate:,.0f} photos{earlier}, more than the "
                         f"{MAX_PHOTOS:,} one plan can hold",
                         hint="split it into several plans, or fly higher (fewer, larger photos)")
-HOVER_HOLD_S = 4.0        # QGC's _hoverAndCaptureDelaySeconds
 
 
 @dataclass(frozen=True)
