@@ -76,6 +76,7 @@ def test_download_plan_and_waypoints(tmp_path, flavour):
         r1 = run("mission", "download", "--connect", url, "-o", str(tmp_path / "got.plan"))
         r2 = run("mission", "download", "--connect", url, "-o", str(tmp_path / "got.waypoints"), "--json")
     assert r1.exit_code == 0 and r2.exit_code == 0, r1.output + r2.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["got.plan", "got.waypoints"]  # no temporary file left
     items, fence, rally, home = load_plan(tmp_path / "got.plan")
     compare_items(ITEMS, items)
     compare_items(FENCE, fence)
