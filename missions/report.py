@@ -527,6 +527,7 @@ def _timeline(verts: Sequence[Vertex], copter: bool) -> np.ndarray:
 
 def _photos(compiled: Compiled, verts: Sequence[Vertex], times: np.ndarray, w: _Walk, proj: Any,
             trig_payloads: tuple[str, ...]) -> list[Photo]:
+    from missions.survey import check_photo_budget
     from missions.triggers import TriggerSpan, simulate_distance_trigger
 
     xy = np.array([(v.x, v.y) for v in verts], dtype=float).reshape(-1, 2)
@@ -578,6 +579,10 @@ def _photos(compiled: Compiled, verts: Sequence[Vertex], times: np.ndarray, w: _
         pay = compiled.payload(name)
         d = pay.footprint_m(op_alt)[1] * (1.0 - front_pct / 100.0)
         inband = np.abs(alts - op_alt) <= tol + 1e-6
+        # it shoots on transits too: the plan's photo budget holds them (checked before they are placed)
+        in_band_m = float(np.hypot(*np.diff(xy, axis=0).T)[inband[:-1] & inband[1:]].sum())
+        check_photo_budget(in_band_m / d, f"flight's {name} payload (shooting by itself wherever it flies at "
+                                          f"{op_alt:g} ± {tol:g} m, transits included)")
         k = 0
         while k < len(verts) - 1:
             if inband[k] and inband[k + 1]:

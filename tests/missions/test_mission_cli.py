@@ -106,6 +106,30 @@ def test_outputs_the_system_refuses_are_errors_not_crashes(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == before
 
 
+def test_a_rededge_shooting_along_long_transits_is_held_to_the_photo_budget(tmp_path):
+    # The RedEdge shoots by itself at its operating altitude, transits included: twelve legs of 178 km at the
+    # survey's altitude (each waypoint within reach of home) would be about 214 000 photos to place and measure.
+    import shutil
+
+    import yaml
+
+    examples = Path(__file__).resolve().parents[2] / "examples"
+    shutil.copytree(examples / "areas", tmp_path / "areas")
+    doc = yaml.safe_load((examples / "field-multispectral.yaml").read_text())
+    home, survey = doc["home"], next(s["survey"] for s in doc["mission"] if "survey" in s)
+    far = [{"waypoint": {"lat": home["lat"] + (0.8 if i % 2 else -0.8), "lon": home["lon"],
+                         "alt_m": survey["altitude_m"]}} for i in range(12)]
+    doc["mission"][-1:-1] = far
+    plan = tmp_path / "far.yaml"
+    plan.write_text(yaml.safe_dump(doc))
+    before = sorted(p.name for p in tmp_path.iterdir())
+    for args in (["check", plan], ["compile", plan, "-o", tmp_path / "out"], ["preview", plan, "-o", tmp_path / "p.svg"]):
+        r = run("mission", *args)
+        assert r.exit_code == 1 and f"{plan}: this flight's multispectral payload" in r.output, r.output
+        assert "photos, more than the 100,000 one plan can hold" in r.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+
+
 def test_check_json_on_a_bad_plan_is_still_json(tmp_path):
     plan, _ = bad_plan(tmp_path, "unknown_payload")
     r = run("mission", "check", plan, "--json")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+
 import click
 
 
@@ -15,6 +17,20 @@ def mission() -> None:
 def _compile(plan: str, firmware: str | None):
     from missions.compile import compile_plan
     return compile_plan(plan, firmware=firmware)
+
+
+@contextlib.contextmanager
+def _located(plan: str):
+    """A PlanError from measuring the compiled mission (the report, the preview) names no place of its
+    own: it is about the plan as a whole, so it is located at the plan file."""
+    from missions.errors import PlanError
+
+    try:
+        yield
+    except PlanError as err:
+        if err.where is None:
+            err.where = plan
+        raise
 
 
 @mission.command("schema")
@@ -37,8 +53,9 @@ def compile_cmd(plan: str, out_dir: str, firmware: str | None) -> None:
     from missions.report import report, simulate, summary_lines
 
     compiled = _compile(plan, firmware)
-    sim = simulate(compiled)
-    rep = report(compiled, sim, plan_path=plan)
+    with _located(plan):
+        sim = simulate(compiled)
+        rep = report(compiled, sim, plan_path=plan)
     for line in summary_lines(rep):
         click.echo(line)
     if rep["errors"]:   # a mission that cannot be flown is not written (`check` shows the whole report)
@@ -62,7 +79,8 @@ def check_cmd(plan: str, as_json: bool, firmware: str | None) -> None:
     from missions.report import error_report, format_report, report
 
     try:
-        rep = report(_compile(plan, firmware), plan_path=plan)
+        with _located(plan):
+            rep = report(_compile(plan, firmware), plan_path=plan)
     except PlanError as err:
         if not as_json:
             raise
@@ -83,7 +101,9 @@ def preview_cmd(plan: str, out: str, firmware: str | None) -> None:
     """Draw the compiled mission: area, path, photo footprints, scale, legend."""
     from missions.preview import write_preview
 
-    click.echo(f"wrote {write_preview(_compile(plan, firmware), out)}")
+    compiled = _compile(plan, firmware)
+    with _located(plan):
+        click.echo(f"wrote {write_preview(compiled, out)}")
 
 # --- end of the compiler's commands ----------------------------------------------------------------------------
 
