@@ -269,13 +269,16 @@ class CameraClient:
             path = uri.split("://", 1)[1]
             # MAVLink FTP URL scheme (devguide ftp.md): an optional "comp=ID:" or QGC's "[;comp=ID]" prefix
             # names the component that serves the file; by default it is the camera itself.
-            component = self.component
+            component, comp_text = self.component, ""
             if path.startswith("[;comp=") and "]" in path:
                 comp_text, path = path[len("[;comp="):].split("]", 1)
-                component = int(comp_text) if comp_text.isdigit() else component
             elif path.startswith("comp=") and ":" in path:
                 comp_text, path = path[len("comp="):].split(":", 1)
-                component = int(comp_text) if comp_text.isdigit() else component
+            if comp_text.isdigit():
+                component = int(comp_text)
+                if component > 255:  # the camera's own radio says so: an error, not a crash in the encoder
+                    raise LinkError(f"the definition URI names component {component}, not 0-255", where=uri,
+                                    hint="the camera reports a broken cam_definition_uri")
             data = download(self.link, self.system, component, path, timeout_s=self.timeout_s,
                             retries=max(self.retries, 3), progress=progress)
         elif scheme in ("http", "https"):

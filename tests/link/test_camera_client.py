@@ -404,6 +404,22 @@ def test_falls_back_to_request_camera_information_for_an_older_camera():
         cam.close()
 
 
+@pytest.mark.parametrize("uri,text", [
+    ("mftp://comp=999:/x.xml", "names component 999, not 0-255"),
+    ("mftp://[;comp=300]/x.xml", "names component 300, not 0-255"),
+    ("http://[::1/x.xml", "malformed URL"),
+    ("ftp://camera/x.xml", "unsupported definition URI scheme 'ftp'"),
+])
+def test_a_broken_definition_uri_from_the_camera_is_a_link_error(client, uri, text):
+    # what a camera (or a corrupted CAMERA_INFORMATION) may report; the component id used to reach the
+    # MAVLink encoder and fail there with struct.error
+    import dataclasses
+
+    info = dataclasses.replace(client.information(), definition_uri=uri)
+    with pytest.raises(LinkError, match=re.escape(text)):
+        client.definition(info, timeout_s=1)
+
+
 def test_cli_set_json_and_mftp_definition():
     with start_emulator("wiris-security", "udpin:127.0.0.1:0", definition_scheme="mftp") as emu:
         r = CliRunner().invoke(cli, ["camera", "set", "AGC_HOT_REJ", "12.5", "--connect", _url(emu), "--json"])
