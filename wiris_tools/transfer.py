@@ -617,6 +617,9 @@ def load_for_upload(path: str, mission_type: int = MISSION_TYPE_MISSION, *, part
             errors = report(compiled)["errors"]
         except ImportError:
             errors = []
+        except PlanError as err:  # from measuring the mission (a photo budget): about the plan as a whole
+            err.where = err.where or str(p)
+            raise
         if errors:
             raise PlanError(f"the compiled mission has {len(errors)} error(s): {errors[0]}", where=str(p),
                             hint="run `wiris mission check` and fix the plan before uploading")

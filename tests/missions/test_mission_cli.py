@@ -123,7 +123,8 @@ def test_a_rededge_shooting_along_long_transits_is_held_to_the_photo_budget(tmp_
     plan = tmp_path / "far.yaml"
     plan.write_text(yaml.safe_dump(doc))
     before = sorted(p.name for p in tmp_path.iterdir())
-    for args in (["check", plan], ["compile", plan, "-o", tmp_path / "out"], ["preview", plan, "-o", tmp_path / "p.svg"]):
+    for args in (["check", plan], ["compile", plan, "-o", tmp_path / "out"], ["preview", plan, "-o", tmp_path / "p.svg"],
+                 ["upload", plan, "--connect", "udpout:127.0.0.1:9", "--timeout", "0.3"]):  # refused before sending
         r = run("mission", *args)
         assert r.exit_code == 1 and f"{plan}: this flight's multispectral payload" in r.output, r.output
         assert "photos, more than the 100,000 one plan can hold" in r.output
