@@ -556,8 +556,7 @@ class CameraClient:
             raise LinkError(f"component {target} speaks MAVLink 1 and does not answer {step.message}, so a "
                             "MAVLink 2 frame it cannot read would be lost without a trace; nothing was sent",
                             where=step.label, hint="run again with --mavlink1")
-        names, _types = _message_fields(step.message)
-        values = dict.fromkeys(names, 0)
+        values = dict.fromkeys(_message_fields(step.message), 0)
         values.update(step.fields)
         msg = getattr(self.link.mav, f"{step.message.lower()}_encode")(self.system, target, **values)
         tries = self.retries + 1
@@ -582,11 +581,11 @@ def _is_number(value: Any) -> bool:
     return not isinstance(value, bool) and isinstance(value, (int, float)) and math.isfinite(value)
 
 
-def _message_fields(name: str) -> tuple[tuple[str, ...], dict[str, str]]:
-    """A message's settable fields (all but the target ids) and their C types, from pymavlink's dialect."""
+def _message_fields(name: str) -> dict[str, str]:
+    """A message's settable fields (all but the target ids, in order) and their C types, from pymavlink's
+    dialect."""
     cls = getattr(mavlink2, f"MAVLink_{name.lower()}_message")
-    types = {f: t for f, t in zip(cls.fieldnames, cls.fieldtypes) if f not in ("target_system", "target_component")}
-    return tuple(types), types
+    return {f: t for f, t in zip(cls.fieldnames, cls.fieldtypes) if f not in ("target_system", "target_component")}
 
 
 def _parse_message_step(s: dict, loc: str) -> tuple[str, tuple[tuple[str, float | int], ...]]:
@@ -599,13 +598,13 @@ def _parse_message_step(s: dict, loc: str) -> tuple[str, tuple[tuple[str, float 
     fields = s.get("fields", {})
     if not isinstance(fields, dict):
         raise LinkError("fields must be a JSON object of field name -> number", where=loc)
-    names, types = _message_fields(name)
+    types = _message_fields(name)
     out = []
     for key, value in fields.items():
         ctype = types.get(key)
         if ctype is None:
             raise LinkError(f"{name} has no field {key!r} a step may set", where=loc,
-                            hint=f"fields: {', '.join(names)}")
+                            hint=f"fields: {', '.join(types)}")
         if not _is_number(value):
             raise LinkError(f"{key} = {value!r} is not a finite number", where=loc)
         int_range = INT_RANGES.get(ctype.removesuffix("_t"))    # pymavlink's uint8_t is the CDF's uint8

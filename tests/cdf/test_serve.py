@@ -141,25 +141,25 @@ def test_other_methods_are_405_and_change_nothing(server, bundle, method):
     assert lines == [f"{method} /cdf/{PRO} 405 {int(headers['content-length'])}"]
 
 
+def raw_request(srv, data: bytes) -> bytes:
+    """Send bytes that http.client would not, and return the start of the answer."""
+    with socket.create_connection(("127.0.0.1", srv.server_address[1]), timeout=5) as s:
+        s.sendall(data)
+        return s.recv(1024)
+
+
 def test_a_malformed_request_gets_an_error_not_a_crash(server):
     srv, lines = server
-    with socket.create_connection(("127.0.0.1", srv.server_address[1]), timeout=5) as s:
-        s.sendall(b"GARBAGE\r\n\r\n")
-        answer = s.recv(1024)
-    assert answer.startswith(b"HTTP/1.1 400")
-    with socket.create_connection(("127.0.0.1", srv.server_address[1]), timeout=5) as s:
-        s.sendall(b"GET /cdf/" + PRO.encode() + b"\r\n\r\n")   # HTTP/0.9: refused, not served header-less
-        answer = s.recv(1024)
-    assert answer.startswith(b"HTTP/1.1 400")
+    assert raw_request(srv, b"GARBAGE\r\n\r\n").startswith(b"HTTP/1.1 400")
+    # HTTP/0.9: refused, not served header-less
+    assert raw_request(srv, b"GET /cdf/" + PRO.encode() + b"\r\n\r\n").startswith(b"HTTP/1.1 400")
     assert request(srv, "GET", f"/cdf/{PRO}")[0] == 200   # still serving
     assert lines[0] == "- - 400 " + lines[0].rsplit(" ", 1)[1]
 
 
 def test_a_broken_absolute_target_is_400_not_a_dropped_connection(server):
     srv, lines = server
-    with socket.create_connection(("127.0.0.1", srv.server_address[1]), timeout=5) as s:
-        s.sendall(b"GET http://[::1/cdf/x.xml HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n")
-        answer = s.recv(1024)
+    answer = raw_request(srv, b"GET http://[::1/cdf/x.xml HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n")
     assert answer.startswith(b"HTTP/1.1 400")
     assert lines == ["GET http://[::1/cdf/x.xml 400 12"]
 
