@@ -155,7 +155,6 @@ def test_bad_connection_strings_are_link_errors():
         Link("udpin:127.0.0.1:0", system=0, heartbeat_s=0)
 
 
-
 @pytest.mark.parametrize("url", ["udpin:127.0.0.1:99999", "udpout:127.0.0.1:65536", "tcp:127.0.0.1:70000"])
 def test_a_port_over_65535_is_refused_before_anything_runs(url):
     # pymavlink takes it: udpout then fails in the heartbeat thread at its first send, tcp in a retry loop
