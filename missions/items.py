@@ -59,6 +59,15 @@ class MissionItem:
     def with_(self, **changes) -> "MissionItem":
         return replace(self, **changes)
 
+    def infinite_field(self) -> str | None:
+        """The first float field holding +-inf, as "param1 = inf"; None when all are finite or NaN.
+        MAVLink's floats carry infinities (a vehicle may hold one), JSON and QGC's WPL readers do not."""
+        for name in ("param1", "param2", "param3", "param4", "z"):
+            v = getattr(self, name)
+            if math.isinf(v):
+                return f"{name} = {v}"
+        return None
+
     def same_on_wire(self, other: "MissionItem") -> bool:
         """Field-by-field equality as a vehicle stores it: floats compared as float32, NaN equal to NaN."""
         def f32(v: float) -> float:

@@ -102,6 +102,23 @@ def _num(v: float | int | None) -> float | int | None:
     return int(v) if v.is_integer() and abs(v) < 2**53 else v
 
 
+def check_finite(form: str, home: Home | None, mission=(), fence=(), rally=()) -> None:
+    """Refuse, naming the place, the one MAVLink value that the `form` file ("a .plan", "a waypoint")
+    cannot hold: an infinite float, which a vehicle may answer a download with. Mission items are
+    numbered as the .plan's doJumpId and the WPL row index number them (from 1), fence and rally
+    items by their position in the list (from 0, their seq on the wire)."""
+    hint = "set a finite value where the vehicle holds it (NaN is fine: it means unset), then try again"
+    if home is not None and any(math.isinf(v) for v in home):
+        raise PlanError(f"the home position {tuple(home)} holds an infinite value, which {form} file cannot hold",
+                        hint=hint)
+    for kind, items, first in (("mission", mission, 1), ("fence", fence, 0), ("rally", rally, 0)):
+        for i, it in enumerate(items, first):
+            bad = it.infinite_field()
+            if bad is not None:
+                raise PlanError(f"{kind} item {i} (command {it.command}) has {bad}, which {form} file cannot hold",
+                                hint=hint)
+
+
 def _coord(v: int, frame: int) -> float | int:
     s = _scale(frame)
     if s == 1:
@@ -182,9 +199,10 @@ def plan_document(items, home: Home | None, *, firmware: str | int | None, vehic
                   fence=None, rally=None, cruise_speed: float | None = None,
                   hover_speed: float | None = None) -> dict[str, Any]:
     """The .plan JSON object (see write_plan)."""
-    items = list(items)
+    items, fence, rally = list(items), list(fence or []), list(rally or [])
     if len(items) > MAX_ITEMS:
         raise PlanError(f"{len(items)} mission items do not fit a MAVLink mission (at most {MAX_ITEMS})")
+    check_finite("a .plan", home, items, fence, rally)
     modes = {_FRAME_ALT_MODE.get(it.frame) for it in items if it.frame in _FRAME_ALT_MODE}
     alt_mode = modes.pop() if len(modes) == 1 else (ALT_MODE_RELATIVE if not modes else ALT_MODE_MIXED)
     lat, lon, alt = home if home is not None else (0.0, 0.0, 0.0)
@@ -198,8 +216,8 @@ def plan_document(items, home: Home | None, *, firmware: str | int | None, vehic
         "vehicleType": _code(VEHICLE_TYPES, vehicle, "vehicle type"),
         "version": 2,
     }
-    return {"fileType": "Plan", "geoFence": _fence_json(list(fence or [])), "groundStation": "QGroundControl",
-            "mission": mission, "rallyPoints": _rally_json(list(rally or [])), "version": 1}
+    return {"fileType": "Plan", "geoFence": _fence_json(fence), "groundStation": "QGroundControl",
+            "mission": mission, "rallyPoints": _rally_json(rally), "version": 1}
 
 
 def write_plan(items, home=None, /, *, firmware: str | int | None = None, vehicle: str | int | None = None,

@@ -28,7 +28,7 @@ from pathlib import Path
 
 from missions.errors import PlanError
 from missions.items import FRAME_GLOBAL, MISSION_TYPE_MISSION, MissionItem
-from missions.planfile import FLOAT32_MAX, MAX_ITEMS, _scale, atomic_write
+from missions.planfile import FLOAT32_MAX, MAX_ITEMS, _scale, atomic_write, check_finite
 
 Home = tuple[float, float, float]
 
@@ -74,6 +74,7 @@ def wpl_text(items, home: Home | None = None) -> str:
     items = list(items)
     if len(items) + 1 > MAX_ITEMS:
         raise PlanError(f"{len(items)} items do not fit a MAVLink mission (at most {MAX_ITEMS - 1} plus home)")
+    check_finite("a waypoint", home, items)
     lines = [HEADER, _row(0, _home_item(home), 1)]
     lines += [_row(i + 1, it, 0) for i, it in enumerate(items)]
     return "\n".join(lines) + "\n"

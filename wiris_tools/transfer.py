@@ -720,8 +720,8 @@ def download_file(link: Link, out: str, *, target_system: int | None = None, tar
         home = (h.x / 1e7, h.y / 1e7, h.z)
     lists = {"mission": len(items)}
     notes: list[str] = []
+    extra: dict[int, list[MissionItem]] = {}
     if suffix in PLAN_SUFFIXES:
-        extra = {}
         for kind in (mavlink2.MAV_MISSION_TYPE_FENCE, mavlink2.MAV_MISSION_TYPE_RALLY):
             try:
                 extra[kind], _ = client.download(mission_type=kind)
@@ -729,10 +729,16 @@ def download_file(link: Link, out: str, *, target_system: int | None = None, tar
                 extra[kind] = []
                 notes.append(f"{TYPE_NAMES[kind]} not downloaded: {err.message}")
             lists[TYPE_NAMES[kind]] = len(extra[kind])
-        text = write_plan(items, home, firmware=int(hb.autopilot), vehicle=int(hb.type),
-                          fence=extra[mavlink2.MAV_MISSION_TYPE_FENCE], rally=extra[mavlink2.MAV_MISSION_TYPE_RALLY])
-    else:
-        text = write_wpl(items, home)
+    try:  # what the vehicle holds may not fit the file form (an infinite float): say where it goes
+        if suffix in PLAN_SUFFIXES:
+            text = write_plan(items, home, firmware=int(hb.autopilot), vehicle=int(hb.type),
+                              fence=extra[mavlink2.MAV_MISSION_TYPE_FENCE], rally=extra[mavlink2.MAV_MISSION_TYPE_RALLY])
+        else:
+            text = write_wpl(items, home)
+    except PlanError as err:
+        if err.where is None:
+            err.where = str(p)
+        raise
     atomic_write(p, text)
     return {"file": str(p), "target_system": system, "items": lists, "home": list(home) if home else None,
             "opaque_id": res.opaque_id, "seconds": round(res.seconds, 3), "notes": notes}

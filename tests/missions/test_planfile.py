@@ -198,8 +198,15 @@ def test_bad_writer_input():
         write_plan(sample_items(), None, firmware="betaflight", vehicle="copter")
     with pytest.raises(PlanError, match="fence polygon"):
         write_plan([], None, firmware="px4", vehicle="copter", fence=fence_items()[:2])
-    with pytest.raises(PlanError, match="infinite"):
+    with pytest.raises(PlanError, match=r"mission item 1 \(command 16\) has param1 = inf, which a .plan file"):
         write_plan([MissionItem(command=16, param1=math.inf)], None, firmware="px4", vehicle="copter")
+    with pytest.raises(PlanError, match=r"rally item 1 \(command 5100\) has z = -inf"):
+        write_plan([], None, firmware="px4", vehicle="copter",
+                   rally=[MissionItem(command=5100), MissionItem(command=5100, z=-math.inf)])
+    with pytest.raises(PlanError, match=r"fence item 0 \(command 5004\) has param1 = inf"):
+        write_plan([], None, firmware="px4", vehicle="copter", fence=[MissionItem(command=5004, param1=math.inf)])
+    with pytest.raises(PlanError, match=r"home position \(47.0, 8.0, inf\) holds an infinite value"):
+        write_plan([], (47.0, 8.0, math.inf), firmware="px4", vehicle="copter")
 
 
 finite = st.floats(allow_nan=True, allow_infinity=False, width=32)

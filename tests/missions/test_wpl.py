@@ -101,6 +101,10 @@ def test_limits(tmp_path):
         read_wpl(b"QGC WPL 110\n\xff\n", "w")
     with pytest.raises(PlanError, match="cannot read"):
         load_wpl(tmp_path / "nope")
+    with pytest.raises(PlanError, match=r"mission item 2 \(command 16\) has param4 = -inf, which a waypoint file"):
+        write_wpl([MissionItem(command=16), MissionItem(command=16, param4=-math.inf)])
+    with pytest.raises(PlanError, match=r"home position \(inf, 8.0, 0.0\) holds an infinite value"):
+        write_wpl([MissionItem(command=16)], (math.inf, 8.0, 0.0))
 
 
 finite = st.floats(allow_nan=True, allow_infinity=False, width=32)
