@@ -404,6 +404,39 @@ def test_falls_back_to_request_camera_information_for_an_older_camera():
         cam.close()
 
 
+@pytest.mark.parametrize("value", [NAN, math.inf])
+def test_info_json_of_a_camera_that_reports_nan_or_inf_is_json(value):
+    """NaN is MAVLink's "unknown" in CAMERA_INFORMATION, STORAGE_INFORMATION and CAMERA_CAPTURE_STATUS;
+    `--json` used to stop with an internal error (json.dumps(allow_nan=False)) instead of writing null."""
+    from pymavlink.dialects.v20 import ardupilotmega as m
+
+    cam = Link("udpin:127.0.0.1:0", system=2, component=100, mav_type=m.MAV_TYPE_CAMERA, heartbeat_s=0.2)
+
+    def on_cmd(msg):
+        cam.send(cam.mav.command_ack_encode(msg.command, m.MAV_RESULT_ACCEPTED, 0, 0, msg.get_srcSystem(),
+                                            msg.get_srcComponent()))
+        wanted = int(msg.param1) if msg.command == m.MAV_CMD_REQUEST_MESSAGE else None
+        if wanted == m.MAVLINK_MSG_ID_CAMERA_INFORMATION:
+            cam.send(cam.mav.camera_information_encode(0, b"V".ljust(32, b"\0"), b"M".ljust(32, b"\0"), 0, value,
+                                                       value, value, 640, 512, 0, m.CAMERA_CAP_FLAGS_CAPTURE_IMAGE,
+                                                       0, b""))
+        elif wanted == m.MAVLINK_MSG_ID_STORAGE_INFORMATION:
+            cam.send(cam.mav.storage_information_encode(0, 1, 1, 2, value, value, value, value, value))
+        elif wanted == m.MAVLINK_MSG_ID_CAMERA_CAPTURE_STATUS:
+            cam.send(cam.mav.camera_capture_status_encode(0, 0, 0, value, 0, value, 0))
+
+    cam.subscribe(on_cmd, "COMMAND_LONG", to_me=True)
+    try:
+        r = CliRunner().invoke(cli, ["camera", "info", "--connect", f"udpout:127.0.0.1:{cam.local_port}",
+                                     "--timeout", "0.5", "--json"])
+    finally:
+        cam.close()
+    assert r.exit_code == 0, r.output
+    got = json.loads(r.output, parse_constant=lambda c: pytest.fail(f"{c} in JSON output"))
+    assert got["camera"]["sensor_size_mm"] == [None, None] and got["camera"]["focal_length_mm"] is None
+    assert got["storage"][0]["total_mib"] is None and got["capture_status"]["image_interval_s"] is None
+
+
 @pytest.mark.parametrize("uri,text", [
     ("mftp://comp=999:/x.xml", "names component 999, not 0-255"),
     ("mftp://[;comp=300]/x.xml", "names component 300, not 0-255"),

@@ -149,6 +149,39 @@ def test_download_checks_the_output_before_it_starts(tmp_path, out, text):
     assert not any(p.name.endswith(".tmp") for p in tmp_path.iterdir())
 
 
+def strict_json(text: str):
+    """json.loads refusing NaN and Infinity, which are not JSON (jq and JSON.parse refuse them)."""
+    return json.loads(text, parse_constant=lambda c: pytest.fail(f"{c} in JSON output"))
+
+
+def test_download_json_of_a_nan_home_altitude_is_null(tmp_path):
+    # ArduPilot's home row (item 0) as a vehicle may hold it before it has a position fix
+    with VehicleSim(flavour="ardupilot") as sim:
+        sim.set_items([MissionItem(command=16, frame=0, x=473977507, y=85456075, z=math.nan), *ITEMS])
+        r = run("mission", "download", "--connect", f"udpout:127.0.0.1:{sim.port}", "-o", str(tmp_path / "got.plan"),
+                "--json")
+    assert r.exit_code == 0, r.output
+    assert strict_json(r.output)["home"] == [47.3977507, 8.5456075, None]
+    assert load_plan(tmp_path / "got.plan")[3][:2] == (47.3977507, 8.5456075)
+
+
+@pytest.mark.parametrize("flavour", ["px4", "ardupilot"])
+@pytest.mark.parametrize("suffix,form", [(".plan", ".plan"), (".waypoints", "waypoint")])
+def test_download_of_an_infinite_value_names_the_item_and_writes_nothing(tmp_path, flavour, suffix, form):
+    # MAVLink floats carry +-inf and a vehicle stores what it was sent; neither file form can hold it
+    held = [*ITEMS[:2], ITEMS[2].with_(param2=-math.inf), ITEMS[3]]
+    if flavour == "ardupilot":
+        held.insert(0, MissionItem(command=16, frame=0, x=473977507, y=85456075, z=488.9))  # the home row
+    out = tmp_path / f"got{suffix}"
+    with VehicleSim(flavour=flavour) as sim:
+        sim.set_items(held)
+        r = run("mission", "download", "--connect", f"udpout:127.0.0.1:{sim.port}", "-o", str(out))
+    assert r.exit_code == 1 and "Traceback" not in r.output
+    assert f"{out}: mission item 3 (command 2000) has param2 = -inf, which a {form} file cannot hold" in r.output
+    assert "hint: set a finite value" in r.output
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.parametrize("args,code,text", [
     (["mission", "upload", "m.kml", "--connect", "udpout:127.0.0.1:9"], 1, "unknown file type"),
     (["mission", "upload", "missing.plan", "--connect", "udpout:127.0.0.1:9"], 2, "does not exist"),

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import contextlib
 import functools
-import json
 import math
 import sys
 
 import click
+
+from wiris_tools.cli.jsonout import echo_json
 
 
 def _link_options(fn):
@@ -44,7 +45,7 @@ def _camera(url, component, system, signing_key, mavlink1, timeout, find_s):
 
 
 def _echo_json(obj) -> None:
-    click.echo(json.dumps(obj, indent=2, allow_nan=False, default=str))
+    echo_json(obj, indent=2)
 
 
 def _num(v) -> str:
@@ -182,7 +183,7 @@ def capture(url, component, system, signing_key, mavlink1, timeout, find_s, inte
             for shot in cam.capture(interval_s=interval_s, count=count, duration_s=duration_s):
                 n += 1
                 if as_json:
-                    click.echo(json.dumps(shot.to_json()))
+                    echo_json(shot.to_json())
                 else:
                     click.echo(f"image {shot.index}: {shot.file or '(failed)'} at {shot.lat / 1e7:.7f}, "
                                f"{shot.lon / 1e7:.7f}, {shot.alt_mm / 1000:.1f} m")

@@ -7,11 +7,12 @@ commands.
 
 from __future__ import annotations
 
-import json
 import sys
 from contextlib import contextmanager
 
 import click
+
+from wiris_tools.cli.jsonout import echo_json
 
 TYPES = ("mission", "fence", "rally")
 
@@ -91,7 +92,7 @@ def upload(file: str, kind: str, verify: bool, part: int | None, firmware: str |
                               target_system=target_system, target_component=target_component, timeout=timeout,
                               progress=progress, loaded=loaded)
     if as_json:
-        click.echo(json.dumps(summary, indent=1))
+        echo_json(summary, indent=1)
         return
     extra = []
     if summary["home_row"]:
@@ -123,7 +124,7 @@ def download(out: str, url: str, signing_key: str | None, target_system: int | N
         summary = download_file(link, out, target_system=target_system, target_component=target_component,
                                 timeout=timeout, progress=progress)
     if as_json:
-        click.echo(json.dumps(summary, indent=1))
+        echo_json(summary, indent=1)
         return
     counts = ", ".join(f"{n} {k}" for k, n in summary["items"].items())
     click.echo(f"downloaded {counts} items from system {summary['target_system']} in {summary['seconds']:.2f} s "
