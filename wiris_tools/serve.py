@@ -8,6 +8,8 @@ for anything it does not host, never a directory listing.
 Safety: only GET and HEAD (405 otherwise); the request path is percent-decoded once and every segment
 checked (no `..`, `.`, empty, hidden or backslash segments, no NUL); the resolved real path must stay
 inside the served directory, so a symlink pointing outside answers 403. Files are read, never written.
+A connection that sends or reads nothing for IDLE_TIMEOUT_S is closed: every connection holds a thread,
+and a stalled client (or many) must not hold them for ever.
 
 Caching: ETag is the sha256 of the content (the manifest's value for definitions), Last-Modified the
 file's mtime; a matching If-None-Match (or, without it, an If-Modified-Since not older than the file)
@@ -33,6 +35,7 @@ CONTENT_TYPES = {".xml": "application/xml", ".xz": "application/x-xz", ".json": 
 IMMUTABLE = re.compile(r"_v\d+\.xml(\.xz)?$")
 MAX_FILE_BYTES = 16 * 1024 * 1024   # a bundle holds 30 KB definitions; anything bigger is not ours to serve
 ALLOWED = "GET, HEAD"
+IDLE_TIMEOUT_S = 30.0   # a GCS fetches a definition in one go; keep-alive connections idle longer are closed
 
 
 @dataclass(frozen=True)
@@ -232,7 +235,7 @@ class BundleServer(http.server.ThreadingHTTPServer):
 
 
 def make_server(directory: str | Path, host: str = "127.0.0.1", port: int = 8000, *, prefix: str | None = None,
-                log: Callable[[str], None] | None = None) -> BundleServer:
+                log: Callable[[str], None] | None = None, idle_timeout_s: float = IDLE_TIMEOUT_S) -> BundleServer:
     """A bound (not yet serving) threaded server for `directory`; port 0 picks a free port.
     `prefix` None: the URL path of the manifest's http URIs (see prefix_from_manifest)."""
     from wiris_tools.errors import LinkError
@@ -244,7 +247,9 @@ def make_server(directory: str | Path, host: str = "127.0.0.1", port: int = 8000
     root = Path(os.path.realpath(root))
     config = ServeConfig(root=root, prefix=_normal_prefix(prefix if prefix is not None else prefix_from_manifest(root)),
                          **({"log": log} if log is not None else {}))
-    handler = type("BoundBundleHandler", (BundleHandler,), {"config": config})
+    # StreamRequestHandler applies `timeout` to the socket; http.server closes the connection when a read
+    # or write of it times out (and logs nothing: there is no request to log)
+    handler = type("BoundBundleHandler", (BundleHandler,), {"config": config, "timeout": idle_timeout_s})
     try:
         return BundleServer((host, port), handler)
     except OSError as err:

@@ -164,6 +164,36 @@ def test_a_broken_absolute_target_is_400_not_a_dropped_connection(server):
     assert lines == ["GET http://[::1/cdf/x.xml 400 12"]
 
 
+def test_stalled_and_idle_connections_are_closed_after_the_idle_timeout(bundle):
+    """Every connection holds a server thread: one that sends half a request, or stays open after its
+    answer (HTTP/1.1 keep-alive), is closed once idle for idle_timeout_s (it used to be held for ever)."""
+    lines: list[str] = []
+    srv = make_server(bundle, "127.0.0.1", 0, log=lines.append, idle_timeout_s=0.3)
+    thread = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
+    thread.start()
+    port = srv.server_address[1]
+    try:
+        with socket.create_connection(("127.0.0.1", port), timeout=5) as stalled, \
+                socket.create_connection(("127.0.0.1", port), timeout=5) as idle:
+            stalled.sendall(b"GET /cdf/" + PRO.encode())  # no end of line, ever
+            idle.sendall(f"GET /cdf/{PRO} HTTP/1.1\r\nHost: x\r\n\r\n".encode())
+            answer = b""
+            while b"</mavlinkcamera>" not in answer:
+                chunk = idle.recv(65536)
+                assert chunk, "closed before the whole answer"
+                answer += chunk
+            assert answer.startswith(b"HTTP/1.1 200")
+            assert stalled.recv(1) == b""  # closed by the server, not the 5 s socket timeout here
+            assert idle.recv(1) == b""
+        assert request(srv, "GET", f"/cdf/{PRO}")[0] == 200  # still serving
+        body = answer.split(b"\r\n\r\n", 1)[1]
+        assert lines == [f"GET /cdf/{PRO} 200 {len(body)}"] * 2
+    finally:
+        srv.shutdown()
+        srv.server_close()
+        thread.join(5)
+
+
 def test_a_client_hanging_up_is_one_log_line_not_a_traceback(server, capfd):
     import struct
     import time
