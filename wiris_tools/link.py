@@ -184,6 +184,16 @@ class _Stats:
         "received": 0, "sent": 0, "bad": 0, "rejected_signature": 0, "bytes_sent": 0})
 
 
+class _Peers(set):
+    """The peers of a udpin connection. pymavlink's receive path adds each new sender to this set while
+    its write() iterates over it; with our receive thread and a sending thread (an emulator's tick, a
+    heartbeat), a peer appearing mid-send raised "Set changed size during iteration" in the sender (an
+    emulator fell silent). Iterating over a copy taken in one C call, under the GIL, cannot race."""
+
+    def __iter__(self):
+        return iter(list(set.__iter__(self)))
+
+
 class Link:
     """One MAVLink connection (see the module docstring for the API)."""
 
@@ -248,12 +258,15 @@ class Link:
             except ValueError:
                 raise LinkError(f"bad baud rate {b!r}", where=url, hint="write it as /dev/ttyUSB0,57600") from None
         try:
-            return mavutil.mavlink_connection(device, baud=baud, autoreconnect=False,
+            conn = mavutil.mavlink_connection(device, baud=baud, autoreconnect=False,
                                               source_system=255, source_component=0)
         except (OSError, ValueError, OverflowError, ImportError) as err:  # OverflowError: a port over 65535
             raise LinkError(f"cannot open the link: {err}", where=url,
                             hint="use a pymavlink connection string such as udpin:127.0.0.1:14550, "
                                  "udpout:HOST:PORT, tcp:HOST:PORT or /dev/ttyUSB0,57600") from None
+        if type(getattr(conn, "clients", None)) is set:  # udpin: see _Peers
+            conn.clients = _Peers(conn.clients)
+        return conn
 
     @property
     def local_port(self) -> int | None:

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import math
+import socket
 import threading
 
 import pytest
@@ -275,3 +276,38 @@ def test_an_interrupted_wait_heartbeat_leaves_the_link_working():
     finally:
         link.close()
         peer.close()
+
+
+def test_new_udpin_peers_while_another_thread_sends():
+    """pymavlink's udpin write() iterated over its peer set while our receive thread added to it: "Set
+    changed size during iteration" in the sending thread (an emulator's tick died, and the emulator
+    fell silent: seen once in test_flood_over_udp_keeps_the_emulator_answering). 5 of 5 runs on the old
+    code raised within 1000 new peers."""
+    mav = mavlink2.MAVLink(None, 1, 1)
+    datagram = mav.heartbeat_encode(mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0, 0).pack(mav)
+    errors: list[BaseException] = []
+    with Link("udpin:127.0.0.1:0", heartbeat_s=0) as link:
+        stop = threading.Event()
+        beat = link.mav.heartbeat_encode(mavlink2.MAV_TYPE_CAMERA, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+
+        def sender() -> None:
+            while not stop.is_set():
+                try:
+                    link.send(beat)
+                except BaseException as err:  # noqa: BLE001 (what the thread would have died of)
+                    errors.append(err)
+                    return
+
+        thread = threading.Thread(target=sender)
+        thread.start()
+        try:
+            for _ in range(1000):
+                with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as peer:  # a new source port each time
+                    peer.sendto(datagram, ("127.0.0.1", link.local_port))
+                if errors:
+                    break
+        finally:
+            stop.set()
+            thread.join(10)
+        assert link.wait_heartbeat(timeout=5) is not None  # the receive side kept going too
+    assert errors == []
