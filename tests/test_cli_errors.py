@@ -78,3 +78,22 @@ def test_ctrl_c_anywhere_in_an_inbox_wait_exits_130_and_leaves_the_inbox_working
                 break
             n += 1
     assert n >= 1  # the wait was interrupted before it returned uninterrupted
+
+
+@pytest.mark.parametrize("args", [
+    ["camera", "info", "--connect", "udpout:127.0.0.1:9", "--wait", "nan"],        # waited for ever
+    ["camera", "capture", "--connect", "udpout:127.0.0.1:9", "--interval", "inf"],
+    ["cdf", "validate", "http://127.0.0.1:9/x.xml", "--timeout", "nan"],          # internal error
+    ["cdf", "validate", "http://127.0.0.1:9/x.xml", "--timeout", "inf"],          # internal error
+    ["mission", "download", "-o", "x.plan", "--connect", "udpout:127.0.0.1:9", "--timeout", "NaN"],  # for ever
+    ["emulate", "wiris-pro", "--connect", "udpin:127.0.0.1:0", "--storage-mib", "nan"],
+    ["emulate", "wiris-pro", "--connect", "udpin:127.0.0.1:0", "--duration", "inf"],  # ran for ever
+])
+def test_a_number_option_refuses_nan_and_inf_as_a_usage_error(args, tmp_path, monkeypatch):
+    from wiris_tools.cli import cli
+
+    monkeypatch.chdir(tmp_path)
+    result = CliRunner().invoke(cli, args)
+    assert result.exit_code == 2
+    assert f"'{args[-1]}' is not a finite number" in result.stderr and "Traceback" not in result.output
+    assert list(tmp_path.iterdir()) == []

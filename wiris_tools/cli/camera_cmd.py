@@ -10,6 +10,7 @@ import sys
 import click
 
 from wiris_tools.cli.jsonout import echo_json
+from wiris_tools.cli.options import FiniteRange
 
 
 def _link_options(fn):
@@ -22,9 +23,9 @@ def _link_options(fn):
     @click.option("--signing-key", type=click.Path(dir_okay=False), default=None,
                   help="MAVLink 2 signing key file (64 hex characters or a passphrase).")
     @click.option("--mavlink1", is_flag=True, help="Send MAVLink 1 frames (a RedEdge's serial API).")
-    @click.option("--timeout", type=click.FloatRange(0.05, 60), default=1.0, show_default=True,
+    @click.option("--timeout", type=FiniteRange(0.05, 60), default=1.0, show_default=True,
                   help="Seconds to wait for each answer (each request is retried 3 times).")
-    @click.option("--wait", "find_s", type=click.FloatRange(0.1, 600), default=5.0, show_default=True,
+    @click.option("--wait", "find_s", type=FiniteRange(0.1, 600), default=5.0, show_default=True,
                   help="Seconds to wait for the camera's HEARTBEAT.")
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
@@ -167,11 +168,11 @@ def set_(name, value, url, component, system, signing_key, mavlink1, timeout, fi
 
 @camera.command()
 @_link_options
-@click.option("--interval", "interval_s", type=click.FloatRange(0, None), default=0.0, show_default=True,
+@click.option("--interval", "interval_s", type=FiniteRange(0, None), default=0.0, show_default=True,
               help="Seconds between images (periodic capture).")
 @click.option("--count", type=click.IntRange(0, None), default=1, show_default=True,
               help="Number of images (0: until Ctrl-C or --duration).")
-@click.option("--duration", "duration_s", type=click.FloatRange(0, None), default=None,
+@click.option("--duration", "duration_s", type=FiniteRange(0, None), default=None,
               help="Stop after this many seconds.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object per image.")
 def capture(url, component, system, signing_key, mavlink1, timeout, find_s, interval_s, count, duration_s,

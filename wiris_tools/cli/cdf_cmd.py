@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import click
 
+from wiris_tools.cli.options import FiniteRange
+
 
 @click.group()
 def cdf() -> None:
@@ -52,7 +54,7 @@ def models(as_json: bool) -> None:
               help="qgc: what QGroundControl needs; mavsdk: what MAVSDK needs without dropping anything; "
                    "strict: both plus interoperability warnings.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object per file (one per line).")
-@click.option("--timeout", "timeout_s", type=click.FloatRange(min=0.1), default=15.0, show_default=True,
+@click.option("--timeout", "timeout_s", type=FiniteRange(min=0.1), default=15.0, show_default=True,
               help="Seconds to wait for an http(s) server.")
 def validate(sources: tuple[str, ...], profile: str, as_json: bool, timeout_s: float) -> None:
     """Validate camera definition files (plain XML or .xml.xz, paths or http(s) URLs).

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import click
 
+from wiris_tools.cli.options import FiniteRange
+
 
 @click.command()
 @click.argument("model")
@@ -16,9 +18,9 @@ import click
               help="Port of the definition's HTTP server (0: a free one).")
 @click.option("--http-host", default="127.0.0.1", show_default=True,
               help="Address the definition's HTTP server binds to and names in cam_definition_uri.")
-@click.option("--storage-mib", type=click.FloatRange(0, None), default=None,
+@click.option("--storage-mib", type=FiniteRange(0, None), default=None,
               help="Capacity of each storage in MiB (WIRIS; small values let you test a full storage).")
-@click.option("--image-mib", type=click.FloatRange(0.001, None), default=None,
+@click.option("--image-mib", type=FiniteRange(0.001, None), default=None,
               help="Room one image of one format takes in MiB (WIRIS).")
 @click.option("--definition-over", "definition_scheme", type=click.Choice(["http", "mftp"]), default="http",
               show_default=True, help="Transport named in cam_definition_uri (WIRIS; MAVLink FTP is always served too).")
@@ -26,7 +28,7 @@ import click
 @click.option("--no-licence", is_flag=True, help="Emulate a camera without the MAVLink licence (ignores commands).")
 @click.option("--signing-key", type=click.Path(dir_okay=False), default=None,
               help="MAVLink 2 signing key file (64 hex characters or a passphrase).")
-@click.option("--duration", type=click.FloatRange(0, None), default=0.0,
+@click.option("--duration", type=FiniteRange(0, None), default=0.0,
               help="Stop after this many seconds (0: run until Ctrl-C).")
 def emulate(model: str, url: str, component: int | None, system: int, http_port: int, http_host: str,
             storage_mib: float | None, image_mib: float | None, definition_scheme: str, ethernet_sdk: bool,

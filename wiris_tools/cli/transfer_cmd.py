@@ -13,6 +13,7 @@ from contextlib import contextmanager
 import click
 
 from wiris_tools.cli.jsonout import echo_json
+from wiris_tools.cli.options import FiniteRange
 
 TYPES = ("mission", "fence", "rally")
 
@@ -29,7 +30,7 @@ def _connect_options(f):
                      help="the vehicle's system id (default: the first autopilot heard)"),
         click.option("--target-component", type=click.IntRange(0, 255), default=1, show_default=True,
                      help="the autopilot's component id"),
-        click.option("--timeout", type=click.FloatRange(0.1, 600), default=10.0, show_default=True,
+        click.option("--timeout", type=FiniteRange(0.1, 600), default=10.0, show_default=True,
                      help="seconds to wait for the vehicle's HEARTBEAT"),
         click.option("--json", "as_json", is_flag=True, help="print the result as JSON (no progress bar)"),
     ]
