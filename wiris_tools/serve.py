@@ -234,6 +234,33 @@ class BundleServer(http.server.ThreadingHTTPServer):
         self.RequestHandlerClass.config.log(f"- {host}:{port} {line}")
 
 
+def host_port(host: str, port: int) -> str:
+    """host:port as a URL writes it ([::1]:8000 for an IPv6 address)."""
+    return f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
+
+
+def bind_http(server_class: type[http.server.HTTPServer], host: str, port: int, handler, *, what: str,
+              host_option: str, port_option: str):
+    """server_class bound to (host, port), IPv6 when `host` is an IPv6 address (http.server listens on
+    IPv4 only); a LinkError whose hint names the option to change when binding fails."""
+    import errno
+    import socket
+
+    from wiris_tools.errors import LinkError
+
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    try:
+        return type(server_class.__name__, (server_class,), {"address_family": family})((host, port), handler)
+    except OSError as err:
+        if isinstance(err, socket.gaierror) or err.errno in (errno.EADDRNOTAVAIL, errno.EAFNOSUPPORT):
+            hint = f"give {host_option} an address of this machine (127.0.0.1, ::1, 0.0.0.0 for all) or its name"
+        elif err.errno == errno.EACCES:
+            hint = f"ports below 1024 need privileges; choose another {port_option} (0 picks a free one)"
+        else:
+            hint = f"choose another {port_option} (0 picks a free one), or stop what uses it"
+        raise LinkError(f"cannot {what} on {host_port(host, port)}: {err.strerror or err}", hint=hint) from None
+
+
 def make_server(directory: str | Path, host: str = "127.0.0.1", port: int = 8000, *, prefix: str | None = None,
                 log: Callable[[str], None] | None = None, idle_timeout_s: float = IDLE_TIMEOUT_S) -> BundleServer:
     """A bound (not yet serving) threaded server for `directory`; port 0 picks a free port.
@@ -250,17 +277,13 @@ def make_server(directory: str | Path, host: str = "127.0.0.1", port: int = 8000
     # StreamRequestHandler applies `timeout` to the socket; http.server closes the connection when a read
     # or write of it times out (and logs nothing: there is no request to log)
     handler = type("BoundBundleHandler", (BundleHandler,), {"config": config, "timeout": idle_timeout_s})
-    try:
-        return BundleServer((host, port), handler)
-    except OSError as err:
-        raise LinkError(f"cannot listen on {host}:{port}: {err.strerror or err}",
-                        hint="choose another --port (or --port 0 for a free one), or stop what uses it") from None
+    return bind_http(BundleServer, host, port, handler, what="listen", host_option="--host", port_option="--port")
 
 
 def server_url(server: BundleServer) -> str:
     host, port = server.server_address[:2]
-    shown = f"[{host}]" if ":" in str(host) else host
-    return f"http://{shown}:{port}{server.RequestHandlerClass.config.prefix}"
+    return f"http://{host_port(str(host), port)}{server.RequestHandlerClass.config.prefix}"
 
 
-__all__ = ["BundleHandler", "BundleServer", "make_server", "prefix_from_manifest", "server_url"]
+__all__ = ["BundleHandler", "BundleServer", "bind_http", "host_port", "make_server", "prefix_from_manifest",
+           "server_url"]

@@ -252,6 +252,41 @@ def test_missing_directory_and_busy_port_are_errors(tmp_path, bundle):
         srv.server_close()
 
 
+@pytest.mark.parametrize("host", ["nosuchhost.invalid", "192.0.2.1"])  # unresolvable; not this machine's
+def test_a_host_that_cannot_be_bound_names_the_host_option(bundle, host):
+    with pytest.raises(WirisError, match=f"cannot listen on {host}:0") as err:
+        make_server(bundle, host, 0)
+    assert err.value.hint.startswith("give --host an address of this machine")  # was: choose another --port
+
+
+def _ipv6_loopback() -> bool:
+    try:
+        with socket.socket(socket.AF_INET6) as s:
+            s.bind(("::1", 0))
+        return True
+    except OSError:
+        return False
+
+
+@pytest.mark.skipif(not _ipv6_loopback(), reason="no IPv6 loopback on this machine")
+def test_serves_on_an_ipv6_address(bundle):
+    # http.server listens on IPv4 only: --host ::1 used to fail with "Address family not supported"
+    srv = make_server(bundle, "::1", 0, log=lambda _l: None)
+    thread = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
+    thread.start()
+    try:
+        url = server_url(srv)
+        assert url == f"http://[::1]:{srv.server_address[1]}/cdf/"
+        conn = http.client.HTTPConnection("::1", srv.server_address[1], timeout=10)
+        conn.request("GET", f"/cdf/{PRO}")
+        assert conn.getresponse().status == 200
+        conn.close()
+    finally:
+        srv.shutdown()
+        srv.server_close()
+        thread.join(5)
+
+
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_cli_serve_runs_until_interrupted(bundle, signum):
     """The real command in a subprocess: it prints its URL, serves, and stops on Ctrl-C or SIGTERM."""

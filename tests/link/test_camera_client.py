@@ -437,6 +437,30 @@ def test_info_json_of_a_camera_that_reports_nan_or_inf_is_json(value):
     assert got["storage"][0]["total_mib"] is None and got["capture_status"]["image_interval_s"] is None
 
 
+def test_the_emulator_definition_server_on_ipv6_closes_idle_connections_and_names_a_bad_host(monkeypatch):
+    import urllib.request
+
+    from wiris_tools.emulate import runner
+
+    try:
+        with socket.socket(socket.AF_INET6) as s:
+            s.bind(("::1", 0))
+    except OSError:
+        pytest.skip("no IPv6 loopback on this machine")
+    monkeypatch.setattr(runner, "IDLE_TIMEOUT_S", 0.3)
+    with start_emulator("wiris-pro", "udpin:127.0.0.1:0", http_host="::1") as emu:
+        assert emu.definition_uri.startswith("http://[::1]:")  # was http://::1:PORT, and no IPv6 listener
+        with urllib.request.urlopen(emu.definition_uri, timeout=5) as resp:
+            assert resp.read() == emu.definition
+        port = int(emu.definition_uri.split("]:")[1].split("/")[0])
+        with socket.create_connection(("::1", port), timeout=5) as stalled:
+            stalled.sendall(b"GET /")
+            assert stalled.recv(1) == b""  # closed after the idle timeout, not held for ever
+    with pytest.raises(LinkError, match="cannot serve the camera definition on 192.0.2.1:0") as err:
+        start_emulator("wiris-pro", "udpin:127.0.0.1:0", http_host="192.0.2.1")
+    assert err.value.hint.startswith("give --http-host an address of this machine")
+
+
 @pytest.mark.parametrize("uri,text", [
     ("mftp://comp=999:/x.xml", "names component 999, not 0-255"),
     ("mftp://[;comp=300]/x.xml", "names component 300, not 0-255"),

@@ -20,6 +20,7 @@ from typing import Any
 from cdf.catalogue import Camera, catalogue
 from cdf.errors import CdfError
 from wiris_tools.errors import LinkError
+from wiris_tools.serve import IDLE_TIMEOUT_S, bind_http, host_port
 
 TICK_S = 0.02
 WAIT_STEP_S = 0.1  # how soon wait() notices a close() from another thread (signals cut a step short)
@@ -32,6 +33,7 @@ class _DefinitionServer:
         class Handler(http.server.BaseHTTPRequestHandler):
             server_version = "wiris-emulator"
             sys_version = ""
+            timeout = IDLE_TIMEOUT_S  # a stalled client must not hold a thread for ever (see wiris_tools.serve)
 
             def _answer(self, with_body: bool) -> None:
                 if self.path.split("?", 1)[0] != served_path:
@@ -53,14 +55,12 @@ class _DefinitionServer:
             def log_message(self, *args: object) -> None:
                 pass
 
-        try:
-            self.httpd = http.server.ThreadingHTTPServer((host, port), Handler)
-        except OSError as err:
-            raise LinkError(f"cannot serve the camera definition on {host}:{port}: {err.strerror or err}",
-                            hint="choose another --http-port (0 picks a free one)") from None
+        self.httpd = bind_http(http.server.ThreadingHTTPServer, host, port, Handler,
+                               what="serve the camera definition", host_option="--http-host",
+                               port_option="--http-port")
         self.httpd.daemon_threads = True
         self.port = self.httpd.server_address[1]
-        self.uri = f"http://{host}:{self.port}{served_path}"
+        self.uri = f"http://{host_port(host, self.port)}{served_path}"
         # shutdown() waits for the loop's next poll: 0.5 s by default, every time an emulator stops
         self._thread = threading.Thread(target=self.httpd.serve_forever, args=(0.05,), name="cdf-http", daemon=True)
         self._thread.start()

@@ -36,6 +36,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from cdf.catalogue import Camera, Setting
 from wiris_tools.emulate import paramext
 from wiris_tools.emulate.definition import Definition, DefParam
+from wiris_tools.serve import host_port
 
 Message = Any
 
@@ -580,7 +581,7 @@ class WirisState:
             flags = mavlink2.VIDEO_STREAM_STATUS_FLAGS_RUNNING if self.streaming else 0
             if o.key == "thermal":
                 flags |= mavlink2.VIDEO_STREAM_STATUS_FLAGS_THERMAL
-            uri = f"rtsp://{self.config.stream_host}:8554/{o.key}".encode()
+            uri = f"rtsp://{host_port(self.config.stream_host, 8554)}/{o.key}".encode()
             # frame rate, bitrate and field of view are in no source read: 0 (hfov "not implemented", §6.4.6)
             out.append(self.mav.video_stream_information_encode(
                 o.value, count, mavlink2.VIDEO_STREAM_TYPE_RTSP,
