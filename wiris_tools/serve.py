@@ -47,17 +47,42 @@ class ServeConfig:
 
 def prefix_from_manifest(directory: Path) -> str:
     """The URL path of the bundle's http(s) URIs (e.g. "/cdf/" for http://host:8000/cdf/x.xml), so the
-    server answers at the URIs the manifest announces; "/" when there is none or they disagree."""
+    server answers at the URIs the manifest announces; "/" when there is none, they disagree, or the path
+    cannot be matched as written."""
     try:
         rows = json.loads((directory / "manifest.json").read_text(encoding="utf-8"))["models"]
         paths = {urllib.parse.urlsplit(r["uri"]).path.rsplit("/", 1)[0] + "/"
                  for r in rows if str(r["uri"]).lower().startswith(("http://", "https://"))}
     except (OSError, ValueError, KeyError, TypeError, AttributeError):
         return "/"
-    return paths.pop() if len(paths) == 1 else "/"
+    if len(paths) != 1:
+        return "/"
+    path = paths.pop()
+    return path if _bad_segment(path) is None else "/"
+
+
+# a path segment as a client sends it (RFC 3986 pchar): requests are matched before percent-decoding
+_SEGMENT = re.compile(r"(?:[A-Za-z0-9._~!$&'()*+,;=:@-]|%[0-9A-Fa-f]{2})+")
+
+
+def _bad_segment(prefix: str) -> str | None:
+    """The first segment of a URL path that no request can match literally, or None."""
+    inner = prefix.strip("/")
+    for seg in inner.split("/") if inner else ():
+        if seg in (".", "..") or not _SEGMENT.fullmatch(seg):
+            return seg
+    return None
 
 
 def _normal_prefix(prefix: str) -> str:
+    from wiris_tools.errors import LinkError
+
+    bad = _bad_segment(prefix)
+    if bad is not None:
+        what = f"segment {bad[:40]!r}" if bad else "an empty segment (//)"
+        raise LinkError(f"URL path {what} cannot be requested as written (clients drop . and .. segments "
+                        "and percent-encode other characters)", where=f"--prefix {prefix[:60]}",
+                        hint="use plain segments such as /cdf: letters, digits and - _ . ~")
     p = "/" + prefix.strip("/")
     return p if p == "/" else p + "/"
 

@@ -7,6 +7,7 @@ import hashlib
 import http.client
 import json
 import os
+import re
 import signal
 import socket
 import threading
@@ -250,6 +251,28 @@ def test_missing_directory_and_busy_port_are_errors(tmp_path, bundle):
         assert "--port" in err.value.hint
     finally:
         srv.server_close()
+
+
+@pytest.mark.parametrize("prefix,text", [("/../..", "segment '..'"), ("/a//b", "an empty segment (//)"),
+                                         ("/my cdf", "segment 'my cdf'"), ("/cdf/./v1", "segment '.'")])
+def test_a_prefix_no_request_can_match_is_refused(bundle, prefix, text):
+    # it used to be served as given, at a URL path no client sends: every request answered 404
+    with pytest.raises(WirisError, match=re.escape(f"URL path {text} cannot be requested")) as err:
+        make_server(bundle, "127.0.0.1", 0, prefix=prefix)
+    assert err.value.where == f"--prefix {prefix}"
+
+
+def test_a_percent_encoded_prefix_is_served(bundle):
+    srv = make_server(bundle, "127.0.0.1", 0, prefix="/my%20cdf/v1", log=lambda _l: None)
+    thread = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
+    thread.start()
+    try:
+        assert server_url(srv).endswith("/my%20cdf/v1/")
+        assert request(srv, "GET", f"/my%20cdf/v1/{PRO}")[0] == 200
+    finally:
+        srv.shutdown()
+        srv.server_close()
+        thread.join(5)
 
 
 @pytest.mark.parametrize("host", ["nosuchhost.invalid", "192.0.2.1"])  # unresolvable; not this machine's
