@@ -20,8 +20,10 @@ import hashlib
 import json
 import lzma
 import os
+import re
 import shutil
 import tempfile
+import urllib.parse
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Iterable
@@ -87,6 +89,18 @@ def check_base_url(base_url: str) -> None:
     if "?" in base_url or "#" in base_url:
         raise CdfError(f"base URL {base_url!r} must not carry a query or fragment",
                        hint="the file name is appended to it")
+    if re.search(r"%(?![0-9A-Fa-f]{2})", base_url):
+        raise CdfError(f"base URL {base_url!r} has a % not followed by two hex digits",
+                       hint="write a literal % as %25")
+    if base_url.lower().startswith(("http://", "https://")):
+        try:
+            parts = urllib.parse.urlsplit(base_url)
+            parts.port  # noqa: B018 (raises ValueError for a port that is not 0-65535)
+        except ValueError as err:
+            raise CdfError(f"base URL {base_url!r} is malformed: {err}",
+                           hint="write it as http://HOST[:PORT]/PATH, an IPv6 host in brackets") from None
+        if not parts.hostname:
+            raise CdfError(f"base URL {base_url!r} names no host", hint="write it as http://HOST[:PORT]/PATH")
 
 
 def select_cameras(cat: Catalogue, models: Iterable[str], all_models: bool

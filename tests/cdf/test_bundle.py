@@ -7,6 +7,7 @@ import hashlib
 import json
 import lzma
 import os
+import re
 import shutil
 from pathlib import Path
 
@@ -181,12 +182,23 @@ def test_a_uri_longer_than_139_characters_is_refused_and_nothing_written(tmp_pat
         build_bundle(tmp_path / "x", ["wiris-pro"], base_url=base_ok, xz=True)
 
 
-@pytest.mark.parametrize("base", ["ftp://host/cdf", "mavlinkftp://cdf", "file:///tmp", "http://h/a b",
-                                  "http://h/c?x=1"])
-def test_bad_base_urls_are_refused(tmp_path, base):
-    with pytest.raises(CdfError, match="base URL"):
+@pytest.mark.parametrize("base,text", [
+    ("ftp://host/cdf", "must start with"), ("mavlinkftp://cdf", "must start with"), ("file:///tmp", "must start with"),
+    ("http://h/a b", "without spaces"), ("http://h/c?x=1", "query or fragment"),
+    # these four were written into every URI of the bundle
+    ("http://[::1/cdf", "malformed: Invalid IPv6 URL"), ("http://h:99999/cdf", "malformed: Port out of range"),
+    ("http:///cdf", "names no host"), ("http://h/%zz", "% not followed by two hex digits"),
+])
+def test_bad_base_urls_are_refused(tmp_path, base, text):
+    with pytest.raises(CdfError, match=re.escape(f"base URL {base!r}") + ".*" + re.escape(text)):
         build_bundle(tmp_path / "o", ["wiris-pro"], base_url=base)
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("base", ["http://[::1]:8000/cdf", "http://h/a%20b", "mftp://"])
+def test_unusual_but_sound_base_urls_are_taken(tmp_path, base):
+    build_bundle(tmp_path / "o", ["wiris-pro"], base_url=base)
+    assert (tmp_path / "o" / "manifest.json").exists()
 
 
 def test_rededge_named_explicitly_is_an_error_with_a_hint(tmp_path):
