@@ -26,7 +26,8 @@ So a leg never leaves the area and re-enters it: any part of a leg outside the a
 
 With `trigger_m`, leg ends lie on a grid of photo positions v = k·trigger_m shared by all lines (photos
 line up across lines and the first photo is at the leg start); gap ends snap inward when half a
-footprint still reaches the boundary (front overlap ≥ 50 %), else outward.
+footprint still reaches the boundary (front overlap ≥ 50 %), else outward. An end held short of a gap's
+middle stays on the grid too, so every leg is a whole number of trigger steps: a photo at both ends.
 
 Cost: vectorised shapely intersections per line and band — O(lines · vertices) — plus one union of
 O(legs) rectangles for the repair pass.
@@ -138,6 +139,19 @@ def _intervals(g: Any) -> list[tuple[float, float]]:
 
 def _polys(g: Any) -> list[Any]:
     return [h for h in leaf_parts(g, "Polygon") if h.area > _EPS]
+
+
+def _grid_down(v: float, trigger_m: float) -> float:
+    """The grid point at or below v (v itself when infinite). Leg ends stay on the photo grid so that a
+    leg's length is a whole number of trigger steps (or zero): distance triggering shoots at the leg's
+    start and every trigger_m after it, so only then is there a photo at the far end too, whichever way
+    the leg is flown. An end clamped off the grid lost its last photo: up to a trigger step of a narrow
+    strip beside a notch went unphotographed."""
+    return math.floor(v / trigger_m + 1e-9) * trigger_m if math.isfinite(v) else v
+
+
+def _grid_up(v: float, trigger_m: float) -> float:
+    return math.ceil(v / trigger_m - 1e-9) * trigger_m if math.isfinite(v) else v
 
 
 def _snap(a: float, b: float, outer_a: bool, outer_b: bool, trigger_m: float, inward_ok: bool) -> tuple[float, float]:
@@ -292,8 +306,9 @@ def part_legs(poly_uv: Any, part: int, across_m: float, spacing_m: float, trigge
         for a, b, sa, sb, lim_a, lim_b, oa, ob in merged:
             if trigger_m:
                 a, b = _snap(a, b, sa, sb, trigger_m, inward_ok)
-                # an outward snap must not carry a gap end past the middle of the gap
-                a, b = max(a, lim_a), min(b, lim_b)
+                # an outward snap must not carry a gap end past the middle of the gap; the end stays on
+                # the grid (see _on_grid) at the last grid point before the middle
+                a, b = max(a, _grid_up(lim_a, trigger_m)), min(b, _grid_down(lim_b, trigger_m))
                 if a > b:
                     a = b = (a + b) / 2.0
             out.append([k, u, a, b, bool(oa), bool(ob), lim_a, lim_b])
@@ -315,10 +330,10 @@ def _repair(poly_uv: Any, legs: list[list[Any]], us: np.ndarray, across_m: float
     d = trigger_m or 0.0
 
     def down(v: float) -> float:
-        return math.floor(v / d + 1e-9) * d if d else v
+        return _grid_down(v, d) if d else v
 
     def up(v: float) -> float:
-        return math.ceil(v / d - 1e-9) * d if d else v
+        return _grid_up(v, d) if d else v
 
     min_piece = max(0.5, 1e-7 * poly_uv.area)
     for _round in range(2):
@@ -339,10 +354,10 @@ def _repair(poly_uv: Any, legs: list[list[Any]], us: np.ndarray, across_m: float
                 if l[2] <= lo and hi <= l[3]:
                     done = True            # covered along-track already: the piece is a margin artefact
                 elif pv0 >= l[2] and hi > l[3] and hi - l[3] <= far_m and hi <= l[7]:
-                    l[3] = min(up(hi), l[7])
+                    l[3] = max(l[3], min(up(hi), down(l[7])))  # on the grid, short of the gap's middle
                     done = True
                 elif pv1 <= l[3] and lo < l[2] and l[2] - lo <= far_m and lo >= l[6]:
-                    l[2] = max(down(lo), l[6])
+                    l[2] = min(l[2], max(down(lo), up(l[6])))
                     done = True
                 if done:
                     break

@@ -107,6 +107,23 @@ def test_auto_angle_path_is_close_to_the_lower_bound_on_convex_areas(poly) -> No
     assert c.path_ratio <= 1.25
 
 
+def test_a_leg_clamped_at_a_notch_keeps_its_end_photo() -> None:
+    # found by the test below: a leg whose start was clamped to the middle of a 4 m notch, off the photo
+    # grid, got no photo at its far end (distance triggering shoots at the start and every trigger step):
+    # 479 m² of the spike beyond it stayed unphotographed (coverage 98.9 %)
+    poly = shapely.from_wkt("POLYGON ((0 100, 141.0149 358.2454, 124.9844 267.2150, 165.8812 303.6435, 84.1470 54.0302, 90.9297 -41.6146, 14.1120 -98.9992, -42.0939 -112.3748, -75.6802 -65.3643, -95.8924 28.3662, 0 100))")
+    plan = plan_survey(area_from_xy(poly), WIRIS_60M, 40, 10, angle_deg=-75.75, turnaround_m=10, speed_mps=6)
+    assert measure(poly, plan.photos, WIRIS_60M).coverage >= 0.995
+    assert_legs_on_the_photo_grid(plan)
+
+
+def assert_legs_on_the_photo_grid(plan) -> None:
+    """Every leg a whole number of trigger steps long (or a single photo): a photo at both ends."""
+    for leg in plan.legs:
+        steps = leg.length_m / plan.trigger_distance_m
+        assert abs(steps - round(steps)) < 1e-6, (leg, steps)
+
+
 @given(star_polygons(), st.sampled_from([(80, 70), (60, 20), (40, 10)]), st.floats(-90, 90))
 @settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 def test_random_concave_areas_are_covered_at_any_overlap(poly, overlap, angle) -> None:
@@ -118,3 +135,4 @@ def test_random_concave_areas_are_covered_at_any_overlap(poly, overlap, angle) -
     c = measure(poly, plan.photos, fp)
     assert c.coverage >= 0.995
     assert leg_crossings(plan.legs, poly) == []
+    assert_legs_on_the_photo_grid(plan)
