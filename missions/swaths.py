@@ -155,12 +155,11 @@ def _grid_up(v: float, trigger_m: float) -> float:
 
 
 def _snap(a: float, b: float, outer_a: bool, outer_b: bool, trigger_m: float, inward_ok: bool) -> tuple[float, float]:
-    lo = math.floor(a / trigger_m + 1e-9) * trigger_m
-    hi = math.ceil(b / trigger_m - 1e-9) * trigger_m
+    lo, hi = _grid_down(a, trigger_m), _grid_up(b, trigger_m)
     if not outer_a and inward_ok:
-        lo = math.ceil(a / trigger_m - 1e-9) * trigger_m
+        lo = _grid_up(a, trigger_m)
     if not outer_b and inward_ok:
-        hi = math.floor(b / trigger_m + 1e-9) * trigger_m
+        hi = _grid_down(b, trigger_m)
     if hi < lo:          # a gap-bounded leg shorter than one trigger step: keep one photo in its middle
         mid = round((a + b) / 2.0 / trigger_m) * trigger_m
         lo = hi = mid
@@ -307,7 +306,7 @@ def part_legs(poly_uv: Any, part: int, across_m: float, spacing_m: float, trigge
             if trigger_m:
                 a, b = _snap(a, b, sa, sb, trigger_m, inward_ok)
                 # an outward snap must not carry a gap end past the middle of the gap; the end stays on
-                # the grid (see _on_grid) at the last grid point before the middle
+                # the grid (see _grid_down) at the last grid point before the middle
                 a, b = max(a, _grid_up(lim_a, trigger_m)), min(b, _grid_down(lim_b, trigger_m))
                 if a > b:
                     a = b = (a + b) / 2.0
