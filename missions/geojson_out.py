@@ -17,10 +17,10 @@ home, flat ground assumed as in the report). Every feature has a `kind` property
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 from missions.compiled import Compiled
+from missions.jsonfinite import finite
 from missions.report import Simulation
 
 # A 100 km² survey has ~10^6 photos; a GIS tool opening a GeoJSON of a million rectangles is unusable.
@@ -131,14 +131,3 @@ def dumps_collection(fc: dict) -> str:
 
     head = dump({k: v for k, v in fc.items() if k != "features"})[:-1]
     return head + ',"features":[\n' + ",\n".join(dump(f) for f in fc["features"]) + "\n]}\n"
-
-
-def finite(obj: Any) -> Any:
-    """JSON has no NaN: replace non-finite floats by null (RFC 8259)."""
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {k: finite(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [finite(v) for v in obj]
-    return obj

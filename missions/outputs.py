@@ -37,7 +37,7 @@ from missions.errors import PlanError
 
 
 def _json_text(obj) -> str:
-    from missions.geojson_out import finite
+    from missions.jsonfinite import finite
     return json.dumps(finite(obj), indent=1, ensure_ascii=False, allow_nan=False) + "\n"
 
 
