@@ -31,13 +31,14 @@ content.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
 import tempfile
 from decimal import ROUND_HALF_UP, Decimal
 from pathlib import Path
-from typing import Any
+from typing import Any, Iterator
 
 from missions.errors import PlanError
 from missions.items import (FRAME_GLOBAL, FRAME_GLOBAL_RELATIVE_ALT, FRAME_GLOBAL_TERRAIN_ALT, MISSION_TYPE_FENCE,
@@ -254,8 +255,8 @@ def _temp_beside(path: Path) -> tuple[int, str]:
     return tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
 
 
-def _cannot_write(path: Path, err: OSError) -> PlanError:
-    return PlanError(f"cannot write the file: {err.strerror or err}", where=str(path),
+def _cannot_write(path: Path, err: OSError, what: str = "the file") -> PlanError:
+    return PlanError(f"cannot write {what}: {err.strerror or err}", where=str(path),
                      hint="the directory must exist and be writable, the name at most 240 bytes")
 
 
@@ -274,26 +275,30 @@ def check_writable(path: str | Path) -> None:
     os.unlink(tmp)
 
 
-def atomic_write(path: Path, text: str) -> None:
-    """Write `text` to `path` via a temporary file in the same directory and a rename; PlanError when
-    that fails (nothing is left behind, an existing file at `path` is unchanged)."""
-    path = Path(path)
+@contextlib.contextmanager
+def replacing(path: Path, what: str = "the file") -> Iterator[Path]:
+    """A temporary file beside `path` to write, renamed onto `path` when the block ends; on any error it is
+    removed and an existing file at `path` stays unchanged. An OSError becomes a PlanError naming `what`."""
     try:
         fd, tmp = _temp_beside(path)
     except OSError as err:
-        raise _cannot_write(path, err) from None
+        raise _cannot_write(path, err, what) from None
+    os.close(fd)
     try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as fh:
-            fh.write(text)
+        yield Path(tmp)
         os.replace(tmp, path)
     except BaseException as err:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
+        Path(tmp).unlink(missing_ok=True)
         if isinstance(err, OSError):
-            raise _cannot_write(path, err) from None
+            raise _cannot_write(path, err, what) from None
         raise
+
+
+def atomic_write(path: Path, text: str) -> None:
+    """Write `text` to `path` via a temporary file in the same directory and a rename; PlanError when
+    that fails (nothing is left behind, an existing file at `path` is unchanged)."""
+    with replacing(Path(path)) as tmp:
+        tmp.write_text(text, encoding="utf-8", newline="\n")
 
 
 # -- reading ---------------------------------------------------------------------------------------

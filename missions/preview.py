@@ -442,9 +442,7 @@ def render_html(pic: Picture, rep: dict) -> str:
 
 def write_preview(compiled: Compiled, out: str | Path) -> Path:
     """Render the preview to `out` (.svg, .png or .html, by suffix), written atomically."""
-    import os
-    import tempfile
-
+    from missions.planfile import replacing
     from missions.report import report, simulate
 
     out = Path(out)
@@ -456,23 +454,14 @@ def write_preview(compiled: Compiled, out: str | Path) -> Path:
     rep = report(compiled, sim)
     pic = build_picture(compiled, sim, rep)
     try:
-        parent = out.resolve().parent
-        if not parent.is_dir():
+        if not out.resolve().parent.is_dir():
             raise PlanError("the output directory does not exist", where=str(out), hint="create it first")
-        fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=parent)
     except OSError as err:  # is_dir() answers False only for "no such file"; a name too long raises
         raise PlanError(f"cannot write the preview: {err.strerror}", where=str(out)) from None
-    os.close(fd)
-    try:
+    with replacing(out, "the preview") as tmp:
         if suffix == ".png":
-            render_png(pic, Path(tmp))
+            render_png(pic, tmp)
         else:
             text = render_svg(pic) if suffix == ".svg" else render_html(pic, rep)
-            Path(tmp).write_text(text, encoding="utf-8")
-        os.replace(tmp, out)
-    except BaseException as err:
-        Path(tmp).unlink(missing_ok=True)
-        if isinstance(err, OSError):
-            raise PlanError(f"cannot write the preview: {err.strerror or err}", where=str(out)) from None
-        raise
+            tmp.write_text(text, encoding="utf-8")
     return out
