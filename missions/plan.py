@@ -19,7 +19,7 @@ Paths in a plan are relative to the plan file.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 import difflib
 import math
 from pathlib import Path
@@ -200,6 +200,9 @@ class _Yaml:
         self.problems = problems
         self.values: dict[tuple, tuple[int, int]] = {}
         self.keys: dict[tuple, tuple[int, int]] = {}
+        # values already reported here and read as None (.inf, a YAML tag): the schema pass skips them,
+        # or `name: .inf` would also be "name must be text, got nothing"
+        self.reported: set[tuple] = set()
         self.nodes = 0
 
     def loc(self, mark: Any) -> str:
@@ -232,9 +235,9 @@ class _Yaml:
             return out
         if isinstance(node, yaml.SequenceNode):
             return [self.convert(v, path + (i,), depth + 1) for i, v in enumerate(node.value)]
-        return self.scalar(node)
+        return self.scalar(node, path)
 
-    def scalar(self, node: Any) -> Any:
+    def scalar(self, node: Any, path: tuple) -> Any:
         import yaml
 
         tag, text = node.tag, node.value
@@ -252,14 +255,21 @@ class _Yaml:
             except (ValueError, TypeError, OverflowError, yaml.YAMLError):
                 return text
             if isinstance(value, float) and not math.isfinite(value):
-                self.problems.append(Problem(self.loc(node.start_mark), f"{text!r} is not a finite number"))
+                self.problems.append(Problem(self.loc(node.start_mark), f"{text!r} is not a finite number",
+                                             "YAML reads .inf and .nan as numbers: give a finite one, or quote "
+                                             "the text if that is what you meant"))
+                self.reported.add(path)
                 return None
             return value
         if tag == "tag:yaml.org,2002:timestamp":
             return text
         self.problems.append(Problem(self.loc(node.start_mark), f"YAML tag {tag!r} is not allowed in a plan",
                                      "remove the tag"))
+        self.reported.add(path)
         return None
+
+
+_TOO_DEEP_HINT = "a plan nests a few levels deep; look for unclosed brackets or runaway indentation"
 
 
 def _parse_yaml(text: str, file: str, problems: list[Problem]) -> tuple[Any, _Yaml]:
@@ -275,10 +285,10 @@ def _parse_yaml(text: str, file: str, problems: list[Problem]) -> tuple[Any, _Ya
         problems.append(Problem(where, f"invalid YAML: {msg}", "check indentation, colons and quotes"))
         return None, conv
     except yaml.YAMLError as e:
-        problems.append(Problem(file, f"invalid YAML: {e}"))
+        problems.append(Problem(file, f"invalid YAML: {e}", "check indentation, colons and quotes"))
         return None, conv
     except RecursionError:
-        problems.append(Problem(file, "the YAML is nested too deeply"))
+        problems.append(Problem(file, "the YAML is nested too deeply", _TOO_DEEP_HINT))
         return None, conv
     if node is None:
         problems.append(Problem(file, "the plan is empty", "start from `wiris mission schema` or examples/"))
@@ -289,7 +299,7 @@ def _parse_yaml(text: str, file: str, problems: list[Problem]) -> tuple[Any, _Ya
         problems.append(Problem(file, str(e), "write the plan without anchors and aliases"))
         return None, conv
     except RecursionError:
-        problems.append(Problem(file, "the YAML is nested too deeply"))
+        problems.append(Problem(file, "the YAML is nested too deeply", _TOO_DEEP_HINT))
         return None, conv
     return data, conv
 
@@ -341,11 +351,58 @@ def _schema_problems(data: Any, conv: _Yaml, problems: list[Problem]) -> None:
     validator = jsonschema.Draft202012Validator(schema)
     seen: set[tuple] = set()
     for err in validator.iter_errors(data):
+        if _already_reported(err, conv.reported):
+            continue
         for problem in _translate(err, conv):
+            if problem.hint is None:
+                problem = replace(problem, hint=_fallback_hint(err))
             k = (problem.where, problem.message)
             if k not in seen:
                 seen.add(k)
                 problems.append(problem)
+
+
+_AREA_HINT = "a KML or GeoJSON file next to the plan, e.g. area: areas/field.kml, or [[lat, lon], [lat, lon], ...]"
+_LATLON_HINT = "two numbers, WGS84 degrees: [lat, lon], e.g. [50.0696, 14.7263]"
+
+# How to write a value of each JSON type in YAML: the hint of a type error (with the field's description)
+_FORMS = {"object": "indent its keys below it, or write {key: value, ...}",
+          "array": "write a list: [a, b] on one line, or one `- item` per line",
+          "number": "write a plain number, without quotes or a unit",
+          "integer": "write a whole number, without quotes",
+          "string": "write text (quote it if YAML would read it as a number or true/false)",
+          "boolean": "write true or false"}
+
+
+def _fallback_hint(err: Any) -> str:
+    """A hint for a schema error that _translate has none for: what the field is (its description) and,
+    for a wrong type, how to write the right one."""
+    sub = _schema_at(plan_schema(), tuple(err.absolute_path))
+    desc = sub.get("description")
+    form = None
+    expected = sub.get("type")
+    if isinstance(expected, list):
+        expected = next((t for t in expected if t != "null"), None)
+    if expected == "object" and sub.get("properties") == {}:
+        form = "write {} (it takes no keys)"
+    elif expected == "object" and sub.get("properties"):
+        keys = sub.get("required") or list(sub["properties"])[:4]
+        form = "write {" + ", ".join(f"{k}: ..." for k in keys) + "}" + (" (or leave it empty)" if not sub.get(
+            "required") and "null" in (sub.get("type") or []) else "")
+    elif isinstance(expected, str):
+        form = _FORMS.get(expected)
+    if desc and (err.validator == "type" or form is None):
+        return f"{desc}: {form}" if err.validator == "type" and form else desc
+    return form or "see `wiris mission schema` for the plan format"
+
+
+def _already_reported(err: Any, reported: set[tuple]) -> bool:
+    """Whether a schema error is about a value the YAML pass reported (and read as None): that value
+    itself, or an anyOf (an area) that fails because of it."""
+    path = tuple(err.absolute_path)
+    if path in reported:
+        return True
+    return err.validator == "anyOf" and any(r[:len(path)] == path for r in reported)
 
 
 def _at(conv: _Yaml, path: tuple, key: bool = False) -> str:
@@ -404,11 +461,13 @@ def _translate(err: Any, conv: _Yaml) -> list[Problem]:
             return [Problem(where, f"{name} {inst} is {rel}{sep} {err.validator_value}", hint)]
     if v == "type":
         expected = err.validator_value
-        exp = " or ".join(expected) if isinstance(expected, list) else expected
-        if exp == "object" and path and path[0] == "mission" and len(path) == 2 and isinstance(inst, str):
+        exp = " or ".join(map(_article, expected)) if isinstance(expected, list) else _article(expected)
+        if expected == "object" and path and path[0] == "mission" and len(path) == 2 and isinstance(inst, str):
             return [Problem(where, f"mission step {inst!r} needs a colon and a body",
                             f"write `- {inst}: {{}}`" if inst in STEPS else _unknown_key_hint(inst, STEPS))]
-        return [Problem(where, f"{name} must be {_article(exp)}, got {_describe(inst)}", hint)]
+        if expected in ("number", "integer") and isinstance(inst, str):
+            hint = _number_in_text_hint(inst) or hint
+        return [Problem(where, f"{name} must be {exp}, got {_describe(inst)}", hint)]
     if v == "enum":
         opts = ", ".join(str(o) for o in err.validator_value)
         close = difflib.get_close_matches(str(inst), [str(o) for o in err.validator_value], n=1)
@@ -421,9 +480,9 @@ def _translate(err: Any, conv: _Yaml) -> list[Problem]:
         if last == "line":
             return [Problem(where, "a corridor line needs at least 2 points", "give [[lat, lon], [lat, lon], ...]")]
         if name.endswith("area") or "exclude" in path:
-            return [Problem(where, "an inline area needs at least 3 [lat, lon] points")]
+            return [Problem(where, "an inline area needs at least 3 [lat, lon] points", _AREA_HINT)]
         if isinstance(inst, list) and len(inst) in (2, 3) or schema.get("description", "").startswith("[lat"):
-            return [Problem(where, f"{name} must be [lat, lon], got {_describe(inst)}")]
+            return [Problem(where, f"{name} must be [lat, lon], got {_describe(inst)}", _LATLON_HINT)]
         return [Problem(where, f"{name}: {err.message}")]
     if v == "minProperties" or v == "maxProperties":
         if path and path[0] == "mission" and len(path) == 2:
@@ -433,24 +492,38 @@ def _translate(err: Any, conv: _Yaml) -> list[Problem]:
     if v == "anyOf":
         if last in ("area",) or (len(path) >= 2 and path[-2] == "exclude"):
             return [Problem(where, f"{name} must be a file path or a list of at least 3 [lat, lon] points, got "
-                            f"{_describe(inst)}")]
+                            f"{_describe(inst)}", _AREA_HINT)]
         if last == "angle_deg":
-            return [Problem(where, f"angle_deg must be 'auto' or a number of degrees -360..360, got {inst!r}")]
+            return [Problem(where, f"angle_deg must be 'auto' or a number of degrees -360..360, got {inst!r}",
+                            "degrees clockwise from north, e.g. angle_deg: 30 (0 = north-south lines)")]
     if v == "uniqueItems":
-        return [Problem(where, f"{name} lists a name twice")]
+        return [Problem(where, f"{name} lists a name twice", "name each payload once")]
     if v == "pattern":
         if last == "name":
             return [Problem(where, f"name {inst!r} must be a file-name-safe word (letters, digits, . _ -), at most 64",
                             "output files are named after it")]
         return [Problem(where, f"{name}: {inst!r} is not allowed here ({err.message})")]
     if v == "propertyNames":
-        return [Problem(where, f"payload name {err.instance!r} must be a word (letters, digits, _ -)")]
+        return [Problem(where, f"payload name {err.instance!r} must be a word (letters, digits, _ -)",
+                        "start with a letter or _, at most 32 characters, e.g. thermal")]
     return [Problem(where, f"{name}: {err.message}", hint)]
 
 
 def _article(t: str) -> str:
     return {"object": "a mapping", "array": "a list", "number": "a number", "integer": "a whole number",
-            "string": "text", "boolean": "true or false"}.get(t, t)
+            "string": "text", "boolean": "true or false", "null": "nothing"}.get(t, t)
+
+
+def _number_in_text_hint(text: str) -> str | None:
+    """For a number written as text: '40' (quoted) or '40 m' / '40m' (with a unit)."""
+    import re
+
+    m = re.fullmatch(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\d\s].*)?", text)
+    if m is None:
+        return None
+    if m.group(2):
+        return f"write the number alone ({m.group(1)}): the unit is fixed by the key's name"
+    return f"remove the quotes: {m.group(1)}"
 
 
 def _describe(v: Any) -> str:
@@ -614,7 +687,9 @@ def _meaning(data: dict, conv: _Yaml, problems: list[Problem], base_dir: Path) -
             if has_rededge:
                 free = [c for c in free if c != REDEDGE_COMPONENT]
             if not free:
-                problems.append(Problem(_at(conv, ("payloads", name)), f"no free component id for {name}"))
+                problems.append(Problem(_at(conv, ("payloads", name)), f"no free component id for {name}",
+                                        f"ids 100..105 are all taken; {cam.model} can use "
+                                        f"{', '.join(map(str, cam.component_ids))}"))
                 continue
             cid = free[0]
             if has_rededge or cid != cam.default_component_id:
@@ -680,7 +755,8 @@ def _meaning(data: dict, conv: _Yaml, problems: list[Problem], base_dir: Path) -
         elif kind == "waypoint":
             payload_ref(body.get("capture"), base + ("capture",))
         elif kind == "land" and ("lat" in body) != ("lon" in body):
-            problems.append(Problem(_at(conv, base), "land needs both lat and lon, or neither (land where it is)"))
+            problems.append(Problem(_at(conv, base), "land needs both lat and lon, or neither (land where it is)",
+                                    "give the landing point as lat and lon, or remove both"))
         elif kind == "camera":
             ref = body.get("payload")
             payload_ref(ref, base + ("payload",))
@@ -835,9 +911,11 @@ def load_plan(path: str | Path) -> Plan:
                             hint="put large areas in KML/GeoJSON files next to the plan")
         raw = p.read_bytes()
     except OSError as e:
-        raise PlanError(f"cannot read the plan: {e.strerror}", where=str(p)) from None
+        raise PlanError(f"cannot read the plan: {e.strerror}", where=str(p),
+                        hint="check the path and that you may read the file") from None
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as e:
-        raise PlanError(f"the plan is not UTF-8 text (byte {e.start})", where=str(p)) from None
+        raise PlanError(f"the plan is not UTF-8 text (byte {e.start})", where=str(p),
+                        hint="save the plan as UTF-8 (the default of every current editor)") from None
     return parse_plan(text, str(p), p.resolve().parent)

@@ -26,6 +26,7 @@ MAX_ALTITUDE_M = 500.0
 MAX_SPEED_MPS = 50.0
 COMPONENT_IDS = (100, 101, 102, 103, 104, 105)   # MAV_COMP_ID_CAMERA..CAMERA6 (common.xml)
 
+_LAT, _LON = "latitude, WGS84 degrees", "longitude, WGS84 degrees"
 _ALT_HINT = f"altitudes are metres above home, {MIN_ALTITUDE_M:g} to {MAX_ALTITUDE_M:g} m"
 
 
@@ -108,14 +109,16 @@ STEPS: dict[str, dict] = {
         "turnaround_m": TURNAROUND,
     }, required=("line", "width_m", "payloads", "overlap"), desc="corridor along a line"),
     "waypoint": _obj({
-        "lat": _num(-90, 90), "lon": _num(-180, 180), "alt_m": ALTITUDE,
+        "lat": _num(-90, 90, desc=_LAT), "lon": _num(-180, 180, desc=_LON), "alt_m": ALTITUDE,
         "hold_s": _num(0, 3600, desc="hold time at the waypoint, seconds"),
         "capture": {"type": "string", "description": "payload that takes one photo here"},
     }, required=("lat", "lon", "alt_m"), desc="fly to a point, optionally hold and take one photo"),
-    "camera": _obj({"payload": {"type": "string"}, "settings": SETTINGS},
+    "camera": _obj({"payload": {"type": "string", "description": "name of the payload to change (from payloads)"},
+                    "settings": SETTINGS},
                    required=("payload", "settings"), desc="change camera settings in flight"),
     "rtl": _obj({}, desc="return to launch", nullable=True),
-    "land": _obj({"lat": _num(-90, 90), "lon": _num(-180, 180)}, desc="land (here, or at lat/lon)", nullable=True),
+    "land": _obj({"lat": _num(-90, 90, desc=_LAT), "lon": _num(-180, 180, desc=_LON)},
+                 desc="land (here, or at lat/lon)", nullable=True),
 }
 
 PAYLOAD = _obj({
@@ -127,7 +130,7 @@ PAYLOAD = _obj({
     "orientation": {"enum": ["landscape", "portrait"], "default": "landscape",
                     "description": "landscape: the long image side across the flight line"},
     "settings": SETTINGS,
-}, required=("camera",))
+}, required=("camera",), desc="a camera on board (camera ids: `wiris cdf models`)")
 
 
 def _build() -> dict:
@@ -143,19 +146,22 @@ def _build() -> dict:
             "name": {"type": "string", "pattern": "^[A-Za-z0-9][A-Za-z0-9._-]{0,63}$",
                      "description": "output file names derive from it (default: the plan file's name)"},
             "vehicle": _obj({
-                "firmware": {"enum": ["ardupilot", "px4"]},
-                "frame": {"enum": ["copter", "plane", "vtol"]},
+                "firmware": {"enum": ["ardupilot", "px4"], "description": "autopilot firmware: ardupilot or px4"},
+                "frame": {"enum": ["copter", "plane", "vtol"], "description": "airframe: copter, plane or vtol"},
                 "speed_mps": _num(exclusive_min=0, maximum=MAX_SPEED_MPS, desc="ground speed while surveying"),
                 "max_mission_items": _num(10, 65535, integer=True,
                                           desc="item limit of the vehicle (default per firmware)"),
-            }, required=("firmware", "frame", "speed_mps")),
-            "home": _obj({"lat": _num(-90, 90), "lon": _num(-180, 180),
+            }, required=("firmware", "frame", "speed_mps"), desc="the aircraft"),
+            "home": _obj({"lat": _num(-90, 90, desc=_LAT), "lon": _num(-180, 180, desc=_LON),
                           "alt_amsl_m": _num(-500, 9000, desc="home altitude above mean sea level")},
-                         required=("lat", "lon", "alt_amsl_m")),
+                         required=("lat", "lon", "alt_amsl_m"), desc="the take-off point"),
             "payloads": {"type": "object", "minProperties": 1,
                          "propertyNames": {"pattern": "^[A-Za-z_][A-Za-z0-9_-]{0,31}$"},
-                         "additionalProperties": PAYLOAD},
+                         "additionalProperties": PAYLOAD,
+                         "description": "the cameras on board, each under a name of yours, e.g. thermal: "
+                                        "{camera: wiris-pro}"},
             "mission": {"type": "array", "minItems": 1,
+                        "description": "the steps in flight order, one `- step: {...}` each: " + ", ".join(STEPS),
                         "items": {"type": "object", "minProperties": 1, "maxProperties": 1,
                                   "properties": STEPS, "additionalProperties": False,
                                   "description": "one step: " + ", ".join(STEPS)}},

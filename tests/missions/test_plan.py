@@ -269,3 +269,29 @@ def test_schema_is_valid_and_lists_steps():
 
 def test_land_needs_both_coordinates(tmp_path):
     one(BASE.replace("  - rtl: {}", "  - land: {lat: 50.11}"), tmp_path, "both lat and lon")
+
+
+def test_a_value_yaml_reads_as_infinite_is_reported_once(tmp_path):
+    # `.inf` is a float in YAML: one problem at that spot, not also "name must be text, got nothing"
+    probs = problems_of(BASE.replace("name: t", "name: .inf"), tmp_path)
+    assert [p.message for p in probs] == ["'.inf' is not a finite number"]
+    assert "quote" in probs[0].hint
+    # in an inline area, not also "area must be a file path or a list of points"
+    probs = problems_of(BASE.replace("[50.1100, 14.5030]", "[50.1100, .nan]", 1), tmp_path)
+    assert [p.message for p in probs] == ["'.nan' is not a finite number"]
+
+
+@pytest.mark.parametrize("written, hint", [('"40"', "remove the quotes: 40"), ("40m", "write the number alone (40)"),
+                                           ("40 m", "write the number alone (40)")])
+def test_a_number_written_as_text_gets_a_hint_that_fixes_it(tmp_path, written, hint):
+    p = one(BASE.replace("altitude_m: 40", f"altitude_m: {written}"), tmp_path, "must be a number")
+    assert p.hint.startswith(hint), p
+
+
+def test_a_mapping_of_the_wrong_type_hints_its_keys(tmp_path):
+    p = one(BASE.replace("home: {lat: 50.1098, lon: 14.5002, alt_amsl_m: 262}", "home: 262"), tmp_path,
+            "home must be a mapping")
+    assert p.hint == "the take-off point: write {lat: ..., lon: ..., alt_amsl_m: ...}"
+    p = one(BASE.replace("  - rtl: {}", "  - rtl: 1"), tmp_path, "rtl must be")
+    assert p.message.endswith("must be a mapping or nothing, got 1")  # not "object or null"
+    assert "write {}" in p.hint

@@ -1,4 +1,5 @@
-"""Property: any YAML document (any text) yields a Plan or a PlanError with a location — never another exception."""
+"""Property: any YAML document (any text) yields a Plan or a PlanError with a location and a hint — never another
+exception."""
 
 from __future__ import annotations
 
@@ -29,10 +30,12 @@ def check(text: str) -> None:
         probs = getattr(e, "problems", None)
         if probs is None:
             assert e.where and e.where.startswith(NAME)
+            assert e.hint, e
         else:
             assert probs
             for p in probs:
                 assert p.where.startswith(NAME), p
+                assert p.hint, p  # every answer says what to do, not only what is wrong
         return
     assert isinstance(result, Plan)
 
@@ -115,5 +118,6 @@ def test_example_with_one_part_replaced_or_removed(where, value):
     except PlanError as e:
         for p in getattr(e, "problems", None) or [e]:
             assert p.where and p.where.startswith(NAME), p
+            assert p.hint, p
         return
     assert isinstance(result, Plan)
