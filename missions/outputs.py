@@ -109,7 +109,8 @@ def write_outputs(compiled: Compiled, out_dir: str | Path, rep: dict | None = No
             raise PlanError("the output path exists and is not a directory", where=str(out_dir),
                             hint="give a directory for -o")
     except OSError as e:  # exists() answers only "no such file"; a name too long raises
-        raise PlanError(f"cannot use the output directory: {e.strerror}", where=str(out_dir)) from None
+        raise PlanError(f"cannot use the output directory: {e.strerror}", where=str(out_dir),
+                        hint="give -o a path you may access, each name in it at most 255 bytes") from None
     if sim is None:
         sim = simulate(compiled)
     if rep is None:
@@ -120,7 +121,8 @@ def write_outputs(compiled: Compiled, out_dir: str | Path, rep: dict | None = No
         parent.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=f".{compiled.name}.", suffix=".tmp", dir=parent))
     except OSError as e:
-        raise PlanError(f"cannot write next to the output directory: {e.strerror}", where=str(out_dir)) from None
+        raise PlanError(f"cannot write next to the output directory: {e.strerror}", where=str(out_dir),
+                        hint="the files are first written beside it: its parent must be a writable directory") from None
     created_dir = False
     placed: list[Path] = []
     backups: list[tuple[Path, Path]] = []

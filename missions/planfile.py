@@ -88,6 +88,21 @@ def _scale(frame: int) -> int:
     return 1
 
 
+def xy_hint(frame: int) -> str:
+    """What x/y may hold in `frame` (the hint of a value that does not fit MISSION_ITEM_INT)."""
+    s = _scale(frame)
+    if s == 10**7:
+        return "global frames carry lat/lon in degrees: latitude -90..90, longitude -180..180"
+    if s == 10**4:
+        return "local frames carry metres, at most ±214748 m (x/y travel as metres × 1e4 in 32 bits)"
+    return f"frame {frame} carries x/y as 32-bit whole numbers (±2147483647)"
+
+
+SIZE_HINT = "a 2000-item .plan is about 1 MB: is this the right file?"
+READ_HINT = "check the path and that you may read the file"
+FLOAT32_HINT = "params 1-4 and altitude travel as float32 (at most ±3.4e38); null means unset"
+
+
 # -- writing ---------------------------------------------------------------------------------------
 
 def _num(v: float | int | None) -> float | int | None:
@@ -99,7 +114,9 @@ def _num(v: float | int | None) -> float | int | None:
     if math.isnan(v):
         return None
     if math.isinf(v):
-        raise PlanError(f"an infinite value ({v}) cannot be written to a .plan file")
+        # items, fence, rally and home passed check_finite: only a library caller's speed gets here
+        raise PlanError(f"an infinite value ({v}) cannot be written to a .plan file",
+                        hint="give write_plan a finite cruise_speed and hover_speed (m/s)")
     return int(v) if v.is_integer() and abs(v) < 2**53 else v
 
 
@@ -202,7 +219,8 @@ def plan_document(items, home: Home | None, *, firmware: str | int | None, vehic
     """The .plan JSON object (see write_plan)."""
     items, fence, rally = list(items), list(fence or []), list(rally or [])
     if len(items) > MAX_ITEMS:
-        raise PlanError(f"{len(items)} mission items do not fit a MAVLink mission (at most {MAX_ITEMS})")
+        raise PlanError(f"{len(items)} mission items do not fit a MAVLink mission (at most {MAX_ITEMS})",
+                        hint="split the mission into several plans (smaller areas)")
     check_finite("a .plan", home, items, fence, rally)
     modes = {_FRAME_ALT_MODE.get(it.frame) for it in items if it.frame in _FRAME_ALT_MODE}
     alt_mode = modes.pop() if len(modes) == 1 else (ALT_MODE_RELATIVE if not modes else ALT_MODE_MIXED)
@@ -307,17 +325,20 @@ class _Reader:
     def __init__(self, name: str) -> None:
         self.name = name
 
-    def err(self, path: str, message: str, hint: str | None = None) -> PlanError:
+    def err(self, path: str, message: str, hint: str) -> PlanError:
         return PlanError(message, where=f"{self.name}: {path}" if path else self.name, hint=hint)
 
     def obj(self, value: Any, path: str) -> dict[str, Any]:
         if not isinstance(value, dict):
-            raise self.err(path, f"expected a JSON object, found {_kind(value)}")
+            raise self.err(path, f"expected a JSON object, found {_kind(value)}",
+                           "write a JSON object { ... } here, as QGroundControl saves it" if path else
+                           'a .plan file is one JSON object: {"fileType": "Plan", "mission": ...}')
         return value
 
     def key(self, obj: dict[str, Any], key: str, path: str, hint: str | None = None) -> Any:
         if key not in obj:
-            raise self.err(path, f"missing key {key!r}", hint)
+            raise self.err(path, f"missing key {key!r}",
+                           hint or f"add {key!r} as QGroundControl writes it, or save the plan again in QGC")
         return obj[key]
 
     def version(self, obj: dict[str, Any], path: str, allowed: tuple[int, ...], what: str) -> int:
@@ -333,19 +354,21 @@ class _Reader:
         if value is None and null_ok:
             return None
         if isinstance(value, bool) or not isinstance(value, (int, float, Decimal)):
-            raise self.err(path, f"expected a number, found {_kind(value)}")
+            raise self.err(path, f"expected a number, found {_kind(value)}",
+                           "write a JSON number without quotes, e.g. 47.3977507"
+                           + (" (null for unset)" if null_ok else ""))
         d = Decimal(value) if not isinstance(value, Decimal) else value
         if not d.is_finite():
             return None if null_ok else self._nonfinite(path)
         return d
 
     def _nonfinite(self, path: str):
-        raise self.err(path, "expected a finite number")
+        raise self.err(path, "expected a finite number", "write a finite number here: NaN and Infinity are refused")
 
-    def integer(self, value: Any, path: str, lo: int, hi: int) -> int:
+    def integer(self, value: Any, path: str, lo: int, hi: int, hint: str) -> int:
         d = self.number(value, path)
         if d is None or d != d.to_integral_value() or not lo <= d <= hi:
-            raise self.err(path, f"expected a whole number in {lo}..{hi}, found {_show(value)}")
+            raise self.err(path, f"expected a whole number in {lo}..{hi}, found {_show(value)}", hint)
         return int(d)
 
     def fixed(self, value: Any, path: str, frame: int) -> int:
@@ -355,17 +378,20 @@ class _Reader:
             return 0
         v = int((d * _scale(frame)).to_integral_value(rounding=ROUND_HALF_UP))
         if not -2**31 <= v < 2**31:
-            raise self.err(path, f"{_show(value)} does not fit MISSION_ITEM_INT's 32-bit x/y for frame {frame}")
+            raise self.err(path, f"{_show(value)} does not fit MISSION_ITEM_INT's 32-bit x/y for frame {frame}",
+                           xy_hint(frame))
         return v
 
     def latlon(self, value: Any, path: str) -> tuple[int, int]:
         if not isinstance(value, list) or len(value) < 2:
-            raise self.err(path, f"expected [lat, lon], found {_kind(value)}")
+            raise self.err(path, f"expected [lat, lon], found {_kind(value)}",
+                           "write [latitude, longitude] in degrees, e.g. [47.3977507, 8.5456075]")
         lat = self.number(value[0], f"{path}[0]")
         lon = self.number(value[1], f"{path}[1]")
         assert lat is not None and lon is not None
         if not (-90 <= lat <= 90 and -180 <= lon <= 180):
-            raise self.err(path, f"latitude {lat} / longitude {lon} out of range")
+            raise self.err(path, f"latitude {lat} / longitude {lon} out of range",
+                           "check the order, [latitude, longitude]: latitude -90..90, longitude -180..180")
         return self.fixed(lat, f"{path}[0]", 0), self.fixed(lon, f"{path}[1]", 0)
 
 
@@ -385,38 +411,44 @@ def _f(d: Decimal | None) -> float:
 def _parse_json(text: str | bytes, name: str) -> Any:
     if isinstance(text, bytes):
         if len(text) > MAX_PLAN_BYTES:
-            raise PlanError(f"the file is larger than {MAX_PLAN_BYTES // 2**20} MB", where=name)
+            raise PlanError(f"the file is larger than {MAX_PLAN_BYTES // 2**20} MB", where=name, hint=SIZE_HINT)
         try:
             text = text.decode("utf-8-sig")
         except UnicodeDecodeError as err:
             raise PlanError(f"not UTF-8 text (byte {err.start})", where=name,
                             hint="a .plan file is JSON in UTF-8") from None
     if len(text) > MAX_PLAN_BYTES:
-        raise PlanError(f"the file is larger than {MAX_PLAN_BYTES // 2**20} MB", where=name)
+        raise PlanError(f"the file is larger than {MAX_PLAN_BYTES // 2**20} MB", where=name, hint=SIZE_HINT)
     try:
         return json.loads(text, parse_float=Decimal, parse_int=Decimal)
     except json.JSONDecodeError as err:
         raise PlanError(f"not valid JSON: {err.msg}", where=f"{name}:{err.lineno}:{err.colno}",
                         hint="a .plan file is the JSON QGroundControl saves") from None
     except RecursionError:
-        raise PlanError("JSON nested too deeply", where=name) from None
+        raise PlanError("JSON nested too deeply", where=name,
+                        hint="a .plan saved by QGroundControl nests about 8 levels: is this the right file?") from None
 
 
 def _simple(r: _Reader, raw: Any, path: str, mission_type: int) -> MissionItem:
     it = r.obj(raw, path)
-    command = r.integer(r.key(it, "command", path), f"{path}.command", 0, 65535)
-    frame = r.integer(r.key(it, "frame", path), f"{path}.frame", 0, 255)
+    command = r.integer(r.key(it, "command", path), f"{path}.command", 0, 65535,
+                        "write the MAV_CMD number without quotes, e.g. 16 (NAV_WAYPOINT)")
+    frame = r.integer(r.key(it, "frame", path), f"{path}.frame", 0, 255,
+                      "write the MAV_FRAME number without quotes, e.g. 3 (GLOBAL_RELATIVE_ALT)")
     params = r.key(it, "params", path)
     if not isinstance(params, list) or len(params) != 7:
         raise r.err(f"{path}.params", f"expected an array of 7 numbers (null for NaN), found {_kind(params)}"
-                    + (f" of {len(params)}" if isinstance(params, list) else ""))
+                    + (f" of {len(params)}" if isinstance(params, list) else ""),
+                    "params is [p1, p2, p3, p4, lat/x, lon/y, alt/z], null for an unset value")
     auto = r.key(it, "autoContinue", path)
     if not isinstance(auto, bool):
-        raise r.err(f"{path}.autoContinue", f"expected true or false, found {_kind(auto)}")
+        raise r.err(f"{path}.autoContinue", f"expected true or false, found {_kind(auto)}",
+                    "write true or false without quotes")
     p = [r.number(v, f"{path}.params[{k}]", null_ok=True) for k, v in enumerate(params)]
     for k in (0, 1, 2, 3, 6):
         if p[k] is not None and abs(float(p[k])) > FLOAT32_MAX:
-            raise r.err(f"{path}.params[{k}]", f"{p[k]} is beyond the float32 range MISSION_ITEM_INT carries")
+            raise r.err(f"{path}.params[{k}]", f"{p[k]} is beyond the float32 range MISSION_ITEM_INT carries",
+                        FLOAT32_HINT)
     return MissionItem(command=command, frame=frame, param1=_f(p[0]), param2=_f(p[1]), param3=_f(p[2]),
                        param4=_f(p[3]), x=r.fixed(params[4], f"{path}.params[4]", frame),
                        y=r.fixed(params[5], f"{path}.params[5]", frame), z=_f(p[6]), autocontinue=int(auto),
@@ -451,7 +483,8 @@ def _mission(r: _Reader, mission: dict[str, Any]) -> tuple[list[MissionItem], Ho
     r.version(mission, "mission", (2,), "mission")
     raw_items = r.key(mission, "items", "mission")
     if not isinstance(raw_items, list):
-        raise r.err("mission.items", f"expected an array, found {_kind(raw_items)}")
+        raise r.err("mission.items", f"expected an array, found {_kind(raw_items)}",
+                    'write "items": [ ... ], as QGroundControl does ([] for an empty mission)')
     items: list[MissionItem] = []
     for k, raw in enumerate(raw_items):
         path = f"mission.items[{k}]"
@@ -462,14 +495,17 @@ def _mission(r: _Reader, mission: dict[str, Any]) -> tuple[list[MissionItem], Ho
         elif kind == "ComplexItem":
             items.extend(_complex(r, it, path))
         else:
-            raise r.err(f"{path}.type", f"item type {_show(kind)} is not SimpleItem or ComplexItem")
+            raise r.err(f"{path}.type", f"item type {_show(kind)} is not SimpleItem or ComplexItem",
+                        'QGroundControl writes "type": "SimpleItem" or "ComplexItem"; use one of them')
         if len(items) > MAX_ITEMS:
-            raise r.err(path, f"more than {MAX_ITEMS} mission items")
+            raise r.err(path, f"more than {MAX_ITEMS} mission items",
+                        f"a MAVLink mission holds at most {MAX_ITEMS} items: split the plan")
     home: Home | None = None
     raw_home = mission.get("plannedHomePosition")
     if raw_home is not None:
         if not isinstance(raw_home, list) or len(raw_home) != 3:
-            raise r.err("mission.plannedHomePosition", "expected [lat, lon, altitude AMSL]")
+            raise r.err("mission.plannedHomePosition", "expected [lat, lon, altitude AMSL]",
+                        "write it as [latitude, longitude, altitude AMSL], e.g. [47.3977507, 8.5456075, 488]")
         x, y = r.latlon(raw_home, "mission.plannedHomePosition")
         alt = r.number(raw_home[2], "mission.plannedHomePosition[2]", null_ok=True)
         home = (x / 1e7, y / 1e7, 0.0 if alt is None else float(alt))
@@ -483,14 +519,16 @@ def _fence(r: _Reader, fence: dict[str, Any]) -> list[MissionItem]:
     circles = fence.get("circles", [])
     for name, value in (("polygons", polygons), ("circles", circles)):
         if not isinstance(value, list):
-            raise r.err(f"geoFence.{name}", f"expected an array, found {_kind(value)}")
+            raise r.err(f"geoFence.{name}", f"expected an array, found {_kind(value)}",
+                        f'write "{name}": [ ... ] ([] for none)')
     for k, raw in enumerate(polygons):
         path = f"geoFence.polygons[{k}]"
         poly = r.obj(raw, path)
         inclusion = r.key(poly, "inclusion", path)
         vertices = r.key(poly, "polygon", path)
         if not isinstance(inclusion, bool) or not isinstance(vertices, list) or len(vertices) < 3:
-            raise r.err(path, "a fence polygon needs \"inclusion\": true/false and at least 3 [lat, lon] vertices")
+            raise r.err(path, "a fence polygon needs \"inclusion\": true/false and at least 3 [lat, lon] vertices",
+                        'e.g. {"inclusion": true, "polygon": [[47.1, 8.1], [47.2, 8.1], [47.2, 8.2]], "version": 1}')
         cmd = CMD_FENCE_POLYGON_INCLUSION if inclusion else CMD_FENCE_POLYGON_EXCLUSION
         for j, v in enumerate(vertices):
             x, y = r.latlon(v, f"{path}.polygon[{j}]")
@@ -504,7 +542,8 @@ def _fence(r: _Reader, fence: dict[str, Any]) -> list[MissionItem]:
         x, y = r.latlon(r.key(circle, "center", f"{path}.circle"), f"{path}.circle.center")
         radius = r.number(r.key(circle, "radius", f"{path}.circle"), f"{path}.circle.radius")
         if not isinstance(inclusion, bool) or radius is None or radius <= 0:
-            raise r.err(path, "a fence circle needs \"inclusion\": true/false and a positive radius")
+            raise r.err(path, "a fence circle needs \"inclusion\": true/false and a positive radius",
+                        'e.g. {"circle": {"center": [47.1, 8.1], "radius": 50}, "inclusion": true} (radius in m)')
         out.append(MissionItem(command=CMD_FENCE_CIRCLE_INCLUSION if inclusion else CMD_FENCE_CIRCLE_EXCLUSION,
                                frame=FRAME_GLOBAL, param1=float(radius), x=x, y=y, mission_type=MISSION_TYPE_FENCE))
     ret = fence.get("breachReturn")
@@ -521,12 +560,14 @@ def _rally(r: _Reader, rally: dict[str, Any]) -> list[MissionItem]:
     r.version(rally, "rallyPoints", (2,), "rallyPoints")
     points = rally.get("points", [])
     if not isinstance(points, list):
-        raise r.err("rallyPoints.points", f"expected an array, found {_kind(points)}")
+        raise r.err("rallyPoints.points", f"expected an array, found {_kind(points)}",
+                    'write "points": [[latitude, longitude, altitude], ...] ([] for none)')
     out = []
     for k, p in enumerate(points):
         path = f"rallyPoints.points[{k}]"
         if not isinstance(p, list) or len(p) != 3:
-            raise r.err(path, "expected [lat, lon, altitude]")
+            raise r.err(path, "expected [lat, lon, altitude]",
+                        "write the point as [latitude, longitude, altitude], e.g. [47.3977507, 8.5456075, 30]")
         x, y = r.latlon(p, path)
         alt = r.number(p[2], f"{path}[2]")
         out.append(MissionItem(command=CMD_RALLY_POINT, frame=FRAME_GLOBAL_RELATIVE_ALT, x=x, y=y, z=float(alt),
@@ -561,8 +602,8 @@ def load_plan(path: str | Path) -> tuple[list[MissionItem], list[MissionItem], l
     try:
         size = p.stat().st_size
         if size > MAX_PLAN_BYTES:
-            raise PlanError(f"the file is larger than {MAX_PLAN_BYTES // 2**20} MB", where=str(p))
+            raise PlanError(f"the file is larger than {MAX_PLAN_BYTES // 2**20} MB", where=str(p), hint=SIZE_HINT)
         data = p.read_bytes()
     except OSError as err:
-        raise PlanError(f"cannot read the file: {err.strerror}", where=str(p)) from None
+        raise PlanError(f"cannot read the file: {err.strerror}", where=str(p), hint=READ_HINT) from None
     return read_plan(data, str(p))

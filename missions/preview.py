@@ -457,7 +457,8 @@ def write_preview(compiled: Compiled, out: str | Path) -> Path:
         if not out.resolve().parent.is_dir():
             raise PlanError("the output directory does not exist", where=str(out), hint="create it first")
     except OSError as err:  # is_dir() answers False only for "no such file"; a name too long raises
-        raise PlanError(f"cannot write the preview: {err.strerror}", where=str(out)) from None
+        raise PlanError(f"cannot write the preview: {err.strerror}", where=str(out),
+                        hint="give -o a path you may access, its file name at most 240 bytes") from None
     with replacing(out, "the preview") as tmp:
         if suffix == ".png":
             render_png(pic, tmp)

@@ -28,12 +28,14 @@ from pathlib import Path
 
 from missions.errors import PlanError
 from missions.items import FRAME_GLOBAL, MISSION_TYPE_MISSION, MissionItem
-from missions.planfile import FLOAT32_MAX, MAX_ITEMS, _scale, atomic_write, check_finite
+from missions.planfile import FLOAT32_MAX, MAX_ITEMS, _scale, atomic_write, check_finite, xy_hint
 
 Home = tuple[float, float, float]
 
 HEADER = "QGC WPL 110"
-MAX_WPL_BYTES = 10 * 1024 * 1024
+MAX_WPL_BYTES = 10 * 1024 * 1024     # a full 65535-item file is about 6 MB
+SIZE_HINT = "a waypoint file of 65535 items is about 6 MB: is this the right file?"
+READ_HINT = "check the path and that you may read the file"
 CMD_NAV_WAYPOINT = 16   # MAV_CMD_NAV_WAYPOINT (common.xml)
 
 
@@ -41,7 +43,9 @@ def _num(v: float) -> str:
     if math.isnan(v):
         return "NaN"
     if math.isinf(v):
-        raise PlanError(f"an infinite value ({v}) cannot be written to a waypoint file")
+        # wpl_text's check_finite refuses every infinite field of the items and home first
+        raise PlanError(f"an infinite value ({v}) cannot be written to a waypoint file",
+                        hint="a bug in wiris-tools: please report it")
     if float(v).is_integer() and abs(v) < 2**53:
         return str(int(v))
     return repr(float(v))
@@ -73,7 +77,8 @@ def _home_item(home: Home | None) -> MissionItem:
 def wpl_text(items, home: Home | None = None) -> str:
     items = list(items)
     if len(items) + 1 > MAX_ITEMS:
-        raise PlanError(f"{len(items)} items do not fit a MAVLink mission (at most {MAX_ITEMS - 1} plus home)")
+        raise PlanError(f"{len(items)} items do not fit a MAVLink mission (at most {MAX_ITEMS - 1} plus home)",
+                        hint="save a .plan instead (it keeps home apart: 65535 items fit), or split the mission")
     check_finite("a waypoint", home, items)
     lines = [HEADER, _row(0, _home_item(home), 1)]
     lines += [_row(i + 1, it, 0) for i, it in enumerate(items)]
@@ -105,7 +110,8 @@ def _decimal(field: str, where: str, what: str) -> Decimal:
     try:
         d = Decimal(field)
     except InvalidOperation:
-        raise PlanError(f"{what} {field!r} is not a number", where=where) from None
+        raise PlanError(f"{what} {field!r} is not a number", where=where,
+                        hint="every field of a row is a number, e.g. 16, -35.3632621 or NaN (an unset param)") from None
     return d
 
 
@@ -114,13 +120,14 @@ def read_wpl(text: str | bytes, name: str = "<waypoints>", *,
     """(mission items, home) from WPL 110 text; PlanError with NAME:LINE otherwise."""
     if isinstance(text, bytes):
         if len(text) > MAX_WPL_BYTES:
-            raise PlanError(f"the file is larger than {MAX_WPL_BYTES // 2**20} MB", where=name)
+            raise PlanError(f"the file is larger than {MAX_WPL_BYTES // 2**20} MB", where=name, hint=SIZE_HINT)
         try:
             text = text.decode("utf-8-sig")
         except UnicodeDecodeError as err:
-            raise PlanError(f"not UTF-8 text (byte {err.start})", where=name) from None
+            raise PlanError(f"not UTF-8 text (byte {err.start})", where=name,
+                            hint="save the file as UTF-8 (a comment in another encoding?) or export it again") from None
     if len(text) > MAX_WPL_BYTES:
-        raise PlanError(f"the file is larger than {MAX_WPL_BYTES // 2**20} MB", where=name)
+        raise PlanError(f"the file is larger than {MAX_WPL_BYTES // 2**20} MB", where=name, hint=SIZE_HINT)
     lines = text.splitlines()
     if not lines or lines[0].strip() != HEADER:
         first = lines[0].strip()[:40] if lines else ""
@@ -141,7 +148,8 @@ def read_wpl(text: str | bytes, name: str = "<waypoints>", *,
                             (11, "autocontinue", 1)):
             d = _decimal(fields[k], where, what)
             if not d.is_finite() or d != d.to_integral_value() or not 0 <= d <= hi:
-                raise PlanError(f"{what} {fields[k]!r} is not a whole number in 0..{hi}", where=where)
+                raise PlanError(f"{what} {fields[k]!r} is not a whole number in 0..{hi}", where=where,
+                                hint="write it without decimals, e.g. 16; current and autocontinue are 0 or 1")
             ints.append(int(d))
         index, current, frame, command, auto = ints
         if index != len(rows):
@@ -150,7 +158,8 @@ def read_wpl(text: str | bytes, name: str = "<waypoints>", *,
         params = [float(_decimal(fields[k], where, f"param{k - 3}")) for k in range(4, 8)]
         z = float(_decimal(fields[10], where, "altitude/z"))
         if any(abs(v) > FLOAT32_MAX for v in (*params, z) if not math.isnan(v)):
-            raise PlanError("a value is beyond the float32 range MISSION_ITEM_INT carries", where=where)
+            raise PlanError("a value is beyond the float32 range MISSION_ITEM_INT carries", where=where,
+                            hint="params 1-4 and altitude travel as float32 (at most ±3.4e38); NaN means unset")
         xy = []
         for k, what in ((8, "latitude/x"), (9, "longitude/y")):
             d = _decimal(fields[k], where, what)
@@ -159,14 +168,16 @@ def read_wpl(text: str | bytes, name: str = "<waypoints>", *,
                 continue
             v = int((d * _scale(frame)).to_integral_value(rounding=ROUND_HALF_UP))
             if not -2**31 <= v < 2**31:
-                raise PlanError(f"{what} {fields[k]} does not fit MISSION_ITEM_INT for frame {frame}", where=where)
+                raise PlanError(f"{what} {fields[k]} does not fit MISSION_ITEM_INT for frame {frame}", where=where,
+                                hint=xy_hint(frame))
             xy.append(v)
         rows.append((lineno, MissionItem(command=command, frame=frame, param1=params[0], param2=params[1],
                                          param3=params[2], param4=params[3], x=xy[0], y=xy[1], z=z,
                                          autocontinue=auto, current=current, mission_type=MISSION_TYPE_MISSION),
                      index))
         if len(rows) > MAX_ITEMS:
-            raise PlanError(f"more than {MAX_ITEMS} rows", where=where)
+            raise PlanError(f"more than {MAX_ITEMS} rows", where=where,
+                            hint=f"a MAVLink mission holds at most {MAX_ITEMS} items, home included: split the file")
     if home_row is None:
         home_row = bool(rows) and rows[0][1].command in (CMD_NAV_WAYPOINT, 0) and rows[0][1].frame == FRAME_GLOBAL
     home: Home | None = None
@@ -181,8 +192,8 @@ def load_wpl(path: str | Path, *, home_row: bool | None = None) -> tuple[list[Mi
     p = Path(path)
     try:
         if p.stat().st_size > MAX_WPL_BYTES:
-            raise PlanError(f"the file is larger than {MAX_WPL_BYTES // 2**20} MB", where=str(p))
+            raise PlanError(f"the file is larger than {MAX_WPL_BYTES // 2**20} MB", where=str(p), hint=SIZE_HINT)
         data = p.read_bytes()
     except OSError as err:
-        raise PlanError(f"cannot read the file: {err.strerror}", where=str(p)) from None
+        raise PlanError(f"cannot read the file: {err.strerror}", where=str(p), hint=READ_HINT) from None
     return read_wpl(data, str(p), home_row=home_row)

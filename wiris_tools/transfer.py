@@ -67,6 +67,9 @@ def mission_result_name(result: int) -> str:
     return entry.name if entry is not None else f"MAV_MISSION_RESULT {result}"
 
 
+# What to do when the vehicle refuses a download with an answer _NACK_HINTS has no word for.
+_DOWNLOAD_NACK_HINT = "retry the download; close other ground stations that may be talking to the vehicle"
+
 _NACK_HINTS = {
     mavlink2.MAV_MISSION_NO_SPACE: "the vehicle holds fewer items (PX4: 500 by default, ArduPilot: about 700 on "
                                    "common boards); split the plan or use fewer items",
@@ -233,7 +236,8 @@ class MissionClient:
             raise LinkError("nothing to upload: the list is empty", where=where,
                             hint="an empty upload would clear the vehicle's list; clear it from the ground station")
         if len(items) > 65535:
-            raise LinkError(f"{len(items)} items do not fit the protocol's 16-bit count", where=where)
+            raise LinkError(f"{len(items)} items do not fit the protocol's 16-bit count", where=where,
+                            hint="at most 65535 items, ArduPilot's home item 0 included: split the mission")
         return _Upload(self, list(items), mission_type, where, progress).run()
 
     # -- download ------------------------------------------------------------------------------
@@ -272,7 +276,7 @@ class MissionClient:
                     break
                 if fatal is not None:
                     raise LinkError(f"the vehicle answered {mission_result_name(fatal)} to the list request",
-                                    where=where, hint=_NACK_HINTS.get(fatal))
+                                    where=where, hint=_NACK_HINTS.get(fatal, _DOWNLOAD_NACK_HINT))
                 resent += 1
                 wait = min(wait * 2, t.ack_s)
             if count_msg is None:
@@ -307,7 +311,8 @@ class MissionClient:
                         break
                     if fatal is not None:
                         raise LinkError(f"the vehicle answered {mission_result_name(fatal)} "
-                                        f"to the request for item {seq}", where=where, hint=_NACK_HINTS.get(fatal))
+                                        f"to the request for item {seq}", where=where,
+                                        hint=_NACK_HINTS.get(fatal, _DOWNLOAD_NACK_HINT))
                     tries += 1
                     resent += 1
                     if tries > t.retries:
@@ -605,7 +610,8 @@ def load_for_upload(path: str, mission_type: int = MISSION_TYPE_MISSION, *, part
         chosen, home = load_wpl(p)
     elif suffix in CAPTURE_SUFFIXES:
         if mission_type != MISSION_TYPE_MISSION:
-            raise PlanError(f"a capture plan compiles to a mission, not a {kind} list", where=str(p))
+            raise PlanError(f"a capture plan compiles to a mission, not a {kind} list", where=str(p),
+                            hint="upload fence and rally from a .plan file")
         try:
             from missions.compile import compile_plan
         except ImportError:
@@ -628,7 +634,9 @@ def load_for_upload(path: str, mission_type: int = MISSION_TYPE_MISSION, *, part
             raise PlanError(f"the mission is split into {len(parts)} parts to fit the vehicle's "
                             f"{compiled.item_limit} items", where=str(p), hint="choose one with --part 1..N")
         if part is not None and not 1 <= part <= len(parts):
-            raise PlanError(f"--part {part}: the mission has {len(parts)} part(s)", where=str(p))
+            raise PlanError(f"--part {part}: the mission has {len(parts)} part(s)", where=str(p),
+                            hint="leave out --part: the mission fits the vehicle in one upload" if len(parts) == 1
+                            else f"give --part 1..{len(parts)}: each part is a complete mission, flown in turn")
         chosen = list(parts[(part or 1) - 1])
         home = compiled.home
     else:
@@ -636,7 +644,8 @@ def load_for_upload(path: str, mission_type: int = MISSION_TYPE_MISSION, *, part
                         hint="upload a .plan, a .waypoints (QGC WPL 110) or a capture plan .yaml")
     chosen = [it.with_(mission_type=mission_type) for it in chosen]
     if not chosen:
-        raise PlanError(f"the file holds no {kind} items", where=str(p))
+        raise PlanError(f"the file holds no {kind} items", where=str(p),
+                        hint="check --type (mission, fence or rally); to clear a list, use the ground station")
     return chosen, home
 
 

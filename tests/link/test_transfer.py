@@ -86,7 +86,7 @@ def test_px4_item_limit_gives_no_space_with_a_hint():
     with VehicleSim(flavour="px4", item_limit=20) as sim, Link(f"udpout:127.0.0.1:{sim.port}") as link:
         with pytest.raises(LinkError) as err:
             MissionClient(link, timeouts=FAST).upload(waypoints(21))
-        assert "MAV_MISSION_NO_SPACE" in str(err.value) and "fewer items" in str(err.value)
+        assert "MAV_MISSION_NO_SPACE" in str(err.value) and "fewer items" in err.value.hint
         assert sim.items() == []
 
 
@@ -104,7 +104,7 @@ def test_verify_names_the_first_differing_item_and_field():
     with TamperingSim(flavour="px4") as sim, Link(f"udpout:127.0.0.1:{sim.port}") as link:
         with pytest.raises(LinkError) as err:
             MissionClient(link).upload_verified(waypoints(8))
-    assert "item 4 differs in z" in str(err.value)
+    assert "item 4 differs in z" in str(err.value) and "upload again" in err.value.hint
 
 
 def test_ardupilot_home_row_is_not_a_difference():
@@ -122,32 +122,40 @@ def test_ardupilot_home_row_is_not_a_difference():
 def test_compare_items_float32_nan_and_length():
     a = MissionItem(command=16, param1=0.1, param4=math.nan, z=10.0)
     compare_items([a], [a.with_(param1=0.100000001)])          # equal as float32
-    with pytest.raises(LinkError, match="item 0 differs in param4"):
+    with pytest.raises(LinkError, match="item 0 differs in param4") as err:
         compare_items([a], [a.with_(param4=0.0)])
-    with pytest.raises(LinkError, match="holds 0 items, 1 were sent"):
+    assert err.value.hint
+    with pytest.raises(LinkError, match="holds 0 items, 1 were sent") as err:
         compare_items([a], [])
+    assert err.value.hint
 
 
 def test_no_vehicle_is_a_clear_error():
     with Link("udpout:127.0.0.1:9", heartbeat_s=0) as link:   # discard port: nobody answers
         with pytest.raises(LinkError) as err:
             MissionClient(link, timeouts=FAST).upload(waypoints(3))
-        assert "no request after MISSION_COUNT" in str(err.value)
-        with pytest.raises(LinkError, match="no MISSION_COUNT"):
+        assert "no request after MISSION_COUNT" in str(err.value) and err.value.hint
+        with pytest.raises(LinkError, match="no MISSION_COUNT") as err:
             MissionClient(link, timeouts=FAST).download()
+        assert err.value.hint
 
 
-def test_empty_upload_is_refused():
+def test_empty_or_oversized_upload_is_refused():
     with Link("udpout:127.0.0.1:9", heartbeat_s=0) as link:
-        with pytest.raises(LinkError, match="empty"):
+        with pytest.raises(LinkError, match="empty") as err:
             MissionClient(link).upload([])
+        assert err.value.hint
+        # a .plan's 65535 items plus ArduPilot's home row: refused before anything is sent
+        with pytest.raises(LinkError, match="65536 items do not fit the protocol's 16-bit count") as err:
+            MissionClient(link).upload(waypoints(1) * 65536)
+        assert err.value.where == "mission on system 1" and "split the mission" in err.value.hint
 
 
-def scripted_vehicle(script):
-    """A raw vehicle on a Link: `script(link, msg)` answers each mission message."""
+def scripted_vehicle(script, types=("MISSION_COUNT", "MISSION_ITEM_INT")):
+    """A raw vehicle on a Link: `script(link, msg)` answers each mission message of `types`."""
     veh = Link("udpin:127.0.0.1:0", system=1, component=1, mav_type=mavlink2.MAV_TYPE_QUADROTOR,
                autopilot=mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA, heartbeat_s=0.2)
-    veh.subscribe(lambda m: script(veh, m), ["MISSION_COUNT", "MISSION_ITEM_INT"], to_me=True)
+    veh.subscribe(lambda m: script(veh, m), list(types), to_me=True)
     return veh
 
 
@@ -192,7 +200,32 @@ def test_fatal_nack_without_further_requests_names_the_item():
             with pytest.raises(LinkError) as err:
                 MissionClient(link, timeouts=FAST).upload(waypoints(3))
         text = str(err.value)
-        assert "MAV_MISSION_UNSUPPORTED to item 1 (MAV_CMD_NAV_WAYPOINT)" in text and "firmware" in text
+        assert "MAV_MISSION_UNSUPPORTED to item 1 (MAV_CMD_NAV_WAYPOINT)" in text and "firmware" in err.value.hint
+    finally:
+        veh.close()
+
+
+@pytest.mark.parametrize("refused,answer,text", [
+    ("MISSION_REQUEST_LIST", mavlink2.MAV_MISSION_INVALID, "MAV_MISSION_INVALID to the list request"),
+    ("MISSION_REQUEST_INT", mavlink2.MAV_MISSION_OPERATION_CANCELLED,
+     "MAV_MISSION_OPERATION_CANCELLED to the request for item 0"),
+])
+def test_download_refused_by_the_vehicle_says_what_to_do(refused, answer, text):
+    # answers that _NACK_HINTS has no word for still come with a hint
+    def script(veh, m):
+        src = (m.get_srcSystem(), m.get_srcComponent())
+        if m.get_type() == refused:
+            veh.send(veh.mav.mission_ack_encode(*src, answer, 0))
+        elif m.get_type() == "MISSION_REQUEST_LIST":
+            veh.send(veh.mav.mission_count_encode(*src, 2, 0))
+
+    veh = scripted_vehicle(script, ("MISSION_REQUEST_LIST", "MISSION_REQUEST_INT"))
+    try:
+        with Link(f"udpout:127.0.0.1:{veh.local_port}") as link:
+            with pytest.raises(LinkError) as err:
+                MissionClient(link, timeouts=FAST).download()
+        assert text in str(err.value) and err.value.where == "mission on system 1"
+        assert "retry the download" in err.value.hint
     finally:
         veh.close()
 

@@ -116,6 +116,7 @@ def test_capture_plan_with_errors_is_refused(tmp_path):
         # the plan changes a camera setting in flight, which PX4 cannot do: a located PlanError
         r = run("mission", "upload", str(plan), "--firmware", "px4", "--connect", f"udpout:127.0.0.1:{sim.port}")
         assert r.exit_code == 1 and "waypoint-inspection.yaml:" in r.output and "Traceback" not in r.output
+        assert "hint:" in r.output
         assert sim.stats["uploads"] == 0
 
 
@@ -124,16 +125,16 @@ def test_broken_plan_is_refused_before_connecting():
         r = run("mission", "upload", str(CORPUS / "qgroundcontrol_sample_wrong_mission_version.plan"),
                 "--connect", f"udpout:127.0.0.1:{sim.port}")
         assert r.exit_code == 1
-        assert "mission.version" in r.output and "Traceback" not in r.output
+        assert "mission.version" in r.output and "Traceback" not in r.output and "hint:" in r.output
         assert sim.stats["uploads"] == 0
 
 
 def test_no_vehicle_is_exit_1_and_download_writes_nothing(tmp_path, plan_file):
     r = run("mission", "upload", str(plan_file), "--connect", "udpout:127.0.0.1:9", "--timeout", "0.3")
-    assert r.exit_code == 1 and "no autopilot HEARTBEAT" in r.output
+    assert r.exit_code == 1 and "no autopilot HEARTBEAT" in r.output and "hint:" in r.output
     out = tmp_path / "nothing.plan"
     r = run("mission", "download", "--connect", "udpout:127.0.0.1:9", "--timeout", "0.3", "-o", str(out))
-    assert r.exit_code == 1 and not out.exists()
+    assert r.exit_code == 1 and not out.exists() and "hint:" in r.output
 
 
 @pytest.mark.parametrize("out,text", [("m" * 250 + ".plan", "cannot write the file"),
@@ -188,15 +189,24 @@ def test_download_of_an_infinite_value_names_the_item_and_writes_nothing(tmp_pat
     (["mission", "download", "--connect", "udpout:127.0.0.1:9", "-o", "x.kml"], 2, ".plan or .waypoints"),
     (["mission", "upload", "m.waypoints", "--type", "fence", "--connect", "udpout:127.0.0.1:9"], 1, "not a fence"),
     (["mission", "upload", "m.plan", "--connect", "nonsense:1"], 1, "connection string"),
+    (["mission", "upload", "m.yaml", "--type", "rally", "--connect", "udpout:127.0.0.1:9"], 1,
+     "m.yaml: a capture plan compiles to a mission, not a rally list\n  hint: upload fence and rally from a .plan"),
+    (["mission", "upload", "m.plan", "--type", "fence", "--connect", "udpout:127.0.0.1:9"], 1,
+     "m.plan: the file holds no fence items\n  hint: check --type"),
+    (["mission", "upload", str(ROOT / "examples" / "waypoint-inspection.yaml"), "--part", "2", "--connect",
+      "udpout:127.0.0.1:9"], 1, "--part 2: the mission has 1 part(s)\n  hint: leave out --part"),
 ])
 def test_usage_and_input_errors(tmp_path, monkeypatch, args, code, text):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "m.kml").write_text("<kml/>")
+    (tmp_path / "m.yaml").write_text("name: m\n")
     (tmp_path / "m.waypoints").write_text(write_wpl(ITEMS, HOME))
     (tmp_path / "m.plan").write_text(write_plan(ITEMS, HOME, firmware="px4", vehicle="copter"))
     r = run(*args)
     assert r.exit_code == code, r.output
     assert text in r.output
+    if code == 1:   # an input error (not a usage error) says what to do
+        assert "\n  hint: " in r.output, r.output
 
 
 def test_signed_vehicle_needs_the_key(tmp_path, plan_file):

@@ -118,7 +118,7 @@ def test_a_failure_while_moving_rolls_back(small, tmp_path, monkeypatch):
     monkeypatch.setattr(outputs.os, "replace", flaky)
     with pytest.raises(PlanError) as e:
         write_outputs(small, out)
-    assert "No space left" in str(e.value)
+    assert "No space left" in str(e.value) and e.value.hint
     monkeypatch.setattr(outputs.os, "replace", real)
     assert _snapshot(out) == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
@@ -135,6 +135,20 @@ def test_new_directory_is_not_left_behind_on_failure(small, tmp_path, monkeypatc
 def test_output_path_that_is_a_file_is_refused(small, tmp_path):
     f = tmp_path / "file"
     f.write_text("x")
-    with pytest.raises(PlanError):
+    with pytest.raises(PlanError) as e:
         write_outputs(small, f)
     assert f.read_text() == "x"
+    assert e.value.where == str(f) and "-o" in e.value.hint
+
+
+def test_unusable_output_paths_say_what_to_do(small, tmp_path):
+    too_long = tmp_path / ("m" * 300)                      # exists() itself fails: the name is too long
+    with pytest.raises(PlanError, match="cannot use the output directory") as e:
+        write_outputs(small, too_long)
+    assert e.value.where == str(too_long) and "at most 255 bytes" in e.value.hint
+    (tmp_path / "file").write_text("x")
+    under_a_file = tmp_path / "file" / "out"               # its parent is a file: nothing can be made beside it
+    with pytest.raises(PlanError, match="cannot write next to the output directory") as e:
+        write_outputs(small, under_a_file)
+    assert e.value.where == str(under_a_file) and "parent must be a writable directory" in e.value.hint
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]

@@ -15,6 +15,7 @@ from hypothesis import strategies as st
 from missions.errors import PlanError
 from missions.items import MISSION_TYPE_FENCE, MISSION_TYPE_RALLY, MissionItem
 from missions.planfile import load_plan, read_plan, write_plan
+from missions.wpl import load_wpl, read_wpl, write_wpl
 
 CORPUS = Path(__file__).resolve().parents[3] / "shared" / "corpus" / "plans"
 if not CORPUS.is_dir():
@@ -166,6 +167,7 @@ def test_content_errors_name_their_location(mutate, where):
     with pytest.raises(PlanError) as err:
         read_plan(json.dumps(doc), "x.plan")
     assert err.value.where.endswith(where), str(err.value)
+    assert err.value.hint, str(err.value)
 
 
 @pytest.mark.parametrize("text,where", [
@@ -178,19 +180,113 @@ def test_syntax_and_hostile_input(text, where):
     with pytest.raises(PlanError) as err:
         read_plan(text, "x.plan")
     assert err.value.where == where
+    assert err.value.hint, str(err.value)
 
 
 def test_size_and_encoding_limits(tmp_path):
-    with pytest.raises(PlanError, match="UTF-8"):
+    with pytest.raises(PlanError, match="UTF-8") as err:
         read_plan(b'{"fileType": "Plan\xff"}', "x.plan")
-    big = tmp_path / "big.plan"
-    with big.open("wb") as fh:
-        fh.seek(21 * 1024 * 1024)
-        fh.write(b"\0")
-    with pytest.raises(PlanError, match="larger than"):
-        load_plan(big)
-    with pytest.raises(PlanError, match="cannot read"):
-        load_plan(tmp_path / "missing.plan")
+    assert err.value.hint
+    for name, load, size, hint in (("big.plan", load_plan, 21, "2000-item .plan is about 1 MB"),
+                                   ("big.waypoints", load_wpl, 11, "65535 items is about 6 MB")):
+        big = tmp_path / name
+        with big.open("wb") as fh:
+            fh.seek(size * 1024 * 1024)
+            fh.write(b"\0")
+        with pytest.raises(PlanError, match="larger than") as err:
+            load(big)
+        assert err.value.where == str(big) and hint in err.value.hint
+    for missing, load in ((tmp_path / "missing.plan", load_plan), (tmp_path / "missing.waypoints", load_wpl)):
+        with pytest.raises(PlanError, match="cannot read") as err:
+            load(missing)
+        assert err.value.where == str(missing) and "check the path" in err.value.hint
+
+
+def _wpl(*rows: str) -> str:
+    return "\n".join(["QGC WPL 110", "0\t1\t0\t16\t0\t0\t0\t0\t47.1\t8.2\t488.5\t1", *rows]) + "\n"
+
+
+def _row(**fields) -> str:
+    """Row 1 of a WPL 110 file, with some of its 12 fields replaced."""
+    row = dict(index="1", current="0", frame="3", command="16", p1="0", p2="0", p3="0", p4="0", lat="47.3977507",
+               lon="8.5456075", alt="50", auto="1")
+    row.update(fields)
+    return "\t".join(row.values())
+
+
+def _plan(mutate) -> str:
+    doc = json.loads(write_plan(sample_items(), (1, 2, 3), firmware="px4", vehicle="copter",
+                                fence=fence_items(), rally=rally_items()))
+    mutate(doc)
+    return json.dumps(doc)
+
+
+def _item(d, key, value):
+    d["mission"]["items"][0][key] = value
+
+
+def _param(d, k, value):
+    d["mission"]["items"][0]["params"][k] = value
+
+
+@pytest.mark.parametrize("read,make,where,hint", [
+    # .waypoints (QGC WPL 110)
+    (read_wpl, lambda: _wpl(_row(p1="abc")), "x.waypoints:3", "every field of a row is a number"),
+    (read_wpl, lambda: _wpl(_row(lat="")), "x.waypoints:3", "INDEX CURRENT FRAME COMMAND"),
+    (read_wpl, lambda: _wpl(_row(frame="3.5")), "x.waypoints:3", "without decimals"),
+    (read_wpl, lambda: _wpl(_row(current="2")), "x.waypoints:3", "current and autocontinue are 0 or 1"),
+    (read_wpl, lambda: _wpl(_row(index="5")), "x.waypoints:3", "without gaps"),
+    (read_wpl, lambda: _wpl(_row(p2="1e39")), "x.waypoints:3", "float32"),
+    (read_wpl, lambda: _wpl(_row(lat="300")), "x.waypoints:3", "latitude -90..90"),
+    (read_wpl, lambda: _wpl(_row(frame="1", lat="300000")), "x.waypoints:3", "at most ±214748 m"),
+    (read_wpl, lambda: _wpl(_row(frame="2", lat="3000000000")), "x.waypoints:3", "32-bit whole numbers"),
+    (read_wpl, lambda: _wpl(*(_row(index=str(i)) for i in range(1, 65536))), "x.waypoints:65537",
+     "split the file"),
+    (read_wpl, lambda: _wpl("# caf\xe9").encode("latin-1"), "x.waypoints", "save the file as UTF-8"),
+    (read_wpl, lambda: "QGC WPL 110\n" + "#" * (10 * 2**20), "x.waypoints", "about 6 MB"),
+    (read_wpl, lambda: (_wpl() + "#" * (10 * 2**20)).encode(), "x.waypoints", "about 6 MB"),
+    (read_wpl, lambda: "QGC WPL 100\n", "x.waypoints:1", "only QGC WPL 110"),
+    # .plan (QGroundControl)
+    (read_plan, lambda: _plan(lambda d: _item(d, "command", "22")), "x.plan: mission.items[0].command",
+     "without quotes"),
+    (read_plan, lambda: _plan(lambda d: _param(d, 4, "47.1")), "x.plan: mission.items[0].params[4]",
+     "without quotes"),
+    (read_plan, lambda: _plan(lambda d: _item(d, "command", 22.5)), "x.plan: mission.items[0].command",
+     "MAV_CMD number"),
+    (read_plan, lambda: _plan(lambda d: _item(d, "frame", 256)), "x.plan: mission.items[0].frame",
+     "MAV_FRAME number"),
+    (read_plan, lambda: _plan(lambda d: _param(d, 0, 1e39)), "x.plan: mission.items[0].params[0]", "float32"),
+    (read_plan, lambda: _plan(lambda d: _param(d, 4, 300)), "x.plan: mission.items[0].params[4]",
+     "latitude -90..90"),
+    (read_plan, lambda: _plan(lambda d: (_item(d, "frame", 1), _param(d, 5, 300000))),
+     "x.plan: mission.items[0].params[5]", "at most ±214748 m"),
+    (read_plan, lambda: _plan(lambda d: d["mission"]["items"].extend(d["mission"]["items"][:1] * 65530)),
+     "x.plan: mission.items[65535]", "split the plan"),
+    (read_plan, lambda: _plan(lambda d: d["rallyPoints"]["points"][0].__setitem__(2, math.inf)),
+     "x.plan: rallyPoints.points[0][2]", "finite number"),
+    (read_plan, lambda: _plan(lambda d: d["mission"].__setitem__("plannedHomePosition", [1, 2])),
+     "x.plan: mission.plannedHomePosition", "[latitude, longitude, altitude AMSL]"),
+    (read_plan, lambda: _plan(lambda d: d["mission"]["items"][0].pop("frame")), "x.plan: mission.items[0]",
+     "add 'frame'"),
+    (read_plan, lambda: b'{"fileType": "Plan", "x": "caf\xe9"}', "x.plan", "UTF-8"),
+    (read_plan, lambda: " " * (20 * 2**20 + 1), "x.plan", "about 1 MB"),
+    (read_plan, lambda: b" " * (20 * 2**20 + 1), "x.plan", "about 1 MB"),
+    (read_plan, lambda: "[" * 100000 + "]" * 100000, "x.plan", "nests about 8 levels"),
+    (read_plan, lambda: "[1, 2]", "x.plan", "one JSON object"),
+], ids=["wpl-not-a-number", "wpl-11-fields", "wpl-not-whole", "wpl-current-2", "wpl-index-gap", "wpl-float32",
+        "wpl-lat-global", "wpl-x-local", "wpl-x-mission", "wpl-too-many-rows", "wpl-not-utf8", "wpl-too-large",
+        "wpl-too-large-bytes", "wpl-header", "plan-command-string", "plan-lat-string", "plan-command-fraction",
+        "plan-frame-256", "plan-float32", "plan-lat-global", "plan-y-local", "plan-too-many-items",
+        "plan-infinity", "plan-home-short", "plan-missing-key", "plan-not-utf8", "plan-too-large",
+        "plan-too-large-bytes", "plan-nested", "plan-not-an-object"])
+def test_bad_files_are_refused_with_a_hint(read, make, where, hint):
+    """Every way a .waypoints or .plan file can be wrong names the place and says what to do."""
+    name = "x.waypoints" if read is read_wpl else "x.plan"
+    with pytest.raises(PlanError) as err:
+        read(make(), name)
+    assert err.value.where == where, str(err.value)
+    assert err.value.hint and hint in err.value.hint, str(err.value)
+    assert str(err.value).endswith(f"\n  hint: {err.value.hint}")
 
 
 def test_bad_writer_input():
@@ -207,6 +303,24 @@ def test_bad_writer_input():
         write_plan([], None, firmware="px4", vehicle="copter", fence=[MissionItem(command=5004, param1=math.inf)])
     with pytest.raises(PlanError, match=r"home position \(47.0, 8.0, inf\) holds an infinite value"):
         write_plan([], (47.0, 8.0, math.inf), firmware="px4", vehicle="copter")
+
+
+def test_writer_limits_have_a_hint():
+    one = MissionItem(command=16)
+    cases = [
+        (lambda: write_plan([one] * 65536, None, firmware="px4", vehicle="copter"), "65536 mission items", "split"),
+        (lambda: write_wpl([one] * 65535), "65535 items do not fit", "save a .plan instead"),
+        (lambda: write_plan([one], None, firmware="px4", vehicle="copter", cruise_speed=math.inf),
+         "an infinite value", "finite cruise_speed"),
+        (lambda: write_plan([one], None, firmware="betaflight", vehicle="copter"), "unknown firmware", "ardupilot"),
+        (lambda: write_plan([], None, firmware="px4", vehicle="copter", fence=fence_items()[:2]), "fence polygon",
+         "param1 = N"),
+        (lambda: write_wpl([one.with_(z=math.inf)]), "has z = inf", "finite value"),
+    ]
+    for write, message, hint in cases:
+        with pytest.raises(PlanError, match=message) as err:
+            write()
+        assert hint in (err.value.hint or ""), str(err.value)
 
 
 finite = st.floats(allow_nan=True, allow_infinity=False, width=32)

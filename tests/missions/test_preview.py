@@ -107,5 +107,14 @@ def test_html_is_self_contained(mission, tmp_path):
 def test_unknown_suffix_is_a_plan_error_and_writes_nothing(mission, tmp_path):
     with pytest.raises(PlanError) as e:
         write_preview(mission, tmp_path / "p.jpg")
-    assert ".svg, .png or .html" in str(e.value)
+    assert ".svg, .png or .html" in str(e.value) and e.value.hint
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("out,text,hint", [("missing/p.svg", "output directory does not exist", "create it"),
+                                           ("m" * 300 + "/p.svg", "cannot write the preview", "240 bytes")])
+def test_unusable_output_path_says_what_to_do(mission, tmp_path, out, text, hint):
+    with pytest.raises(PlanError, match=text) as e:
+        write_preview(mission, tmp_path / out)
+    assert e.value.where == str(tmp_path / out) and hint in e.value.hint
     assert list(tmp_path.iterdir()) == []
