@@ -46,7 +46,10 @@ from missions.items import (FRAME_GLOBAL, FRAME_GLOBAL_RELATIVE_ALT, FRAME_GLOBA
 
 Home = tuple[float, float, float]
 
-MAX_PLAN_BYTES = 20 * 1024 * 1024     # a 2000-item survey plan is well under 2 MB
+# A 2000-item survey plan is about 1 MB; a vehicle can hold 65535 mission items (ArduPilot with its mission on
+# the SD card), and their .plan as write_plan writes it is up to about 45 MB with every float at its longest.
+# write_plan refuses anything larger, so every file this tool writes it can read again (a download too).
+MAX_PLAN_BYTES = 64 * 1024 * 1024
 MAX_ITEMS = 65535                     # MISSION_COUNT is 16 bits
 FLOAT32_MAX = 3.4028234663852886e38   # params 1-4 and z travel as float32
 
@@ -98,7 +101,7 @@ def xy_hint(frame: int) -> str:
     return f"frame {frame} carries x/y as 32-bit whole numbers (±2147483647)"
 
 
-SIZE_HINT = "a 2000-item .plan is about 1 MB: is this the right file?"
+SIZE_HINT = "a 2000-item .plan is about 1 MB, a full 65535-item one up to 45 MB: is this the right file?"
 READ_HINT = "check the path and that you may read the file"
 FLOAT32_HINT = "params 1-4 and altitude travel as float32 (at most ±3.4e38); null means unset"
 
@@ -265,7 +268,11 @@ def write_plan(items, home=None, /, *, firmware: str | int | None = None, vehicl
         raise TypeError(f"unexpected arguments {sorted(file_form)}")
     doc = plan_document(items, home, firmware=firmware, vehicle=vehicle, fence=fence, rally=rally,
                         cruise_speed=cruise_speed, hover_speed=hover_speed)
-    return json.dumps(doc, indent=4, sort_keys=True, allow_nan=False) + "\n"
+    text = json.dumps(doc, indent=4, sort_keys=True, allow_nan=False) + "\n"
+    if len(text) > MAX_PLAN_BYTES:  # only a vehicle's hostile fence or rally list gets here
+        raise PlanError(f"the .plan would be {len(text) / 2**20:.0f} MB, more than the {MAX_PLAN_BYTES // 2**20} MB "
+                        "this tool reads back", hint="save the mission alone as .waypoints")
+    return text
 
 
 def _temp_beside(path: Path) -> tuple[int, str]:

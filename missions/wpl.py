@@ -33,8 +33,10 @@ from missions.planfile import FLOAT32_MAX, MAX_ITEMS, _scale, atomic_write, chec
 Home = tuple[float, float, float]
 
 HEADER = "QGC WPL 110"
-MAX_WPL_BYTES = 10 * 1024 * 1024     # a full 65535-item file is about 6 MB
-SIZE_HINT = "a waypoint file of 65535 items is about 6 MB: is this the right file?"
+# A full 65535-item file is about 6 MB, up to 12 MB with every float at its longest: wpl_text writes
+# nothing this tool could not read again.
+MAX_WPL_BYTES = 16 * 1024 * 1024
+SIZE_HINT = "a waypoint file of 65535 items is about 6 MB, at most 12 MB: is this the right file?"
 READ_HINT = "check the path and that you may read the file"
 CMD_NAV_WAYPOINT = 16   # MAV_CMD_NAV_WAYPOINT (common.xml)
 

@@ -12,6 +12,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from missions import planfile, wpl
 from missions.errors import PlanError
 from missions.items import MISSION_TYPE_FENCE, MISSION_TYPE_RALLY, MissionItem
 from missions.planfile import load_plan, read_plan, write_plan
@@ -187,8 +188,8 @@ def test_size_and_encoding_limits(tmp_path):
     with pytest.raises(PlanError, match="UTF-8") as err:
         read_plan(b'{"fileType": "Plan\xff"}', "x.plan")
     assert err.value.hint
-    for name, load, size, hint in (("big.plan", load_plan, 21, "2000-item .plan is about 1 MB"),
-                                   ("big.waypoints", load_wpl, 11, "65535 items is about 6 MB")):
+    for name, load, size, hint in (("big.plan", load_plan, 65, "2000-item .plan is about 1 MB"),
+                                   ("big.waypoints", load_wpl, 17, "65535 items is about 6 MB")):
         big = tmp_path / name
         with big.open("wb") as fh:
             fh.seek(size * 1024 * 1024)
@@ -200,6 +201,32 @@ def test_size_and_encoding_limits(tmp_path):
         with pytest.raises(PlanError, match="cannot read") as err:
             load(missing)
         assert err.value.where == str(missing) and "check the path" in err.value.hint
+
+
+# Every float at its longest repr, every integer at its widest: the largest item either writer makes.
+LONGEST = -1.2345678901234567e-300
+WIDEST_ITEM = MissionItem(command=65535, frame=3, param1=LONGEST, param2=LONGEST, param3=LONGEST, param4=LONGEST,
+                          x=-2**31, y=-2**31, z=LONGEST)
+
+
+def test_a_full_mission_as_either_writer_writes_it_can_be_read_again():
+    # A vehicle may hold 65535 items (the download writes them): the read limits must take that file.
+    home = (LONGEST, LONGEST, LONGEST)
+    one, two = (len(write_plan([WIDEST_ITEM] * n, home, firmware="ardupilot", vehicle="copter")) for n in (1, 2))
+    assert one + (two - one) * (65535 - 1) <= planfile.MAX_PLAN_BYTES
+    one, two = (len(write_wpl([WIDEST_ITEM] * n, home)) for n in (1, 2))
+    assert one + (two - one) * (65534 - 1) <= wpl.MAX_WPL_BYTES
+
+
+def test_a_plan_too_large_to_read_back_is_not_written(monkeypatch):
+    # fence and rally lists (65535 items each) could outgrow the limit: write_plan refuses what it could not read
+    fence = [MissionItem(command=5003, frame=0, param1=50.0, x=471000000, y=81000000,
+                         mission_type=MISSION_TYPE_FENCE)] * 100
+    text = write_plan([WIDEST_ITEM], None, firmware="ardupilot", vehicle="copter", fence=fence)
+    monkeypatch.setattr(planfile, "MAX_PLAN_BYTES", len(text) - 1)
+    with pytest.raises(PlanError, match="more than the 0 MB this tool reads back") as err:
+        write_plan([WIDEST_ITEM], None, firmware="ardupilot", vehicle="copter", fence=fence)
+    assert "save the mission alone as .waypoints" in err.value.hint
 
 
 def _wpl(*rows: str) -> str:
@@ -243,8 +270,8 @@ def _param(d, k, value):
     (read_wpl, lambda: _wpl(*(_row(index=str(i)) for i in range(1, 65536))), "x.waypoints:65537",
      "split the file"),
     (read_wpl, lambda: _wpl("# caf\xe9").encode("latin-1"), "x.waypoints", "save the file as UTF-8"),
-    (read_wpl, lambda: "QGC WPL 110\n" + "#" * (10 * 2**20), "x.waypoints", "about 6 MB"),
-    (read_wpl, lambda: (_wpl() + "#" * (10 * 2**20)).encode(), "x.waypoints", "about 6 MB"),
+    (read_wpl, lambda: "QGC WPL 110\n" + "#" * wpl.MAX_WPL_BYTES, "x.waypoints", "about 6 MB"),
+    (read_wpl, lambda: (_wpl() + "#" * wpl.MAX_WPL_BYTES).encode(), "x.waypoints", "about 6 MB"),
     (read_wpl, lambda: "QGC WPL 100\n", "x.waypoints:1", "only QGC WPL 110"),
     # .plan (QGroundControl)
     (read_plan, lambda: _plan(lambda d: _item(d, "command", "22")), "x.plan: mission.items[0].command",
@@ -269,8 +296,8 @@ def _param(d, k, value):
     (read_plan, lambda: _plan(lambda d: d["mission"]["items"][0].pop("frame")), "x.plan: mission.items[0]",
      "add 'frame'"),
     (read_plan, lambda: b'{"fileType": "Plan", "x": "caf\xe9"}', "x.plan", "UTF-8"),
-    (read_plan, lambda: " " * (20 * 2**20 + 1), "x.plan", "about 1 MB"),
-    (read_plan, lambda: b" " * (20 * 2**20 + 1), "x.plan", "about 1 MB"),
+    (read_plan, lambda: " " * (planfile.MAX_PLAN_BYTES + 1), "x.plan", "about 1 MB"),
+    (read_plan, lambda: b" " * (planfile.MAX_PLAN_BYTES + 1), "x.plan", "about 1 MB"),
     (read_plan, lambda: "[" * 100000 + "]" * 100000, "x.plan", "nests about 8 levels"),
     (read_plan, lambda: "[1, 2]", "x.plan", "one JSON object"),
 ], ids=["wpl-not-a-number", "wpl-11-fields", "wpl-not-whole", "wpl-current-2", "wpl-index-gap", "wpl-float32",
