@@ -295,9 +295,10 @@ class CameraClient:
             cam_definition_uri=uri))
         try:
             parsed = parse_definition(data, uri)
-        except CdfError as err:
-            raise LinkError(f"the camera's definition cannot be read: {err}", where=uri,
-                            hint="see the validation findings (`wiris cdf validate URL`)") from None
+        except CdfError as err:     # its message and place; its hint travels as ours
+            what = f"{err.where}: {err.message}" if err.where else err.message
+            raise LinkError(f"the camera's definition cannot be read: {what}", where=uri,
+                            hint=err.hint or "see the validation findings (`wiris cdf validate URL`)") from None
         return LoadedDefinition(uri, data, parsed, report)
 
     # -- settings over PARAM_EXT ---------------------------------------------------------------
@@ -386,7 +387,9 @@ class CameraClient:
             raw = paramext.encode(value, cdf_type)
             ext = paramext.wire_type(cdf_type).ext_type
         except paramext.WireValueError as err:
-            raise LinkError(f"{name}: {err}", where=where or name) from None
+            raise LinkError(f"{name}: {err}", where=where or name,
+                            hint="the definition gives this setting an unusable type or range: "
+                                 "check it with `wiris cdf validate URL`") from None
         msg = self.link.mav.param_ext_set_encode(self.system, self.component, name.encode(), raw, ext)
 
         def ours(m: Any) -> bool:
@@ -413,7 +416,9 @@ class CameraClient:
                             mavlink2.PARAM_ACK_FAILED: "the camera does not know this parameter or its type"}
                     raise LinkError(f"{name} = {value}: the camera answered {reason}"
                                     + (f" (it keeps {held})" if held is not None else ""),
-                                    where=where or name, hint=hint.get(ack.param_result))
+                                    where=where or name,
+                                    hint=hint.get(ack.param_result, "a result PARAM_ACK does not define: check the "
+                                                                    "camera's firmware"))
         raise LinkError(f"{name}: no PARAM_EXT_ACK after {self.retries + 1} tries ({self.timeout_s:g} s each)",
                         where=where or name, hint="is the camera still connected? does it speak PARAM_EXT?")
 
@@ -519,7 +524,9 @@ class CameraClient:
                                     where=where, hint=getattr(err, "hint", None)) from None
             if got != expect:
                 raise LinkError(f"{where}: {command_name(step.command)} answered {result_name(got)}, expected "
-                                f"{step.expect}", where=where)
+                                f"{step.expect}", where=where,
+                                hint='the camera accepted it; if it should, set the step\'s "expect": '
+                                     '{"result": "MAV_RESULT_ACCEPTED"}')
             return StepResult(step, result_name(got))
         if step.kind == "message":
             return self._send_message(step, target)
@@ -597,7 +604,8 @@ def _parse_message_step(s: dict, loc: str) -> tuple[str, tuple[tuple[str, float 
                         hint=f"messages: {', '.join(MESSAGES)}")
     fields = s.get("fields", {})
     if not isinstance(fields, dict):
-        raise LinkError("fields must be a JSON object of field name -> number", where=loc)
+        raise LinkError("fields must be a JSON object of field name -> number", where=loc,
+                        hint='e.g. "fields": {"mode": 2, "shutter_speed": 2000, "extra_param": 255}')
     types = _message_fields(name)
     out = []
     for key, value in fields.items():
@@ -606,12 +614,15 @@ def _parse_message_step(s: dict, loc: str) -> tuple[str, tuple[tuple[str, float 
             raise LinkError(f"{name} has no field {key!r} a step may set", where=loc,
                             hint=f"fields: {', '.join(types)}")
         if not _is_number(value):
-            raise LinkError(f"{key} = {value!r} is not a finite number", where=loc)
+            raise LinkError(f"{key} = {value!r} is not a finite number", where=loc,
+                            hint=f'write a plain JSON number, e.g. "{key}": 2 (not text, true/false, null or NaN)')
         int_range = INT_RANGES.get(ctype.removesuffix("_t"))    # pymavlink's uint8_t is the CDF's uint8
         if int_range is not None:
             lo, hi = int_range
             if value != int(value) or not lo <= value <= hi:
-                raise LinkError(f"{key} = {value!r} is not an integer {lo}–{hi} ({ctype})", where=loc)
+                raise LinkError(f"{key} = {value!r} is not an integer {lo}–{hi} ({ctype})", where=loc,
+                                hint=f"write a whole number from {lo} to {hi}, or compile the plan again "
+                                     "(`wiris mission compile`)")
             value = int(value)
         out.append((key, value))
     return name, tuple(out)
@@ -626,12 +637,15 @@ def parse_setup(data: Any, where: str = "setup") -> list[Step]:
                         hint="use the NAME.setup.json that `wiris mission compile` writes")
     raw_steps = data["steps"]
     if len(raw_steps) > MAX_STEPS:
-        raise LinkError(f"{len(raw_steps)} steps; at most {MAX_STEPS} are accepted", where=where)
+        raise LinkError(f"{len(raw_steps)} steps; at most {MAX_STEPS} are accepted", where=where,
+                        hint=f"split the steps into files of at most {MAX_STEPS} and apply them one after another")
     steps = []
     for i, s in enumerate(raw_steps, start=1):
         loc = f"{where}: step {i}"
         if not isinstance(s, dict):
-            raise LinkError("a step must be a JSON object", where=loc)
+            raise LinkError("a step must be a JSON object", where=loc,
+                            hint='write each step as an object, e.g. {"kind": "param_set", "param_id": '
+                                 '"autoCapMode", "value": 2}')
         desc = str(s.get("description") or "")[:200]
         if desc:
             loc += f" ({desc})"
@@ -640,7 +654,9 @@ def parse_setup(data: Any, where: str = "setup") -> list[Step]:
             raise LinkError(f"unknown step kind {kind!r}", where=loc, hint=f"kinds: {', '.join(KINDS)}")
         comp = s.get("target_component", 0)
         if isinstance(comp, bool) or not isinstance(comp, int) or not 0 <= comp <= 255:
-            raise LinkError(f"target_component {comp!r} is not a component id (0–255)", where=loc)
+            raise LinkError(f"target_component {comp!r} is not a component id (0–255)", where=loc,
+                            hint='write the camera\'s component id, e.g. "target_component": 100 (0: the camera '
+                                 'connected to)')
         if kind == "command_long":
             cmd = s.get("command")
             if isinstance(cmd, str):
@@ -649,11 +665,13 @@ def parse_setup(data: Any, where: str = "setup") -> list[Step]:
                     raise LinkError(f"unknown command {cmd!r}", where=loc, hint="use a MAV_CMD_* name from common.xml")
                 cmd = number
             if isinstance(cmd, bool) or not isinstance(cmd, int) or not 0 <= cmd <= 65535:
-                raise LinkError(f"command {s.get('command')!r} is not a MAV_CMD name or number", where=loc)
+                raise LinkError(f"command {s.get('command')!r} is not a MAV_CMD name or number", where=loc,
+                                hint='e.g. "command": "MAV_CMD_SET_CAMERA_MODE" or its number 530')
             params = s.get("params", [])
             if not isinstance(params, list) or len(params) > 7 or any(
                     p is not None and (isinstance(p, bool) or not isinstance(p, (int, float))) for p in params):
-                raise LinkError("params must be a list of at most 7 numbers or null (NaN)", where=loc)
+                raise LinkError("params must be a list of at most 7 numbers or null (NaN)", where=loc,
+                                hint='e.g. "params": [0, 1, null, null, null, null, null] (null keeps the value)')
             params = list(params) + [None] * (7 - len(params))
             expect = (s.get("expect") or {}).get("result", "MAV_RESULT_ACCEPTED") \
                 if isinstance(s.get("expect") or {}, dict) else "MAV_RESULT_ACCEPTED"
@@ -667,10 +685,13 @@ def parse_setup(data: Any, where: str = "setup") -> list[Step]:
             continue
         pid = s.get("param_id")
         if not isinstance(pid, str) or not 1 <= len(pid) <= 16 or not pid.isascii():
-            raise LinkError(f"param_id {pid!r} must be 1–16 ASCII characters", where=loc)
+            raise LinkError(f"param_id {pid!r} must be 1–16 ASCII characters", where=loc,
+                            hint='write the name the camera uses, e.g. "param_id": "EMISSIVITY" '
+                                 '(`wiris camera settings` lists them)')
         value = s.get("value")
         if not _is_number(value):
-            raise LinkError(f"value {value!r} is not a finite number", where=loc)
+            raise LinkError(f"value {value!r} is not a finite number", where=loc,
+                            hint='write a plain JSON number, e.g. "value": 0.97 (not text, true/false, null or NaN)')
         ptype = str(s.get("type") or ("float" if kind == "param_set" else ""))
         if kind == "param_ext_set":
             try:
@@ -687,14 +708,19 @@ def load_setup(path: str | Path) -> list[Step]:
         with p.open("rb") as fh:
             raw = fh.read(MAX_SETUP_BYTES + 1)
     except OSError as err:
-        raise LinkError(f"cannot read: {err.strerror or err}", where=str(path)) from None
+        raise LinkError(f"cannot read: {err.strerror or err}", where=str(path),
+                        hint="check the path and its permissions; `wiris mission compile PLAN -o DIR` writes "
+                             "DIR/NAME.setup.json") from None
     if len(raw) > MAX_SETUP_BYTES:
-        raise LinkError(f"file is larger than {MAX_SETUP_BYTES} bytes", where=str(path))
+        raise LinkError(f"file is larger than {MAX_SETUP_BYTES} bytes", where=str(path),
+                        hint="give the NAME.setup.json that `wiris mission compile` wrote, not another file")
     try:
         data = json.loads(raw.decode("utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as err:
         line = getattr(err, "lineno", None)
-        raise LinkError(f"not valid JSON: {err}", where=f"{path}:{line}" if line else str(path)) from None
+        raise LinkError(f"not valid JSON: {err}", where=f"{path}:{line}" if line else str(path),
+                        hint="fix the JSON (UTF-8) at that place, or write the file again with "
+                             "`wiris mission compile`") from None
     return parse_setup(data, str(path))
 
 

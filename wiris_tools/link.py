@@ -88,7 +88,11 @@ _RESULT_HINTS = {
     mavlink2.MAV_RESULT_UNSUPPORTED: "the target does not implement this command",
     mavlink2.MAV_RESULT_FAILED: "the target tried and failed; check its status messages",
     mavlink2.MAV_RESULT_TEMPORARILY_REJECTED: "the target is busy; try again in a moment",
+    mavlink2.MAV_RESULT_COMMAND_LONG_ONLY: "the target takes this command only as COMMAND_LONG (Link.command_long)",
+    mavlink2.MAV_RESULT_COMMAND_INT_ONLY: "the target takes this command only as COMMAND_INT (Link.command_int)",
 }
+# any other result (MAV_RESULT_CANCELLED, a number this dialect does not define)
+_OTHER_RESULT_HINT = "a result this MAVLink dialect does not explain: see the target's documentation or firmware"
 
 
 def command_name(command: int) -> str:
@@ -208,7 +212,8 @@ class Link:
             raise LinkError("MAVLink 1 cannot be signed", where=url,
                             hint="signing needs MAVLink 2; drop --signing-key or the MAVLink 1 option")
         if signing_key is not None and len(signing_key) != 32:
-            raise LinkError("a signing key must be 32 bytes", where=url)
+            raise LinkError("a signing key must be 32 bytes", where=url,
+                            hint="pass the key that wiris_tools.signing.load_signing_key(FILE) returns")
         self.url = url
         self.system = system
         self.component = component
@@ -288,7 +293,8 @@ class Link:
     def send(self, msg: Message) -> None:
         """Send one message (thread-safe). Framing follows the link: MAVLink 2, or 1 if asked."""
         if self._closed.is_set():
-            raise LinkError("the link is closed", where=self.url)
+            raise LinkError("the link is closed", where=self.url,
+                            hint="a bug in wiris-tools or the program using it (send after close): please report it")
         with self._send_lock:
             buf = msg.pack(self.mav, force_mavlink1=self.mavlink1)
             self.mav.seq = (self.mav.seq + 1) % 256
@@ -297,7 +303,9 @@ class Link:
             try:
                 self._conn.write(buf)
             except (OSError, OverflowError) as err:  # OverflowError: sendto() to a port over 65535
-                raise LinkError(f"cannot send {msg.get_type()}: {err}", where=self.url) from None
+                raise LinkError(f"cannot send {msg.get_type()}: {err}", where=self.url,
+                                hint="check --connect (a file path opens as a read-only log) and that a serial "
+                                     "device is still plugged in") from None
             self._stats.counts["sent"] += 1
             self._stats.counts["bytes_sent"] += len(buf)
 
@@ -462,7 +470,8 @@ class Link:
     @staticmethod
     def _params(params: Sequence[float], command: int) -> list[float]:
         if len(params) > 7:
-            raise LinkError(f"{command_name(command)} takes 7 params, got {len(params)}")
+            raise LinkError(f"{command_name(command)} takes 7 params, got {len(params)}",
+                            hint="a bug in wiris-tools or the program using it (at most 7 params): please report it")
         return [float(v) for v in params] + [0.0] * (7 - len(params))
 
     def _run_command(self, encode: Callable[[int], Message], target_system: int, target_component: int,
@@ -501,7 +510,7 @@ class Link:
                             progress(int(getattr(ack, "progress", 255)))
                         deadline = time.monotonic() + timeout
                         continue
-                    hint = _RESULT_HINTS.get(ack.result)
+                    hint = _RESULT_HINTS.get(ack.result, _OTHER_RESULT_HINT)
                     raise LinkError(f"{name} answered {result_name(ack.result)}", where=where, hint=hint)
         raise LinkError(f"no answer to {name} after {tries} tries ({timeout:g} s each)", where=where,
                         hint="check the target's system/component id, the link, and the signing key")

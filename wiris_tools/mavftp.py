@@ -33,6 +33,13 @@ ERR_FILE_NOT_FOUND = 10
 MAX_SESSIONS = 4
 MAX_DOWNLOAD_BYTES = 4 * 1024 * 1024
 
+# What to do when the camera's FTP server refuses to open a file (NAK error code -> hint) or misbehaves.
+_OPEN_HINTS = {
+    ERR_FILE_NOT_FOUND: "file not found: the camera's mftp:// URI names a file it does not serve",
+    ERR_NO_SESSIONS: "all the camera's MAVLink FTP sessions are in use; retry in a moment",
+}
+_BROKEN_SERVER_HINT = "retry; if it happens again, check the camera's firmware (its MAVLink FTP server)"
+
 
 @dataclass(frozen=True)
 class Packet:
@@ -162,29 +169,35 @@ def download(link: Any, system: int, component: int, path: str, *, timeout_s: fl
 
     name = path.encode()
     if len(name) > DATA_MAX:
-        raise LinkError("path too long for MAVLink FTP", where=where)
+        raise LinkError("path too long for MAVLink FTP", where=where,
+                        hint=f"a MAVLink FTP path holds at most {DATA_MAX} bytes: check the camera's mftp:// URI")
     opened = exchange(OP_OPEN_RO, size=len(name), data=name)
     if opened.opcode == OP_NAK:
         code = opened.data[0] if opened.data else 0
         raise LinkError(f"the camera cannot open the file (FTP error {code})", where=where,
-                        hint="file not found" if code == ERR_FILE_NOT_FOUND else None)
+                        hint=_OPEN_HINTS.get(code, "retry; if it persists, use the camera's http:// definition "
+                                                   "if it has one"))
     length = struct.unpack("<I", opened.data[:4].ljust(4, b"\0"))[0]
     if length > max_bytes:
-        raise LinkError(f"file is {length} bytes; the limit is {max_bytes}", where=where)
+        raise LinkError(f"file is {length} bytes; the limit is {max_bytes}", where=where,
+                        hint="check that the mftp:// URI names the camera definition, not another file")
     session = opened.session
     chunks = bytearray()
     deadline = time.monotonic() + max(10.0, length / 1000)
     try:
         while len(chunks) < length:
             if time.monotonic() > deadline:
-                raise LinkError("download took too long", where=where)
+                raise LinkError("download took too long", where=where,
+                                hint="check the radio link (lost packets, a low baud rate) and retry")
             got = exchange(OP_READ, session=session, offset=len(chunks), size=DATA_MAX)
             if got.opcode == OP_NAK:
                 if got.data[:1] == bytes([ERR_EOF]):
                     break
-                raise LinkError(f"read failed (FTP error {got.data[0] if got.data else '?'})", where=where)
+                raise LinkError(f"read failed (FTP error {got.data[0] if got.data else '?'})", where=where,
+                                hint=_BROKEN_SERVER_HINT)
             if got.offset != len(chunks) or not got.data:
-                raise LinkError("the camera answered a read at the wrong offset", where=where)
+                raise LinkError("the camera answered a read at the wrong offset", where=where,
+                                hint=_BROKEN_SERVER_HINT)
             chunks += got.data
             if progress is not None:
                 progress(len(chunks), length)
@@ -196,5 +209,6 @@ def download(link: Any, system: int, component: int, path: str, *, timeout_s: fl
         except LinkError:
             pass
     if len(chunks) != length:
-        raise LinkError(f"got {len(chunks)} of {length} bytes", where=where)
+        raise LinkError(f"got {len(chunks)} of {length} bytes", where=where,
+                        hint="the camera ended the file before its announced size; " + _BROKEN_SERVER_HINT)
     return bytes(chunks)

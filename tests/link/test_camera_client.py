@@ -85,24 +85,58 @@ def test_set_refused_by_the_definition_sends_nothing(client, pro, name, value, m
     d = client.definition(client.information()).definition
     with pro.lock:
         before = dict(pro.state.values)
-    with pytest.raises(LinkError, match=message):
+    with pytest.raises(LinkError, match=message) as err:
         client.set_setting(d, name, value)
+    assert err.value.hint
     with pro.lock:
         assert pro.state.values == before
 
 
 def test_camera_refusal_names_the_result(client):
-    with pytest.raises(LinkError, match="PARAM_ACK_VALUE_UNSUPPORTED"):
+    with pytest.raises(LinkError, match="PARAM_ACK_VALUE_UNSUPPORTED") as unsupported:
         client.set_param_ext("EMISSIVITY", 3.0, "float")
-    with pytest.raises(LinkError, match="PARAM_ACK_FAILED"):
+    with pytest.raises(LinkError, match="PARAM_ACK_FAILED") as failed:
         client.set_param_ext("NOT_A_PARAM", 1, "uint32")
+    assert unsupported.value.hint and failed.value.hint
+
+
+def test_a_definition_type_that_cannot_carry_the_value_says_what_to_check(client, pro):
+    """A camera's definition may declare a type its own range does not fit (a uint8 up to 1000) or one
+    without a PARAM_EXT number encoding: the value is refused before anything is sent."""
+    from wiris_tools.emulate.definition import DefParam, Definition
+
+    d = Definition("V", "M", 1, (DefParam("BIG", "uint8", None, max=1000.0), DefParam("TXT", "custom", None)))
+    for name, value, text in (("BIG", "300", "does not fit uint8"), ("TXT", "1", "no PARAM_EXT number encoding")):
+        with pytest.raises(LinkError, match=text) as err:
+            client.set_setting(d, name, value)
+        assert err.value.where == name and "wiris cdf validate" in err.value.hint
+
+
+def test_a_param_ext_ack_result_mavlink_does_not_define_gets_a_hint():
+    from pymavlink.dialects.v20 import ardupilotmega as m
+
+    cam = Link("udpin:127.0.0.1:0", system=2, component=100, mav_type=m.MAV_TYPE_CAMERA, heartbeat_s=0.2)
+
+    def on_set(msg):
+        cam.send(cam.mav.param_ext_ack_encode(msg.param_id.encode(), msg.param_value.encode(), msg.param_type, 9))
+
+    cam.subscribe(on_set, "PARAM_EXT_SET", to_me=True)
+    try:
+        with Link(f"udpout:127.0.0.1:{cam.local_port}", heartbeat_s=0.2) as link:
+            client = CameraClient(link, timeout_s=0.5, retries=0)
+            with pytest.raises(LinkError, match="the camera answered 9") as err:
+                client.set_param_ext("EMISSIVITY", 0.5, "float")
+    finally:
+        cam.close()
+    assert "firmware" in err.value.hint
 
 
 def test_capture_periodic_then_storage_full(client):
     shots = list(client.capture(interval_s=1, count=2))
     assert [s.index for s in shots] == [0, 1] and all(s.result == 1 for s in shots)
-    with pytest.raises(LinkError, match="failed to capture"):
+    with pytest.raises(LinkError, match="failed to capture") as err:
         list(client.capture(interval_s=1, count=0, duration_s=20))       # 30 MiB, 10 MiB per image
+    assert err.value.hint
     assert client.capture_status()["image_count"] == 3
 
 
@@ -148,6 +182,7 @@ def test_apply_stops_at_the_first_refusal_naming_it(tmp_path, pro):
     assert result.exit_code == 1
     assert "step 4 (impossible range mode)" in result.output and "MAV_RESULT_DENIED" in result.output
     assert "3 of 5 steps done" in result.output
+    assert "  hint: " in result.output
     with pro.lock:
         assert pro.state.value("emissivity") != pytest.approx(0.97)     # step 5 never ran
 
@@ -161,9 +196,10 @@ def test_apply_when_the_camera_disappears(tmp_path):
             done = []
             cam.apply(steps[:1], on_step=done.append)
             emu.close()
-            with pytest.raises(LinkError, match=r"step 2 \(layout blended\).*no answer"):
+            with pytest.raises(LinkError, match=r"step 2 \(layout blended\).*no answer") as err:
                 cam.apply(steps[1:2], on_step=done.append)
             assert len(done) == 1
+            assert err.value.hint                      # the command's hint travels with the step
     finally:
         emu.close()
 
@@ -174,6 +210,7 @@ def test_no_camera_times_out():
         port = s.getsockname()[1]
         result = CliRunner().invoke(cli, ["camera", "info", "--connect", f"udpout:127.0.0.1:{port}", "--wait", "0.5"])
     assert result.exit_code == 1 and "no HEARTBEAT" in result.output and "Traceback" not in result.output
+    assert "  hint: " in result.output
 
 
 @pytest.mark.parametrize("content,message", [
@@ -192,8 +229,101 @@ def test_bad_setup_files_are_refused_before_sending(tmp_path, pro, content, mess
         before = dict(pro.state.values)
     result = CliRunner().invoke(cli, ["camera", "apply", str(path), "--connect", _url(pro)])
     assert result.exit_code == 1 and message in result.output, result.output
+    assert "\n  hint: " in result.output, result.output
     with pro.lock:
         assert pro.state.values == before
+
+
+def _steps(*steps) -> str:
+    return json.dumps({"format": "wiris-setup", "version": 1, "steps": list(steps)})
+
+
+def _param(**kw) -> dict:
+    return {"kind": "param_ext_set", "target_component": 100, "param_id": "EMISSIVITY", "value": 0.97,
+            "type": "float"} | kw
+
+
+def _command(**kw) -> dict:
+    return {"kind": "command_long", "target_component": 100, "command": "MAV_CMD_SET_CAMERA_MODE",
+            "params": [0, 1]} | kw
+
+
+def _message(**kw) -> dict:
+    return {"kind": "message", "target_component": 100, "message": "DIGICAM_CONFIGURE", "fields": {"mode": 2}} | kw
+
+
+# (content, where after the file's path, message, a piece of the hint)
+BAD_SETUP_FILES = {
+    "not-json": ('{"steps": [\n  {not json', ":2", "not valid JSON", "wiris mission compile"),
+    "not-utf8": (b'{"steps": ["\xff"]}', "", "not valid JSON", "UTF-8"),
+    "not-an-object": ("[1, 2]", "", '"steps" list', "NAME.setup.json"),
+    "no-steps-list": ('{"steps": {"kind": "param_set"}}', "", '"steps" list', "wiris mission compile"),
+    "too-many-steps": (_steps(*[_param()] * 1001), "", "1001 steps; at most 1000", "split"),
+    "step-not-an-object": (_steps(_param(), ["param_set"]), ": step 2", "must be a JSON object", '{"kind": '),
+    "unknown-kind": (_steps(_param(kind="reboot")), ": step 1", "unknown step kind 'reboot'", "command_long"),
+    "unknown-command-name": (_steps(_command(command="MAV_CMD_NOPE")), ": step 1", "unknown command", "MAV_CMD_"),
+    "command-not-a-number": (_steps(_command(command=70000)), ": step 1", "not a MAV_CMD name or number",
+                             "MAV_CMD_SET_CAMERA_MODE"),
+    "command-true": (_steps(_command(command=True)), ": step 1", "not a MAV_CMD name or number", "530"),
+    "eight-params": (_steps(_command(params=[0] * 8)), ": step 1", "at most 7 numbers", "null keeps"),
+    "params-not-a-list": (_steps(_command(params="0,1")), ": step 1", "at most 7 numbers", '"params": ['),
+    "param-text": (_steps(_command(params=[0, "1"])), ": step 1", "at most 7 numbers", '"params": ['),
+    "unknown-expected-result": (_steps(_command(expect={"result": "OK"})), ": step 1", "unknown expected result",
+                                "MAV_RESULT_ACCEPTED"),
+    "component-256": (_steps(_param(target_component=256)), ": step 1", "not a component id",
+                      '"target_component": 100'),
+    "component-text": (_steps(_param(target_component="100")), ": step 1", "not a component id", "component id"),
+    "component-described": (_steps(_param(description="emissivity", target_component=-1)), ": step 1 (emissivity)",
+                            "not a component id", "component id"),
+    "param-id-empty": (_steps(_param(param_id="")), ": step 1", "1–16 ASCII", '"param_id": "EMISSIVITY"'),
+    "param-id-long": (_steps(_param(param_id="A" * 17)), ": step 1", "1–16 ASCII", "wiris camera settings"),
+    "param-id-not-ascii": (_steps(_param(kind="param_set", param_id="Emissivität")), ": step 1", "1–16 ASCII",
+                           "EMISSIVITY"),
+    "value-nan": (_steps(_param(), _param()).replace("0.97", "NaN", 1), ": step 1", "not a finite number", '"value": '),
+    "value-infinity": (_steps(_param(kind="param_set", value=1)).replace('"value": 1', '"value": -Infinity'),
+                       ": step 1", "not a finite number", "NaN"),
+    "value-text": (_steps(_param(value="0.97")), ": step 1", "not a finite number", "not text"),
+    "value-does-not-fit": (_steps(_param(value=300, type="uint8")), ": step 1", "does not fit uint8", "uint8"),
+    "fields-not-an-object": (_steps(_message(fields=[["mode", 2]])), ": step 1", "must be a JSON object",
+                             '"fields": {'),
+    "field-not-finite": (_steps(_message(fields={"iso": None})), ": step 1", "not a finite number", '"iso": 2'),
+    "field-out-of-range": (_steps(_message(fields={"iso": 256})), ": step 1", "not an integer 0–255",
+                           "whole number from 0 to 255"),
+    "field-not-whole": (_steps(_message(fields={"shutter_speed": 1.5})), ": step 1", "not an integer 0–65535",
+                        "from 0 to 65535"),
+    "unknown-field": (_steps(_message(fields={"shutter": 60})), ": step 1", "no field 'shutter'", "shutter_speed"),
+    "unknown-message": (_steps(_message(message="DIGICAM_CONTROL")), ": step 1", "cannot send message",
+                        "DIGICAM_CONFIGURE"),
+    "too-large": (b" " * (1024 * 1024) + b"{}", "", "larger than 1048576 bytes", "wiris mission compile"),
+    "missing": (None, "", "cannot read: No such file or directory", "check the path"),
+    "a-directory": ("directory", "", "cannot read", "check the path"),
+}
+
+
+@pytest.mark.parametrize("content,where,message,hint", BAD_SETUP_FILES.values(), ids=BAD_SETUP_FILES)
+def test_a_bad_setup_file_says_where_what_and_what_to_do(tmp_path, content, where, message, hint):
+    """Every refusal of `wiris camera apply FILE`'s loader names the file (and line or step) and carries a
+    hint; nothing reaches a camera before the whole file is read."""
+    path = tmp_path / "flight.setup.json"
+    if content == "directory":
+        path.mkdir()
+    elif content is not None:
+        (path.write_bytes if isinstance(content, bytes) else path.write_text)(content)
+    with pytest.raises(LinkError) as err:
+        load_setup(path)
+    assert message in err.value.message
+    assert err.value.where == f"{path}{where}"
+    assert err.value.hint and hint in err.value.hint, err.value.hint
+    assert "\n" not in err.value.hint and len(err.value.hint) < 120      # one line
+
+
+def test_a_step_the_camera_accepts_against_its_expected_result_says_how_to_fix_it(tmp_path, client):
+    steps = [SetupStep("identify", 100, "command_long", "MAV_CMD_REQUEST_MESSAGE", (259.0, 0, 0, 0, 0, 0, 0),
+                       expect="MAV_RESULT_DENIED")]
+    with pytest.raises(LinkError, match="answered MAV_RESULT_ACCEPTED, expected MAV_RESULT_DENIED") as err:
+        client.apply(load_setup(_setup_file(tmp_path, steps)))
+    assert err.value.where == "step 1 (identify)"
+    assert '"expect": {"result": "MAV_RESULT_ACCEPTED"}' in err.value.hint
 
 
 def test_unknown_fields_are_tolerated(tmp_path, pro):
@@ -245,6 +375,7 @@ def test_rededge_parameters_through_the_client(tmp_path):
         result = CliRunner().invoke(cli, ["camera", "apply", path, "--connect", _url(emu), "--mavlink1"])
         assert result.exit_code == 1, result.output
         assert "step 3 (impossible mode)" in result.output and "kept 2" in result.output
+        assert "  hint: " in result.output
         with emu.lock:
             assert emu.state.values["autoCapMode"] == 2 and emu.state.values["operatingAlt"] == 90
 
@@ -302,6 +433,7 @@ def test_a_bad_message_step_is_refused_before_anything_is_sent(step, message):
     with pytest.raises(LinkError, match=re.escape(message)) as ei:
         parse_setup(doc, "f.setup.json")
     assert ei.value.where.startswith("f.setup.json: step 2")
+    assert ei.value.hint
 
 
 def test_emulate_command_runs_and_stops():
@@ -398,8 +530,9 @@ def test_falls_back_to_request_camera_information_for_an_older_camera():
             info = CameraClient(link, timeout_s=0.5).information()
             assert (info.vendor, info.model, info.system, info.component) == ("Old", "Cam", 2, 101)
             assert seen[:2] == [m.MAV_CMD_REQUEST_MESSAGE, m.MAV_CMD_REQUEST_CAMERA_INFORMATION]
-            with pytest.raises(LinkError, match="names no camera definition"):
+            with pytest.raises(LinkError, match="names no camera definition") as err:
                 CameraClient(link, timeout_s=0.5).definition(info)
+            assert err.value.hint
     finally:
         cam.close()
 
@@ -473,8 +606,9 @@ def test_a_broken_definition_uri_from_the_camera_is_a_link_error(client, uri, te
     import dataclasses
 
     info = dataclasses.replace(client.information(), definition_uri=uri)
-    with pytest.raises(LinkError, match=re.escape(text)):
+    with pytest.raises(LinkError, match=re.escape(text)) as err:
         client.definition(info, timeout_s=1)
+    assert err.value.hint
 
 
 def test_cli_set_json_and_mftp_definition():

@@ -3,9 +3,11 @@ resends, errors; our client's mftp:// download over UDP. (MAVSDK's mftp download
 
 from __future__ import annotations
 
+import dataclasses
 import struct
 
 import pytest
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from cdf.catalogue import catalogue
 from cdf.generate import definition_file_name, definition_xml
@@ -104,5 +106,83 @@ def test_client_downloads_the_mftp_definition():
         assert info.definition_uri == f"mftp://{NAME}"
         loaded = cam.definition(info)
         assert loaded.data == BODY and loaded.report.valid
-        with pytest.raises(LinkError, match="cannot open the file"):
+        with pytest.raises(LinkError, match="cannot open the file") as err:
             mavftp.download(link, 1, 100, "missing.xml", timeout_s=0.3)
+        assert err.value.hint.startswith("file not found")
+
+
+@pytest.mark.parametrize("case", ["path-too-long", "no-sessions", "too-large"])
+def test_download_refusals_say_what_to_do(case):
+    # one emulator each: a new download starts again at seq 1, which the server takes for a resend of the
+    # last download's first request when that one stopped right after it
+    with start_emulator("wiris-pro", "udpin:127.0.0.1:0", definition_scheme="mftp") as emu, \
+            Link(f"udpout:127.0.0.1:{emu.link.local_port}", heartbeat_s=0.2) as link:
+        if case == "path-too-long":
+            with pytest.raises(LinkError, match="path too long") as err:
+                mavftp.download(link, 1, 100, "d/" * 120 + NAME, timeout_s=0.3)
+            assert err.value.where.startswith("mftp d/d/") and "239 bytes" in err.value.hint
+        elif case == "no-sessions":
+            with emu.lock:
+                emu.state.ftp.sessions.update(dict.fromkeys(range(mavftp.MAX_SESSIONS), NAME))
+            with pytest.raises(LinkError, match=f"FTP error {mavftp.ERR_NO_SESSIONS}") as err:
+                mavftp.download(link, 1, 100, NAME, timeout_s=0.3)
+            assert "retry" in err.value.hint
+        else:
+            with pytest.raises(LinkError, match=f"file is {len(BODY)} bytes; the limit is 1000") as err:
+                mavftp.download(link, 1, 100, NAME, timeout_s=0.3, max_bytes=1000)
+            assert "names the camera definition" in err.value.hint
+
+
+class _FaultyServer(mavftp.FtpServer):
+    """A camera's FTP server with one fault: a file shorter than it announces, reads answered at the wrong
+    offset, or reads that fail."""
+
+    def __init__(self, mav, fault):
+        super().__init__({NAME: BODY}, mav)
+        self.fault = fault
+
+    def _answer(self, req):
+        out = super()._answer(req)
+        if req.opcode == mavftp.OP_OPEN_RO and self.fault == "short":
+            return [dataclasses.replace(out[0], data=struct.pack("<I", len(BODY) + 10))]
+        if req.opcode == mavftp.OP_READ and self.fault == "offset":
+            return [dataclasses.replace(out[0], offset=out[0].offset + 1)]
+        if req.opcode == mavftp.OP_READ and self.fault == "fail":
+            return [self._nak(req, mavftp.ERR_FAIL)]
+        return out
+
+
+@pytest.mark.parametrize("fault,message", [
+    ("short", f"got {len(BODY)} of {len(BODY) + 10} bytes"),
+    ("offset", "the camera answered a read at the wrong offset"),
+    ("fail", f"read failed (FTP error {mavftp.ERR_FAIL})"),
+], ids=["short", "offset", "fail"])
+def test_a_camera_whose_ftp_server_misbehaves_gets_a_hint(fault, message):
+    cam = Link("udpin:127.0.0.1:0", system=1, component=100, mav_type=mavlink2.MAV_TYPE_CAMERA, heartbeat_s=0.2)
+    server = _FaultyServer(cam.mav, fault)
+    cam.subscribe(lambda msg: [cam.send(r) for r in server.handle(msg)], "FILE_TRANSFER_PROTOCOL", to_me=True)
+    try:
+        with Link(f"udpout:127.0.0.1:{cam.local_port}", heartbeat_s=0.2) as link:
+            with pytest.raises(LinkError) as err:
+                mavftp.download(link, 1, 100, NAME, timeout_s=0.5)
+    finally:
+        cam.close()
+    assert err.value.message == message and err.value.where == f"mftp {NAME} on component 100"
+    assert "firmware" in err.value.hint
+
+
+@pytest.mark.parametrize("body,message,hint", [
+    (b"<html><body>login</body></html>", "root element is <html>, not <mavlinkcamera>", "not a camera definition"),
+    (b"\xfd7zXZ\x00 not really xz", "broken xz stream", ".xml.xz"),
+    (b"<mavlinkcamera><definition", "", "broken definition"),
+], ids=["html-page", "broken-xz", "unclosed"])
+def test_a_definition_the_camera_serves_that_cannot_be_read_says_what_to_do(body, message, hint):
+    with start_emulator("wiris-pro", "udpin:127.0.0.1:0", definition_scheme="mftp") as emu, \
+            Link(f"udpout:127.0.0.1:{emu.link.local_port}", heartbeat_s=0.2) as link:
+        with emu.lock:
+            emu.state.ftp.files[NAME] = body
+        cam = CameraClient(link, timeout_s=0.5)
+        with pytest.raises(LinkError, match="the camera's definition cannot be read: ") as err:
+            cam.definition(cam.information())
+    assert message in err.value.message and "hint" not in err.value.message   # the hint travels as the hint
+    assert err.value.where == f"mftp://{NAME}" and hint in err.value.hint

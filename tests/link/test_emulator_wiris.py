@@ -363,6 +363,29 @@ def test_wiris_state_refuses_a_rededge():
         WirisState(catalogue().get("rededge-mx"), parse_definition(definition_xml(catalogue().get("wiris-pro"))))
 
 
+@pytest.mark.parametrize("data,where,message,hint", [
+    (b" " * (4 * 1024 * 1024 + 1), "d.xml", "the limit is 4194304", "at most 4 MiB"),
+    (b"\xfd7zXZ\x00" + b"\0" * 20, "d.xml", "broken xz stream", ".xml.xz"),
+    (b"<parameters/>", "d.xml", "root element is <parameters>, not <mavlinkcamera>", "not a camera definition"),
+    (b"<mavlinkcamera>\n<definition>", "d.xml:2", "", "broken definition"),
+], ids=["too-large", "broken-xz", "other-root", "unclosed"])
+def test_a_definition_that_cannot_be_read_says_where_and_what_to_do(data, where, message, hint):
+    from cdf.errors import CdfError
+
+    with pytest.raises(CdfError) as err:
+        parse_definition(data, "d.xml")
+    assert message in err.value.message and err.value.where == where and hint in err.value.hint
+
+
+def test_the_emulator_refuses_a_definition_that_is_not_one_before_it_opens_anything():
+    from cdf.errors import CdfError
+    from wiris_tools.emulate.runner import start_emulator
+
+    with pytest.raises(CdfError, match="root element is <camera>") as err:
+        start_emulator("wiris-pro", "udpin:127.0.0.1:0", definition=b"<camera/>")
+    assert err.value.where == "wiris-pro" and "check which file" in err.value.hint
+
+
 def test_infinite_storage_id_is_denied_not_a_crash(pro, gcs):
     """Found by the fuzzer: REQUEST_MESSAGE(STORAGE_INFORMATION, inf) raised OverflowError."""
     out = pro.handle(gcs.cmd(m.MAV_CMD_REQUEST_MESSAGE, m.MAVLINK_MSG_ID_STORAGE_INFORMATION, math.inf), 0)

@@ -115,10 +115,12 @@ def test_retries_increment_confirmation_then_fail_naming_command(links):
     assert r2.confirmations == [0, 1, 2]
     text = str(err.value)
     assert "MAV_CMD_REQUEST_CAMERA_INFORMATION" in text and "3 tries" in text and "component 100" in text
+    assert err.value.hint
 
 
 @pytest.mark.parametrize("result", [mavlink2.MAV_RESULT_DENIED, mavlink2.MAV_RESULT_UNSUPPORTED,
-                                    mavlink2.MAV_RESULT_FAILED, mavlink2.MAV_RESULT_TEMPORARILY_REJECTED])
+                                    mavlink2.MAV_RESULT_FAILED, mavlink2.MAV_RESULT_TEMPORARILY_REJECTED,
+                                    mavlink2.MAV_RESULT_COMMAND_INT_ONLY])
 def test_error_results_raise_with_their_names(links, result):
     a, b = links
     b.wait_heartbeat(timeout=3, component=100)
@@ -127,6 +129,26 @@ def test_error_results_raise_with_their_names(links, result):
         b.command_long(1, 100, mavlink2.MAV_CMD_SET_CAMERA_MODE, [0, 1], timeout=1, retries=0)
     assert mavlink2.enums["MAV_RESULT"][result].name in str(err.value)
     assert "MAV_CMD_SET_CAMERA_MODE" in str(err.value)
+    assert err.value.hint
+
+
+@pytest.mark.parametrize("result", [6, 200])   # MAV_RESULT_CANCELLED (newer common.xml), a made-up one
+def test_a_result_the_dialect_does_not_define_still_gets_a_hint(links, result):
+    a, b = links
+    b.wait_heartbeat(timeout=3, component=100)
+    Responder(a, [[(result, 0)]])
+    with pytest.raises(LinkError, match=f"answered MAV_RESULT {result}") as err:
+        b.command_long(1, 100, mavlink2.MAV_CMD_SET_CAMERA_MODE, [0, 1], timeout=1, retries=0)
+    assert "firmware" in err.value.hint
+
+
+def test_more_than_seven_params_is_refused_with_a_hint(links):
+    _a, b = links
+    for call in (lambda: b.command_long(1, 100, mavlink2.MAV_CMD_SET_CAMERA_MODE, [0] * 8),
+                 lambda: b.command_int(1, 100, mavlink2.MAV_CMD_SET_CAMERA_MODE, params=[0] * 8)):
+        with pytest.raises(LinkError, match="takes 7 params, got 8") as err:
+            call()
+        assert "please report it" in err.value.hint
 
 
 def test_ack_for_another_command_or_from_another_component_is_ignored(links):
@@ -152,22 +174,36 @@ def test_bad_connection_strings_are_link_errors():
     with pytest.raises(LinkError) as err:
         Link("udpin:nohostport", heartbeat_s=0)
     assert "connection string" in str(err.value)
-    with pytest.raises(LinkError):
+    with pytest.raises(LinkError) as err:
         Link("udpin:127.0.0.1:0", system=0, heartbeat_s=0)
+    assert err.value.hint
 
 
 @pytest.mark.parametrize("url", ["udpin:127.0.0.1:99999", "udpout:127.0.0.1:65536", "tcp:127.0.0.1:70000"])
 def test_a_port_over_65535_is_refused_before_anything_runs(url):
     # pymavlink takes it: udpout then fails in the heartbeat thread at its first send, tcp in a retry loop
-    with pytest.raises(LinkError, match="is not 0-65535"):
+    with pytest.raises(LinkError, match="is not 0-65535") as err:
         Link(url, heartbeat_s=1)
+    assert err.value.hint
 
 
 def test_send_after_close_is_a_link_error():
     a = Link("udpin:127.0.0.1:0", heartbeat_s=0)
     a.close()
-    with pytest.raises(LinkError):
+    with pytest.raises(LinkError) as err:
         a.send(a.mav.heartbeat_encode(6, 8, 0, 0, 4))
+    assert err.value.where == "udpin:127.0.0.1:0" and "please report it" in err.value.hint
+
+
+def test_a_connection_that_cannot_be_written_says_what_to_check(tmp_path):
+    """pymavlink opens a plain file given as the connection string as a telemetry log, for reading only:
+    sending to it fails (as writing to a serial device that was unplugged does)."""
+    log = tmp_path / "flight.tlog"
+    log.write_bytes(b"")
+    with Link(str(log), heartbeat_s=0) as link:
+        with pytest.raises(LinkError, match="cannot send HEARTBEAT") as err:
+            link.send_heartbeat()
+    assert err.value.where == str(log) and "--connect" in err.value.hint
 
 
 # -- signing ---------------------------------------------------------------------------------------
@@ -204,8 +240,16 @@ def test_signed_link_drops_unsigned_and_wrongly_signed(gcs_kwargs):
 
 
 def test_mavlink1_cannot_be_signed():
-    with pytest.raises(LinkError, match="MAVLink 1 cannot be signed"):
+    with pytest.raises(LinkError, match="MAVLink 1 cannot be signed") as err:
         Link("udpin:127.0.0.1:0", mavlink1=True, signing_key=KEY, heartbeat_s=0)
+    assert err.value.hint
+
+
+@pytest.mark.parametrize("key", [b"", KEY[:16], KEY + b"\0"], ids=["empty", "16-bytes", "33-bytes"])
+def test_a_signing_key_of_another_length_is_refused_with_a_hint(key):
+    with pytest.raises(LinkError, match="must be 32 bytes") as err:
+        Link("udpin:127.0.0.1:0", signing_key=key, heartbeat_s=0)
+    assert err.value.where == "udpin:127.0.0.1:0" and "load_signing_key" in err.value.hint
 
 
 def test_key_file_hex_and_passphrase_match_mavproxy(tmp_path):
@@ -226,9 +270,10 @@ def test_bad_key_files_are_link_errors(tmp_path, content):
     f.write_bytes(content)
     with pytest.raises(LinkError) as err:
         load_signing_key(f)
-    assert err.value.where == str(f)
-    with pytest.raises(LinkError):
+    assert err.value.where == str(f) and err.value.hint
+    with pytest.raises(LinkError) as err:
         load_signing_key(tmp_path / "missing")
+    assert err.value.hint
     assert len(key_from_text("a")) == 32
 
 

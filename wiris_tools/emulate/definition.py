@@ -11,7 +11,7 @@ import math
 from dataclasses import dataclass
 
 from cdf.errors import CdfError
-from cdf.xmlsafe import inflate, parse_xml
+from cdf.xmlsafe import MAX_BYTES, inflate, parse_xml
 
 
 @dataclass(frozen=True)
@@ -89,14 +89,17 @@ def parse_definition(data: bytes, name: str = "definition") -> Definition:
     """Read a camera definition (plain or .xml.xz bytes); CdfError when it is not a readable definition."""
     loaded = inflate(data, name)
     if loaded.data is None:
-        raise CdfError(loaded.problems[0].message if loaded.problems else "unreadable", where=name)
+        raise CdfError(loaded.problems[0].message if loaded.problems else "unreadable", where=name,
+                       hint=f"a definition is plain XML or one whole .xml.xz stream of at most "
+                            f"{MAX_BYTES // 2**20} MiB: check it with `wiris cdf validate`")
     root, problems = parse_xml(loaded.data, name)
     if root is None:
         p = problems[0] if problems else None
         raise CdfError(p.message if p else "not XML", where=f"{name}:{p.line}" if p and p.line else name,
                        hint="the camera serves a broken definition; report it to the camera's vendor")
     if root.tag != "mavlinkcamera":
-        raise CdfError(f"root element is <{root.tag}>, not <mavlinkcamera>", where=name)
+        raise CdfError(f"root element is <{root.tag}>, not <mavlinkcamera>", where=name,
+                       hint="this XML is not a camera definition: check which file the URI or path names")
     d = root.find("definition")
     version = None
     if d is not None:
