@@ -12,6 +12,7 @@ Responses carry the request's seq + 1; a request repeating the last seq gets the
 
 from __future__ import annotations
 
+import random
 import struct
 import time
 from dataclasses import dataclass
@@ -147,7 +148,10 @@ def download(link: Any, system: int, component: int, path: str, *, timeout_s: fl
              max_bytes: int = MAX_DOWNLOAD_BYTES, progress: Callable[[int, int], None] | None = None) -> bytes:
     """Read one file with OpenFileRO / ReadFile / TerminateSession; LinkError naming the step on failure."""
     where = f"mftp {path} on component {component}"
-    seq = [0]
+    # A server answers a request that repeats its last seq with its last answer (a lost ACK): a download
+    # starting at a fixed seq would get the previous one's answer when that one ended at the same seq (seq 1
+    # after a refused OpenFileRO). A random start makes that a 1 in 65536 chance.
+    seq = [random.randrange(0x10000)]
 
     def exchange(opcode: int, *, session: int = 0, offset: int = 0, size: int = 0, data: bytes = b"") -> Packet:
         seq[0] = (seq[0] + 1) & 0xFFFF
@@ -178,13 +182,13 @@ def download(link: Any, system: int, component: int, path: str, *, timeout_s: fl
                         hint=_OPEN_HINTS.get(code, "retry; if it persists, use the camera's http:// definition "
                                                    "if it has one"))
     length = struct.unpack("<I", opened.data[:4].ljust(4, b"\0"))[0]
-    if length > max_bytes:
-        raise LinkError(f"file is {length} bytes; the limit is {max_bytes}", where=where,
-                        hint="check that the mftp:// URI names the camera definition, not another file")
     session = opened.session
     chunks = bytearray()
     deadline = time.monotonic() + max(10.0, length / 1000)
-    try:
+    try:  # from here on the session is open: the finally closes it, whatever stops the download
+        if length > max_bytes:
+            raise LinkError(f"file is {length} bytes; the limit is {max_bytes}", where=where,
+                            hint="check that the mftp:// URI names the camera definition, not another file")
         while len(chunks) < length:
             if time.monotonic() > deadline:
                 raise LinkError("download took too long", where=where,

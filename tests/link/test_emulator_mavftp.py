@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import struct
+import time
 
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
@@ -113,8 +114,6 @@ def test_client_downloads_the_mftp_definition():
 
 @pytest.mark.parametrize("case", ["path-too-long", "no-sessions", "too-large"])
 def test_download_refusals_say_what_to_do(case):
-    # one emulator each: a new download starts again at seq 1, which the server takes for a resend of the
-    # last download's first request when that one stopped right after it
     with start_emulator("wiris-pro", "udpin:127.0.0.1:0", definition_scheme="mftp") as emu, \
             Link(f"udpout:127.0.0.1:{emu.link.local_port}", heartbeat_s=0.2) as link:
         if case == "path-too-long":
@@ -131,6 +130,37 @@ def test_download_refusals_say_what_to_do(case):
             with pytest.raises(LinkError, match=f"file is {len(BODY)} bytes; the limit is 1000") as err:
                 mavftp.download(link, 1, 100, NAME, timeout_s=0.3, max_bytes=1000)
             assert "names the camera definition" in err.value.hint
+
+
+def test_downloads_after_a_refused_one_get_their_own_answers():
+    # A server takes a request repeating its last seq for a resend and replays its last answer: downloads
+    # that all started at seq 1 got the "file not found" of a wrong path again for the right one.
+    with start_emulator("wiris-pro", "udpin:127.0.0.1:0", definition_scheme="mftp") as emu, \
+            Link(f"udpout:127.0.0.1:{emu.link.local_port}", heartbeat_s=0.2) as link:
+        for _ in range(3):
+            with pytest.raises(LinkError, match="cannot open the file"):
+                mavftp.download(link, 1, 100, "missing.xml", timeout_s=0.3)
+            assert mavftp.download(link, 1, 100, NAME, timeout_s=0.3) == BODY
+
+
+def test_a_refused_download_closes_its_session():
+    # the size refusal came before the try whose finally sends TerminateSession: each one kept a session
+    # of the camera's four until none was left (hidden while every download began at seq 1: the server
+    # replayed the first OpenFileRO's answer instead of opening another)
+    with start_emulator("wiris-pro", "udpin:127.0.0.1:0", definition_scheme="mftp") as emu, \
+            Link(f"udpout:127.0.0.1:{emu.link.local_port}", heartbeat_s=0.2) as link:
+        for _ in range(mavftp.MAX_SESSIONS + 1):
+            with pytest.raises(LinkError, match="the limit is 1000"):
+                mavftp.download(link, 1, 100, NAME, timeout_s=0.3, max_bytes=1000)
+        assert mavftp.download(link, 1, 100, NAME, timeout_s=0.3) == BODY
+        deadline = time.monotonic() + 2
+        while time.monotonic() < deadline:
+            with emu.lock:
+                if not emu.state.ftp.sessions:
+                    break
+            time.sleep(0.02)
+        with emu.lock:
+            assert emu.state.ftp.sessions == {}
 
 
 class _FaultyServer(mavftp.FtpServer):
