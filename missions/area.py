@@ -108,7 +108,8 @@ def read_area_source(source: Any, base_dir: str | Path | None = None, where: str
     if isinstance(source, (list, tuple)):
         return [_inline_polygon(source, where)]
     raise PlanError(f"an area must be a file path or a list of [lat, lon] points, got {type(source).__name__}",
-                    where=where)
+                    where=where, hint="e.g. area: areas/field.kml, or [[50.110, 14.500], [50.110, 14.503], "
+                                      "[50.112, 14.503]]")
 
 
 def _inline_polygon(points: Sequence[Any], where: str) -> LatLonPolygon:
@@ -117,10 +118,13 @@ def _inline_polygon(points: Sequence[Any], where: str) -> LatLonPolygon:
         here = f"{where}[{i}]"
         if not (isinstance(p, (list, tuple)) and len(p) in (2, 3)
                 and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in p)):
-            raise PlanError(f"point must be [lat, lon], got {p!r}", where=here)
+            raise PlanError(f"point must be [lat, lon], got {p!r}", where=here,
+                            hint="each point is two numbers, latitude then longitude in degrees, "
+                                 "e.g. [50.0696, 14.7263]")
         lat, lon = float(p[0]), float(p[1])
         if not (math.isfinite(lat) and math.isfinite(lon)):
-            raise PlanError("point is not finite", where=here)
+            raise PlanError("point is not finite", where=here,
+                            hint="replace the NaN/infinite value by a latitude and longitude in degrees")
         if abs(lat) > 90 or abs(lon) > 180:
             hint = ("inline points are [lat, lon]; this looks like [lon, lat]"
                     if abs(lat) <= 180 and abs(lon) <= 90 else "coordinates must be WGS84 degrees")
@@ -136,13 +140,21 @@ def read_geojson(path: Path) -> list[LatLonPolygon]:
     try:
         doc = json.loads(data.decode("utf-8-sig"))
     except UnicodeDecodeError as e:
-        raise PlanError(f"GeoJSON is not UTF-8 ({e.reason})", where=str(path)) from None
+        raise PlanError(f"GeoJSON is not UTF-8 ({e.reason})", where=str(path),
+                        hint="save it as UTF-8 (not UTF-16 or a legacy code page): RFC 7946 GeoJSON is "
+                             "UTF-8") from None
     except json.JSONDecodeError as e:
-        raise PlanError(f"invalid JSON: {e.msg}", where=f"{path}:{e.lineno}:{e.colno}") from None
+        raise PlanError(f"invalid JSON: {e.msg}", where=f"{path}:{e.lineno}:{e.colno}",
+                        hint="fix the JSON there (a missing comma, bracket or quote?) or export the area "
+                             "again") from None
     except RecursionError:
-        raise PlanError("JSON nested too deeply", where=str(path)) from None
+        raise PlanError("JSON nested too deeply", where=str(path),
+                        hint="a GeoJSON area nests arrays at most 4 deep (MultiPolygon); export it again "
+                             "from your GIS") from None
     if not isinstance(doc, dict):
-        raise PlanError("GeoJSON must be an object", where=str(path))
+        raise PlanError("GeoJSON must be an object", where=str(path),
+                        hint='the file must hold one object, e.g. {"type": "Polygon", "coordinates": '
+                             '[[[lon, lat], ...]]}')
     _check_geojson_crs(doc, str(path))
     polys: list[LatLonPolygon] = []
     _collect_geojson(doc, str(path), "$", polys, depth=0)
@@ -169,14 +181,17 @@ def _check_geojson_crs(doc: dict, where: str) -> None:
 
 def _collect_geojson(obj: Any, file: str, jpath: str, out: list[LatLonPolygon], depth: int) -> None:
     if depth > 32:
-        raise PlanError("GeoJSON nested too deeply", where=f"{file}: {jpath}")
+        raise PlanError("GeoJSON nested too deeply", where=f"{file}: {jpath}",
+                        hint="put the polygons in one FeatureCollection (collections nest at most 32 levels)")
     if not isinstance(obj, dict):
-        raise PlanError("expected a GeoJSON object", where=f"{file}: {jpath}")
+        raise PlanError("expected a GeoJSON object", where=f"{file}: {jpath}",
+                        hint='features and geometries are objects with a "type", e.g. {"type": "Polygon", ...}')
     kind = obj.get("type")
     if kind == "FeatureCollection":
         feats = obj.get("features")
         if not isinstance(feats, list):
-            raise PlanError("FeatureCollection without a 'features' list", where=f"{file}: {jpath}")
+            raise PlanError("FeatureCollection without a 'features' list", where=f"{file}: {jpath}",
+                            hint='give it "features": [...], a list of Feature objects (RFC 7946 §3.3)')
         for i, f in enumerate(feats):
             _collect_geojson(f, file, f"{jpath}.features[{i}]", out, depth + 1)
     elif kind == "Feature":
@@ -191,28 +206,36 @@ def _collect_geojson(obj: Any, file: str, jpath: str, out: list[LatLonPolygon], 
     elif kind == "MultiPolygon":
         coords = obj.get("coordinates")
         if not isinstance(coords, list):
-            raise PlanError("MultiPolygon without coordinates", where=f"{file}: {jpath}")
+            raise PlanError("MultiPolygon without coordinates", where=f"{file}: {jpath}",
+                            hint='give it "coordinates": [[[[lon, lat], ...]]] (polygons > rings > positions)')
         for i, c in enumerate(coords):
             out.append(_geojson_polygon(c, file, f"{jpath}.coordinates[{i}]"))
     elif kind in ("Point", "MultiPoint", "LineString", "MultiLineString"):
         return
     else:
-        raise PlanError(f"unknown GeoJSON type {kind!r}", where=f"{file}: {jpath}")
+        raise PlanError(f"unknown GeoJSON type {kind!r}", where=f"{file}: {jpath}",
+                        hint="supported: Polygon, MultiPolygon, Feature, FeatureCollection, GeometryCollection "
+                             "(case matters)")
 
 
 def _geojson_polygon(coords: Any, file: str, jpath: str) -> LatLonPolygon:
     if not isinstance(coords, list) or not coords:
-        raise PlanError("Polygon without rings", where=f"{file}: {jpath}")
+        raise PlanError("Polygon without rings", where=f"{file}: {jpath}",
+                        hint='"coordinates" is a list of rings, the outer one first: [[[lon, lat], [lon, lat], ...]]')
     rings = []
     for r, ring in enumerate(coords):
         if not isinstance(ring, list):
-            raise PlanError("a ring must be a list of [lon, lat] positions", where=f"{file}: {jpath}[{r}]")
+            raise PlanError("a ring must be a list of [lon, lat] positions", where=f"{file}: {jpath}[{r}]",
+                            hint="a Polygon's coordinates nest three levels: [[[14.7263, 50.0696], "
+                                 "[14.7281, 50.0696], ...]]")
         pts = []
         for i, p in enumerate(ring):
             here = f"{file}: {jpath}[{r}][{i}]"
             if not (isinstance(p, list) and len(p) >= 2
                     and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in p[:2])):
-                raise PlanError(f"position must be [lon, lat], got {p!r}", where=here)
+                raise PlanError(f"position must be [lon, lat], got {p!r}", where=here,
+                                hint="each position is [lon, lat] in degrees (GeoJSON order), "
+                                     "e.g. [14.7263, 50.0696]")
             lon, lat = float(p[0]), float(p[1])
             if not (math.isfinite(lat) and math.isfinite(lon)) or abs(lat) > 90 or abs(lon) > 180:
                 raise PlanError(f"position {p[:2]!r} is not a longitude/latitude in degrees", where=here,
@@ -238,9 +261,12 @@ def read_kml(path: Path) -> list[LatLonPolygon]:
         root = etree.fromstring(data, parser)
     except etree.XMLSyntaxError as e:
         line = e.position[0] if e.position else None
-        raise PlanError(f"KML is not well-formed XML: {e.msg}", where=f"{path}:{line}" if line else str(path)) from None
+        raise PlanError(f"KML is not well-formed XML: {e.msg}", where=f"{path}:{line}" if line else str(path),
+                        hint="fix the XML at that line (an unclosed or misspelt tag?) or export the KML "
+                             "again") from None
     if root is None:
-        raise PlanError("KML is empty", where=str(path))
+        raise PlanError("KML is empty", where=str(path),
+                        hint="export the area again as KML from Google Earth or QGIS")
     doc = root.getroottree().docinfo
     if doc.doctype or doc.internalDTD is not None:
         raise PlanError("KML with a DOCTYPE/DTD is refused", where=str(path),
@@ -278,16 +304,22 @@ def _kml_ring(boundary: Any, path: Path) -> tuple[tuple[float, float], ...]:
             break
     where = f"{path}:{(coords_el if coords_el is not None else boundary).sourceline}"
     if coords_el is None or not (coords_el.text or "").strip():
-        raise PlanError("polygon boundary without <coordinates>", where=where)
+        raise PlanError("polygon boundary without <coordinates>", where=where,
+                        hint="give the ring as <LinearRing><coordinates>lon,lat lon,lat ...</coordinates>"
+                             "</LinearRing>")
     pts = []
     for tok in coords_el.text.split():
         parts = tok.split(",")
         try:
             lon, lat = float(parts[0]), float(parts[1])
         except (ValueError, IndexError):
-            raise PlanError(f"bad KML coordinate {tok!r}; expected lon,lat[,alt]", where=where) from None
+            raise PlanError(f"bad KML coordinate {tok!r}; expected lon,lat[,alt]", where=where,
+                            hint="no spaces inside a tuple, one between tuples: 14.7263,50.0696,0 "
+                                 "14.7281,50.0696,0") from None
         if not (math.isfinite(lat) and math.isfinite(lon)) or abs(lat) > 90 or abs(lon) > 180:
-            raise PlanError(f"KML coordinate {tok!r} is not lon,lat in degrees", where=where)
+            raise PlanError(f"KML coordinate {tok!r} is not lon,lat in degrees", where=where,
+                            hint="longitude first, in WGS84 degrees (14.7263,50.0696); reproject a file in "
+                                 "metres to EPSG:4326")
         pts.append((lat, lon))
     return tuple(pts)
 
@@ -295,7 +327,9 @@ def _kml_ring(boundary: Any, path: Path) -> tuple[tuple[float, float], ...]:
 def _kml_polygon(poly: Any, path: Path) -> LatLonPolygon:
     outer = _kml_children(poly, "outerBoundaryIs")
     if not outer:
-        raise PlanError("Polygon without <outerBoundaryIs>", where=f"{path}:{poly.sourceline}")
+        raise PlanError("Polygon without <outerBoundaryIs>", where=f"{path}:{poly.sourceline}",
+                        hint="the outer ring goes in <outerBoundaryIs><LinearRing><coordinates> inside "
+                             "the <Polygon>")
     inner = _kml_children(poly, "innerBoundaryIs")
     holes = tuple(_kml_ring(b, path) for b in inner)
     wheres = tuple(_kml_ring_where(b, path) for b in [outer[0], *inner])
@@ -402,7 +436,9 @@ def build_area(polygons: Sequence[LatLonPolygon], exclusions: Sequence[LatLonPol
     from shapely.geometry.polygon import orient
 
     if not polygons:
-        raise PlanError("no polygon given for the area", where=source or None)
+        raise PlanError("no polygon given for the area", where=source or None,
+                        hint="give build_area at least one polygon (from a plan: a bug in wiris-tools, "
+                             "please report it)")
     for p in [*polygons, *exclusions]:
         if len(p.outer) < 3:
             raise PlanError(f"polygon has fewer than 3 points ({len(p.outer)})", where=p.where,

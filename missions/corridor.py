@@ -77,9 +77,11 @@ def plan_corridor(line: Sequence[Sequence[float]], width_m: float, footprint: Fo
     poly_in: LatLonPolygon = _inline_polygon(line, where)      # reuses the [lat, lon] checks
     pts = poly_in.outer
     if len(pts) < 2:
-        raise PlanError("a corridor needs at least 2 points", where=where)
+        raise PlanError("a corridor needs at least 2 points", where=where,
+                        hint="give the centre line as [lat, lon] points, e.g. [[50.110, 14.500], [50.113, 14.504]]")
     if not (isinstance(width_m, (int, float)) and math.isfinite(width_m) and width_m > 0):
-        raise PlanError(f"corridor width {width_m!r} m must be positive", where="corridor.width_m")
+        raise PlanError(f"corridor width {width_m!r} m must be positive", where="corridor.width_m",
+                        hint="width_m is the full width in metres, centred on the line, e.g. width_m: 60")
     spacing = transect_spacing_m(footprint, side_pct)
     trig = trigger_distance_m(footprint, front_pct)
     interval = trig / speed_mps
@@ -93,7 +95,8 @@ def plan_corridor(line: Sequence[Sequence[float]], width_m: float, footprint: Fo
     keep = np.concatenate([[True], np.hypot(*np.diff(xy, axis=0).T) > 0.01])
     xy = xy[keep]
     if len(xy) < 2:
-        raise PlanError("the corridor line has no length (all points coincide)", where=where)
+        raise PlanError("the corridor line has no length (all points coincide)", where=where,
+                        hint="give its start and end as different points (points under 1 cm apart count as one)")
     from missions.geo import MAX_EXTENT_M  # the limit areas have: the local projection's accuracy
 
     size = float(max(np.ptp(xy[:, 0]), np.ptp(xy[:, 1])))
@@ -125,7 +128,9 @@ def plan_corridor(line: Sequence[Sequence[float]], width_m: float, footprint: Fo
         lxy = _extend_end(lxy, math.ceil(L / trig - 1e-9) * trig - L)
         lines.append(lxy)
     if not lines:
-        raise PlanError("the corridor produced no flight lines", where=where)
+        raise PlanError("the corridor produced no flight lines", where=where,
+                        hint="straighten the line or narrow width_m; if neither helps, please report it with "
+                             "the plan")
 
     em = min(exit_margin_m, 0.45 * trig)
     path: list[tuple[float, float, str, int]] = []

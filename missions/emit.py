@@ -100,6 +100,23 @@ def _nav(command: int, lat: float, lon: float, alt: float, p1: float = 0.0, p2: 
                        z=round(float(alt), 2), comment=comment)
 
 
+def _unmet_hint(cam: Any, values: Sequence[tuple[str, Any]], state: dict) -> str:
+    """Hint for settings that `commands_for` left out: the settings whose values their `when` needs."""
+    need: list[str] = []
+    for key, _ in values:
+        s = cam.setting(key)
+        for wkey, wval in (s.command.when if s is not None and s.command is not None else ()):
+            if state.get(wkey) != wval:
+                ws = cam.setting(wkey)
+                option = ws.enum.by_value(wval) if ws is not None and ws.enum else None
+                text = f"{wkey}: {option.key if option is not None else wval}"
+                if text not in need:
+                    need.append(text)
+    if need:
+        return f"add {', '.join(need)} to this step (in-flight steps do not inherit the payload's settings)"
+    return "a bug in wiris-tools: please report it with the plan"
+
+
 class Emitter:
     """Builds the item list step by step. One instance per compile (no module-level state)."""
 
@@ -229,7 +246,8 @@ class Emitter:
         cmds = commands_for(cam, values, state)
         state.update(dict(values))
         if not cmds:
-            raise PlanError(f"none of these settings reaches {cam.id} by a command", where=where)
+            raise PlanError(f"none of these settings reaches {cam.id} by a command", where=where,
+                            hint=_unmet_hint(cam, values, state))
         if self.s.last_pos is None:
             raise PlanError("an in-flight camera change before the vehicle has a position", where=where,
                             hint="put settings for the start in the payload's settings (they are applied pre-flight)")
@@ -281,7 +299,8 @@ class Emitter:
             else:
                 if v != int(v):
                     raise PlanError(f"{cmd.command} param {idx + 1} = {v} must be whole in a mission item",
-                                    where=where)
+                                    where=where, hint="a bug in wiris-tools or its camera table (the slot is an "
+                                                      "int32): please report it with the plan")
                 xy.append(int(v))
         p = [NAN if v is None else float(v) for v in params]
         self._add(_do(cid, p[0], p[1], p[2], p[3], xy[0], xy[1], p[6],
@@ -301,7 +320,9 @@ class Emitter:
     def land(self, lat: float | None, lon: float | None, where: str | None = None) -> None:
         if lat is None or lon is None:
             if self.s.last_pos is None:
-                raise PlanError("land needs lat/lon when the vehicle has no position yet", where=where)
+                raise PlanError("land needs lat/lon when the vehicle has no position yet", where=where,
+                                hint="give the landing point (land: {lat: 50.11, lon: 14.50}) or put a takeoff "
+                                     "before it")
             lat, lon = self.s.last_pos[0], self.s.last_pos[1]
         cmd = mavlink.MAV_CMD_NAV_VTOL_LAND if self.frame == "vtol" else mavlink.MAV_CMD_NAV_LAND
         self._add(_nav(cmd, lat, lon, 0.0, comment="land"))

@@ -153,7 +153,9 @@ def check_items(items: tuple[MissionItem, ...] | list[MissionItem], prof: Firmwa
             raise PlanError(f"{prof.title} would reject this item at upload", where=here, hint=prof.rule(it.command))
         # MISSION_ITEM_INT carries params 5/6 as int32: no NaN, no fractions (reference §4.2)
         if not (isinstance(it.x, int) and isinstance(it.y, int)) or not (-2**31 <= it.x < 2**31 and -2**31 <= it.y < 2**31):
-            raise PlanError("params 5/6 (x/y) must be int32 in MISSION_ITEM_INT", where=here)
+            raise PlanError("params 5/6 (x/y) must be int32 in MISSION_ITEM_INT", where=here,
+                            hint="a bug in wiris-tools (the compiler emitted an item it must not): please report it "
+                                 "with the plan")
 
 
 # ------------------------------------------------------------------------------------------- item limits

@@ -89,7 +89,9 @@ class LocalProjection:
         la = np.asarray(list(lats), dtype=float)
         lo = np.asarray(list(lons), dtype=float)
         if la.size == 0:
-            raise PlanError("no coordinates to centre a projection on")
+            raise PlanError("no coordinates to centre a projection on",
+                            hint="a bug in wiris-tools (its callers always pass points): please report it with "
+                                 "the plan")
         bad = np.abs(la) > MAX_ABS_LAT_DEG
         if bad.any():
             i = int(np.argmax(bad))

@@ -49,7 +49,9 @@ def encode(cmd: BridgeCommand, comment: str = "") -> list[MissionItem]:
         raise PlanError(f"{cmd.command} cannot go through the Lua bridge",
                         hint="bridge commands: " + ", ".join(BRIDGE_COMMANDS))
     if not FIRST_COMPONENT <= cmd.component <= FIRST_COMPONENT + 5:
-        raise PlanError(f"camera component {cmd.component} is outside 100..105")
+        raise PlanError(f"camera component {cmd.component} is outside 100..105",
+                        hint="the bridge addresses MAV_COMP_ID_CAMERA..CAMERA6; from a plan (ids checked when it "
+                             "loads) this is a bug in wiris-tools: please report it")
     if len(cmd.params) != 7:
         raise ValueError("a command has 7 params")
     index = BRIDGE_COMMANDS.index(cmd.command)
@@ -65,7 +67,9 @@ def encode(cmd: BridgeCommand, comment: str = "") -> list[MissionItem]:
     items = []
     for n, (chunk, mask, vals) in enumerate(chunks):
         if any(not math.isfinite(v) for v in vals):
-            raise PlanError(f"{cmd.command}: a value to send is not finite")
+            raise PlanError(f"{cmd.command}: a value to send is not finite",
+                            hint="a bug in wiris-tools (plan settings are range-checked when it loads): please "
+                                 "report it with the plan")
         last = n == len(chunks) - 1
         ident = MARKER | (index << 10) | ((cmd.component - FIRST_COMPONENT) << 7) | (chunk << 5) | (mask << 2) \
             | (int(last) << 1)

@@ -29,7 +29,8 @@ def _imager(camera, imager_id: str | None, where: str | None):
         return known[0]
     if camera.imagers:
         return camera.imagers[0]
-    raise PlanError(f"{camera.id} lists no imagers", where=where)
+    raise PlanError(f"{camera.id} lists no imagers", where=where,
+                    hint=f"add its imagers (sensor_mm, resolution_px, lenses_mm) to cdf/tables/{camera.table}")
 
 
 def payload_info(payload, camera, where: str | None = None) -> tuple[PayloadInfo, tuple[str, ...]]:
@@ -72,7 +73,8 @@ def payload_info(payload, camera, where: str | None = None) -> tuple[PayloadInfo
 def altitude_for_gsd(info: PayloadInfo, gsd_cm: float) -> float:
     """Altitude above ground (m) at which `info` images with `gsd_cm` cm/px (inverse of PayloadInfo.gsd_cm)."""
     if not (math.isfinite(gsd_cm) and gsd_cm > 0):
-        raise PlanError(f"GSD {gsd_cm!r} cm/px must be positive")
+        raise PlanError(f"GSD {gsd_cm!r} cm/px must be positive",
+                        hint="give the GSD in centimetres per pixel, e.g. gsd_cm: 3.5")
     return gsd_cm / info.gsd_cm(1.0)
 
 

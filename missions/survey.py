@@ -234,9 +234,11 @@ def plan_survey(area: Area, footprint: Footprint, front_pct: float, side_pct: fl
     spacing = transect_spacing_m(footprint, side_pct)
     trig = trigger_distance_m(footprint, front_pct)
     if not (isinstance(speed_mps, (int, float)) and math.isfinite(speed_mps) and speed_mps > 0):
-        raise PlanError(f"speed {speed_mps!r} m/s must be positive", where="vehicle.speed_mps")
+        raise PlanError(f"speed {speed_mps!r} m/s must be positive", where="vehicle.speed_mps",
+                        hint="give the ground speed in m/s, e.g. speed_mps: 5")
     if not (isinstance(turnaround_m, (int, float)) and math.isfinite(turnaround_m) and turnaround_m >= 0):
-        raise PlanError(f"turnaround {turnaround_m!r} m must be zero or positive", where="turnaround_m")
+        raise PlanError(f"turnaround {turnaround_m!r} m must be zero or positive", where="turnaround_m",
+                        hint="the straight run beyond each line end in metres, e.g. turnaround_m: 10 (0: none)")
     interval = trig / speed_mps
     if min_interval_s and not hover and interval < min_interval_s - 1e-9:
         raise PlanError(f"photos would be {interval:.2f} s apart, faster than the camera's minimum of "
@@ -248,11 +250,13 @@ def plan_survey(area: Area, footprint: Footprint, front_pct: float, side_pct: fl
     check_photo_budget(geom.area / (spacing * trig) * (2 if refly_90 else 1), "survey", photos_left)
     if isinstance(angle_deg, str):
         if angle_deg != "auto":
-            raise PlanError(f"angle_deg must be a number or 'auto', got {angle_deg!r}", where="angle_deg")
+            raise PlanError(f"angle_deg must be a number or 'auto', got {angle_deg!r}", where="angle_deg",
+                            hint="degrees clockwise from north, e.g. angle_deg: 30 (0 = north-south lines), or auto")
         angle = best_angle(geom, footprint.across_m, spacing, trig, footprint.along_m, turnaround_m, speed_mps)
     else:
         if not math.isfinite(float(angle_deg)):
-            raise PlanError(f"angle_deg {angle_deg!r} is not a number", where="angle_deg")
+            raise PlanError(f"angle_deg {angle_deg!r} is not a number", where="angle_deg",
+                            hint="degrees clockwise from north, e.g. angle_deg: 30 (0 = north-south lines), or auto")
         angle = normalise_angle(float(angle_deg))
     start_xy = area.projection.point_to_xy(*start_latlon) if start_latlon else None
 

@@ -225,3 +225,116 @@ def test_hole_errors_point_at_the_hole(tmp_path: Path) -> None:
     with pytest.raises(PlanError, match="hole 0") as e:
         load_area(g)
     assert e.value.where == f"{g}: $.coordinates[1]"
+
+
+# ------------------------------------------------------------------ every bad file: where, what, what to do
+_RING = "[[14.500, 50.100], [14.505, 50.100], [14.505, 50.103], [14.500, 50.103], [14.500, 50.100]]"
+_KML = '<kml xmlns="http://www.opengis.net/kml/2.2"><Placemark>\n{}\n</Placemark></kml>'
+
+
+def _kml_ring(coordinates: str) -> str:
+    return _KML.format("<Polygon><outerBoundaryIs><LinearRing>\n"
+                       f"<coordinates>{coordinates}</coordinates>\n</LinearRing></outerBoundaryIs></Polygon>")
+
+
+def _nested_collections(depth: int) -> str:
+    doc = '{"type": "Polygon", "coordinates": [' + _RING + "]}"
+    for _ in range(depth):
+        doc = '{"type": "GeometryCollection", "geometries": [' + doc + "]}"
+    return doc
+
+
+BAD_AREA_FILES = [
+    # (file name, content, message pattern, a fragment the hint must contain)
+    ("utf16.geojson", '{"type": "Polygon"}'.encode("utf-16"), "not UTF-8", "UTF-8"),
+    ("latin1.geojson", '{"type": "Polygon", "name": "Údolí"}'.encode("latin-1"), "not UTF-8", "UTF-8"),
+    ("syntax.geojson", '{"type": "Polygon",\n "coordinates": [[[14.5, 50.1] [14.6, 50.1]]]}', "invalid JSON",
+     "comma"),
+    ("deep_json.geojson", "[" * 5000 + "]" * 5000, "JSON nested too deeply", "4 deep"),
+    ("list.geojson", "[" + _RING + "]", "must be an object", '"type": "Polygon"'),
+    ("lowercase.geojson", '{"type": "polygon", "coordinates": [' + _RING + "]}", "unknown GeoJSON type",
+     "case matters"),
+    ("no_type.geojson", '{"coordinates": [' + _RING + "]}", "unknown GeoJSON type None", "Polygon"),
+    ("no_rings.geojson", '{"type": "Polygon", "coordinates": []}', "Polygon without rings", "[[[lon, lat]"),
+    ("flat_ring.geojson", '{"type": "Polygon", "coordinates": [14.5, 50.1]}', "a ring must be a list",
+     "three levels"),
+    ("position.geojson", '{"type": "Polygon", "coordinates": [[[14.5], [14.505, 50.1], [14.505, 50.103]]]}',
+     "position must be", "[lon, lat]"),
+    ("string_position.geojson", '{"type": "Polygon", "coordinates": [[["14.5", "50.1"], [14.505, 50.1]]]}',
+     "position must be", "e.g. [14.7263, 50.0696]"),
+    ("metres.geojson", '{"type": "Polygon", "coordinates": [[[458000, 5550000], [458500, 5550000], '
+                       '[458500, 5550400]]]}', "not a longitude/latitude", "EPSG:4326"),
+    ("no_features.geojson", '{"type": "FeatureCollection"}', "without a 'features' list", '"features": [...]'),
+    ("features_dict.geojson", '{"type": "FeatureCollection", "features": {"type": "Feature"}}',
+     "without a 'features' list", "Feature objects"),
+    ("feature_number.geojson", '{"type": "FeatureCollection", "features": [5]}', "expected a GeoJSON object",
+     '"type"'),
+    ("multi_empty.geojson", '{"type": "MultiPolygon"}', "MultiPolygon without coordinates", "[[[[lon, lat]"),
+    ("nested.geojson", _nested_collections(40), "GeoJSON nested too deeply", "FeatureCollection"),
+    ("points.geojson", '{"type": "Feature", "geometry": {"type": "Point", "coordinates": [14.5, 50.1]}}',
+     "no Polygon or MultiPolygon", "polygon"),
+    ("empty.kml", "", "not well-formed", "export the KML again"),
+    ("unclosed.kml", "<kml>\n<Placemark>\n</kml>\n", "not well-formed", "unclosed"),
+    ("root_only.kml", '<kml xmlns="http://www.opengis.net/kml/2.2"/>', "no Polygon", "Add Polygon"),
+    ("path.kml", _KML.format("<LineString><coordinates>14.5,50.1 14.6,50.1</coordinates></LineString>"),
+     "no Polygon", "paths"),
+    ("no_outer.kml", _KML.format("<Polygon>\n</Polygon>"), "without <outerBoundaryIs>", "<outerBoundaryIs>"),
+    ("no_coordinates.kml", _KML.format("<Polygon><outerBoundaryIs><LinearRing>\n</LinearRing></outerBoundaryIs>"
+                                       "</Polygon>"), "without <coordinates>", "<coordinates>lon,lat"),
+    ("empty_coordinates.kml", _kml_ring("  "), "without <coordinates>", "<LinearRing>"),
+    ("spaced.kml", _kml_ring("14.500, 50.100 14.505, 50.100 14.505, 50.103"), "bad KML coordinate",
+     "no spaces inside a tuple"),
+    ("lon_only.kml", _kml_ring("14.500 14.505 14.505"), "bad KML coordinate", "14.7263,50.0696"),
+    ("metres.kml", _kml_ring("458000,5550000 458500,5550000 458500,5550400"), "not lon,lat in degrees",
+     "longitude first"),
+    ("doctype.kml", '<?xml version="1.0"?>\n<!DOCTYPE kml>\n' + _kml_ring("14.5,50.1 14.6,50.1 14.6,50.2"),
+     "DOCTYPE", "remove the <!DOCTYPE"),
+    ("two_points.kml", _kml_ring("14.500,50.100 14.505,50.100 14.500,50.100"), "fewer than 3 distinct points",
+     "3 corners"),
+    ("area.kmz", b"PK\x03\x04", "KMZ", "doc.kml"),
+    ("area.shp", b"\x00\x00\x27\x0a", "unknown area file type", ".geojson"),
+]
+
+
+@pytest.mark.parametrize("name,content,message,hint", BAD_AREA_FILES, ids=[c[0] for c in BAD_AREA_FILES])
+def test_bad_area_files_say_where_and_what_to_do(tmp_path: Path, name: str, content: str | bytes, message: str,
+                                                 hint: str) -> None:
+    f = tmp_path / name
+    if isinstance(content, bytes):
+        f.write_bytes(content)
+    else:
+        f.write_text(content, encoding="utf-8")
+    with pytest.raises(PlanError, match=message) as e:
+        load_area(name, base_dir=tmp_path)
+    err = e.value
+    assert err.where and str(f) in err.where                # which file (and line or JSON path where known)
+    assert err.hint and hint in err.hint, err.hint          # what to do about it
+    assert err.hint != err.message
+    assert f"\n  hint: {err.hint}" in str(err)              # what the CLI prints
+
+
+def test_bad_area_file_errors_point_into_the_file(tmp_path: Path) -> None:
+    kml = tmp_path / "spaced.kml"
+    kml.write_text(_kml_ring("14.500, 50.100 14.505, 50.100 14.505, 50.103"))
+    with pytest.raises(PlanError) as e:
+        load_area(kml)
+    assert e.value.where == f"{kml}:3"                       # the line of its <coordinates>
+    gj = tmp_path / "position.geojson"
+    gj.write_text('{"type": "FeatureCollection", "features": [{"type": "Feature", "geometry": '
+                  '{"type": "Polygon", "coordinates": [[[14.5, 50.1], [14.505]]]}}]}')
+    with pytest.raises(PlanError) as e:
+        load_area(gj)
+    assert e.value.where == f"{gj}: $.features[0].geometry.coordinates[0][1]"
+
+
+@pytest.mark.parametrize("source,where,message", [
+    ([[50.1, 14.5], [50.1, "14.505"], [50.103, 14.505]], "area[1]", "point must be"),
+    ([[50.1, 14.5], [50.1], [50.103, 14.505]], "area[1]", "point must be"),
+    ([[50.1, 14.5], [float("nan"), 14.505], [50.103, 14.505]], "area[1]", "not finite"),
+    (5, "area", "must be a file path or a list"),
+])
+def test_bad_inline_areas_say_where_and_what_to_do(source, where: str, message: str) -> None:
+    with pytest.raises(PlanError, match=message) as e:
+        load_area(source)
+    assert e.value.where == where
+    assert e.value.hint and e.value.hint != e.value.message

@@ -424,3 +424,72 @@ def test_two_wiris_hover_on_ardupilot_and_distance_on_px4(tmp_path):
         doc["vehicle"]["speed_mps"] = 2.5        # the Security needs 1.8 s between photos
     c = build(tmp_path, slow, firmware="px4")
     assert any(it.command == m.MAV_CMD_DO_SET_CAM_TRIGG_DIST for it in c.items)
+
+
+def test_in_flight_setting_that_needs_a_preflight_one_names_it(tmp_path):
+    # range_max_c travels only with range_mode manual; the payload sets manual before flight, but the
+    # in-flight step alone does not carry it: the hint says what to add, and adding it compiles
+    def ch(doc, step_settings):
+        doc["payloads"]["thermal"]["settings"] = {"range_mode": "manual", "range_min_c": 0, "range_max_c": 80}
+        doc["mission"].insert(2, {"camera": {"payload": "thermal", "settings": step_settings}})
+    with pytest.raises(PlanError, match="none of these settings reaches wiris-pro") as ei:
+        build(tmp_path, lambda d: ch(d, {"range_max_c": 90}))
+    assert "range_mode: manual" in ei.value.hint
+    assert str(tmp_path / "plan.yaml") in ei.value.where
+    c = build(tmp_path, lambda d: ch(d, {"range_mode": "manual", "range_max_c": 90}))
+    assert any(b.command == "MAV_CMD_USER_1" for b in lua.decode(c.items))
+
+
+def test_land_before_any_position_needs_lat_lon(tmp_path):
+    with pytest.raises(PlanError, match="land needs lat/lon") as ei:
+        build(tmp_path, lambda d: d.update(mission=[{"land": None}]))
+    assert "lat" in ei.value.hint and "takeoff" in ei.value.hint
+    assert str(tmp_path / "plan.yaml") in ei.value.where
+
+
+def test_corridor_of_one_repeated_point_is_refused(tmp_path):
+    def ch(doc):
+        doc["mission"][1] = {"corridor": {"line": [[50.110, 14.500], [50.110, 14.500]], "width_m": 40,
+                                          "payloads": ["thermal"], "altitude_m": 40,
+                                          "overlap": {"front": 80, "side": 60}}}
+    with pytest.raises(PlanError, match="corridor line has no length") as ei:
+        build(tmp_path, ch)
+    assert "different points" in ei.value.hint
+    assert "plan.yaml:" in ei.value.where
+
+
+def test_area_file_errors_keep_file_location_and_hint_through_the_compiler(tmp_path):
+    (tmp_path / "field.geojson").write_text('{"type": "Polygon", "coordinates": [[[14.5], [14.505, 50.1]]]}')
+    with pytest.raises(PlanError, match=r"position must be \[lon, lat\]") as ei:
+        build(tmp_path, lambda d: survey(d).update(area="field.geojson"))
+    assert ei.value.where == f"{tmp_path / 'field.geojson'}: $.coordinates[0][0]"
+    assert "GeoJSON order" in ei.value.hint
+
+
+LINE = [[50.110, 14.500], [50.113, 14.504]]
+
+
+@pytest.mark.parametrize("planner,kwargs,where", [
+    ("survey", {"speed_mps": 0}, "vehicle.speed_mps"),
+    ("survey", {"turnaround_m": -1}, "turnaround_m"),
+    ("survey", {"angle_deg": "north"}, "angle_deg"),
+    ("survey", {"angle_deg": float("nan")}, "angle_deg"),
+    ("corridor", {"line": LINE[:1]}, "corridor.line"),
+    ("corridor", {"width_m": 0}, "corridor.width_m"),
+])
+def test_geometry_argument_errors_carry_a_hint(planner, kwargs, where):
+    # the plan schema keeps these out of a plan file; library callers get the same where, what and hint
+    from missions.area import load_area
+    from missions.corridor import plan_corridor
+    from missions.footprint import Footprint
+    from missions.survey import plan_survey
+
+    fp = Footprint(across_m=50.0, along_m=40.0)
+    with pytest.raises(PlanError) as ei:
+        if planner == "survey":
+            plan_survey(load_area(SQUARE), fp, 80, 70, **kwargs)
+        else:
+            args = {"line": LINE, "width_m": 40, **kwargs}
+            plan_corridor(args["line"], args["width_m"], fp, 80, 60)
+    assert ei.value.where == where
+    assert ei.value.hint and "e.g." in ei.value.hint

@@ -70,8 +70,9 @@ def test_bridge_paced_across_consecutive_camera_steps():
 
 
 def test_change_before_any_position_refused():
-    with pytest.raises(PlanError, match="before the vehicle has a position"):
+    with pytest.raises(PlanError, match="before the vehicle has a position") as ei:
         emitter(ARDUPILOT).camera_change("thermal", [("palette", 1)])
+    assert "payload's settings" in ei.value.hint
 
 
 def test_px4_single_capture_warns_other_cameras_shoot():
@@ -103,3 +104,20 @@ def test_altitudes_are_whole_centimetres_as_ardupilot_stores_them():
 
     item = emit._nav(16, 50.0, 14.0, 40.123456)
     assert item.z == 40.12
+
+
+def test_land_before_any_position_needs_lat_lon():
+    with pytest.raises(PlanError, match="land needs lat/lon") as ei:
+        emitter(ARDUPILOT).land(None, None, where="plan.yaml:9:5")
+    assert ei.value.where == "plan.yaml:9:5"
+    assert "lat" in ei.value.hint and "takeoff" in ei.value.hint
+
+
+@pytest.mark.parametrize("prof", [ARDUPILOT, PX4])
+def test_setting_whose_condition_is_not_set_in_flight_names_the_condition(prof):
+    e = emitter(prof)
+    e.takeoff(20)
+    with pytest.raises(PlanError, match="none of these settings") as ei:
+        e.camera_change("thermal", [("range_max_c", 90.0), ("span_half_c", 5.0)], where="plan.yaml:12:7")
+    assert ei.value.where == "plan.yaml:12:7"
+    assert "range_mode: manual" in ei.value.hint and "range_mode: span" in ei.value.hint

@@ -125,3 +125,13 @@ def test_split_impossible_names_the_count():
     with pytest.raises(PlanError) as ei:
         split_parts(items, 20)
     assert "32 items" in ei.value.message and "20" in ei.value.message
+    assert "vehicle.max_mission_items" in ei.value.hint
+
+
+@pytest.mark.parametrize("x,y", [(2**31, 0), (0, -2**31 - 1), (1.5, 0)])
+def test_check_items_refuses_params_5_6_that_are_not_int32(x, y):
+    items = [MissionItem(command=cmd("DO_DIGICAM_CONTROL"), frame=FRAME_MISSION, x=x, y=y)]
+    with pytest.raises(PlanError, match="int32") as ei:
+        check_items(items, PX4)
+    assert "mission item 1" in ei.value.where
+    assert "report" in ei.value.hint

@@ -80,5 +80,12 @@ def test_polar_areas_are_refused(lat: float) -> None:
 
 
 def test_non_finite_centre_is_refused() -> None:
-    with pytest.raises(PlanError):
+    with pytest.raises(PlanError) as e:
         LocalProjection(float("nan"), 0.0)
+    assert "NaN" in (e.value.hint or "")
+
+
+def test_no_points_to_centre_on_is_refused() -> None:
+    with pytest.raises(PlanError, match="no coordinates") as e:
+        LocalProjection.centred_on([], [])
+    assert "report" in (e.value.hint or "")

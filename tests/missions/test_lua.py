@@ -59,10 +59,18 @@ def test_foreign_script_ids_are_ignored():
 
 
 def test_refuses_non_bridge_command_and_component():
-    with pytest.raises(PlanError):
+    with pytest.raises(PlanError) as ei:
         lua.encode(lua.BridgeCommand("MAV_CMD_IMAGE_START_CAPTURE", 100, (None,) * 7))
-    with pytest.raises(PlanError):
+    assert "MAV_CMD_USER_1" in ei.value.hint
+    with pytest.raises(PlanError) as ei:
         lua.encode(lua.BridgeCommand("MAV_CMD_USER_1", 99, (None,) * 7))
+    assert "CAMERA6" in ei.value.hint and "report" in ei.value.hint
+
+
+def test_refuses_a_value_that_is_not_finite():
+    with pytest.raises(PlanError, match="not finite") as ei:
+        lua.encode(lua.BridgeCommand("MAV_CMD_USER_1", 101, (math.inf,) + (None,) * 6))
+    assert "report" in ei.value.hint
 
 
 def test_script_is_valid_lua():

@@ -70,8 +70,9 @@ def test_lens_not_in_table_lists_lenses():
 
 
 def test_several_lenses_need_lens_mm():
-    with pytest.raises(PlanError, match="which lens"):
+    with pytest.raises(PlanError, match="which lens") as ei:
         info("wiris-pro")
+    assert "lens_mm" in ei.value.hint
 
 
 def test_assumed_optics_warn():
@@ -91,3 +92,21 @@ def test_too_fast_names_the_speed_that_works():
     assert "1.8 s" in ei.value.message
     assert "5 m/s" in ei.value.hint       # 9 m / 1.8 s
     assert optics.check_interval(i, 9.0, 5.0) == pytest.approx(1.8)
+
+
+@pytest.mark.parametrize("gsd", [0.0, -1.0, float("nan")])
+def test_gsd_must_be_positive(gsd):
+    i, _ = info("wiris-pro", 13)
+    with pytest.raises(PlanError, match="must be positive") as ei:
+        optics.altitude_for_gsd(i, gsd)
+    assert "gsd_cm" in ei.value.hint
+
+
+def test_camera_without_imagers_names_its_table():
+    import dataclasses
+
+    cam = dataclasses.replace(catalogue().get("wiris-pro"), imagers=())
+    with pytest.raises(PlanError, match="lists no imagers") as ei:
+        optics.payload_info(Payload(name="p", camera="wiris-pro"), cam, where="plan.yaml:5:3")
+    assert ei.value.where == "plan.yaml:5:3"
+    assert f"cdf/tables/{cam.table}" in ei.value.hint
