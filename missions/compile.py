@@ -100,7 +100,7 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
             optics_errors[p.name] = e
 
     em = Emitter(prof, plan.vehicle.frame, plan.vehicle.speed_mps, (plan.home.lat, plan.home.lon), cameras,
-                 components, instances)
+                 components, instances, {p.name: dict(p.values) for p in plan.payloads})
     areas: list[AreaInfo] = []
     intent: list[Any] = []
     rededge_alts: dict[str, list[float]] = {}

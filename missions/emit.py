@@ -113,7 +113,7 @@ def _unmet_hint(cam: Any, values: Sequence[tuple[str, Any]], state: dict) -> str
                 if text not in need:
                     need.append(text)
     if need:
-        return f"add {', '.join(need)} to this step (in-flight steps do not inherit the payload's settings)"
+        return f"add {', '.join(need)} to this step or to the payload's settings"
     return "a bug in wiris-tools: please report it with the plan"
 
 
@@ -121,7 +121,8 @@ class Emitter:
     """Builds the item list step by step. One instance per compile (no module-level state)."""
 
     def __init__(self, profile: FirmwareProfile, frame: str, speed_mps: float, home: tuple[float, float],
-                 cameras: dict[str, Any], component_ids: dict[str, int], instances: dict[str, int]) -> None:
+                 cameras: dict[str, Any], component_ids: dict[str, int], instances: dict[str, int],
+                 preflight: dict[str, dict] | None = None) -> None:
         self.profile = profile
         self.frame = frame
         self.speed_mps = speed_mps
@@ -129,7 +130,9 @@ class Emitter:
         self.cameras = cameras                  # payload name -> catalogue Camera
         self.component_ids = component_ids      # payload name -> component id
         self.instances = instances              # payload name -> ArduPilot CAMn instance (WIRIS only)
-        self.camera_state: dict[str, dict] = {}
+        # what each camera holds: the pre-flight settings (setup.json), then every in-flight change; an
+        # in-flight value whose `when` a pre-flight setting meets travels (the plan loader judges alike)
+        self.camera_state: dict[str, dict] = {name: dict(v) for name, v in (preflight or {}).items()}
         self.s = _State()
 
     # ------------------------------------------------------------------------------------------ plumbing
