@@ -177,9 +177,11 @@ def build_bundle(directory: str | Path, models: Iterable[str] = (), *, all_model
     directory = Path(directory)
     try:
         if directory.exists() and not directory.is_dir():
-            raise CdfError("the output path exists and is not a directory", where=str(directory))
+            raise CdfError("the output path exists and is not a directory", where=str(directory),
+                           hint="choose another -o directory, or move that file away")
     except OSError as err:  # exists() answers only "no such file"; a name too long raises
-        raise CdfError(f"cannot use the output directory: {err.strerror}", where=str(directory)) from None
+        raise CdfError(f"cannot use the output directory: {err.strerror}", where=str(directory),
+                       hint="choose another -o directory, one you may create and write to") from None
     if base_url is not None:
         check_base_url(base_url)
     cameras, skipped = select_cameras(cat, models, all_models)
@@ -203,7 +205,8 @@ def build_bundle(directory: str | Path, models: Iterable[str] = (), *, all_model
         if xz:
             packed = xz_bytes(data)
             if lzma.decompress(packed) != data:
-                raise CdfError(f"{cam.id}: the xz twin does not inflate to the definition", where=file_name + ".xz")
+                raise CdfError(f"{cam.id}: the xz twin does not inflate to the definition", where=file_name + ".xz",
+                               hint="a bug in wiris-tools or liblzma: please report it; build without --xz meanwhile")
             problems += _strict_problems(packed, file_name + ".xz", cam, None)
             files[file_name + ".xz"] = packed
         if problems:
@@ -233,7 +236,8 @@ def build_bundle(directory: str | Path, models: Iterable[str] = (), *, all_model
     for name, content in outputs.items():
         target = directory / name
         if target.is_symlink() or (target.exists() and not target.is_file()):
-            raise CdfError("not a regular file; refusing to replace it", where=str(target))
+            raise CdfError("not a regular file; refusing to replace it", where=str(target),
+                           hint="move it away (symlinks and directories are never replaced), or choose another -o")
         if target.exists():
             if target.read_bytes() != content:
                 owner = next((e for e in entries if name.startswith(e.file)), None)

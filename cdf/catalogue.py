@@ -11,6 +11,7 @@ reference resolves) and raises CdfError naming the table and the entry.
 
 from __future__ import annotations
 
+import difflib
 import functools
 import itertools
 import math
@@ -276,6 +277,25 @@ def _fmt(v: float | None) -> str:
     return str(int(v)) if float(v).is_integer() else f"{v:g}"
 
 
+def _name_hint(name: Any, known: Iterable[str], rule: str, aliases: dict[str, str] | None = None) -> str:
+    """The hint for a table entry naming something that does not exist: the likely name ('did you mean'),
+    else the names it may be when they are few, else the rule alone. `aliases` maps names of the wrong
+    kind (a setting key where a PARAM_EXT name belongs) to the right one."""
+    names = sorted({str(k) for k in known})
+    close = (aliases or {}).get(str(name)) or next(iter(difflib.get_close_matches(str(name), names, n=1)), None)
+    if close:
+        return f"did you mean {close!r}? ({rule})"
+    if not names:
+        return f"{rule}; this table defines none"
+    listed = ", ".join(names)
+    return f"{rule}: {listed}" if len(listed) <= 60 else f"{rule}; check the spelling"
+
+
+def _values_text(values: Iterable[float | int], most: int = 8) -> str:
+    shown = [_fmt(v) for v in values]
+    return ", ".join(shown[:most]) + (", ..." if len(shown) > most else "")
+
+
 def _read_yaml(path: Path) -> dict:
     import yaml
 
@@ -283,9 +303,11 @@ def _read_yaml(path: Path) -> dict:
     try:
         data = yaml.load(path.read_text(encoding="utf-8"), Loader=loader)
     except yaml.YAMLError as err:
-        raise CdfError(f"cannot parse catalogue table: {err}", where=str(path)) from None
+        raise CdfError(f"cannot parse catalogue table: {err}", where=str(path),
+                       hint="fix the YAML at the line and column it names (indentation, quotes, colons)") from None
     if not isinstance(data, dict):
-        raise CdfError("a catalogue table must be a mapping", where=str(path))
+        raise CdfError("a catalogue table must be a mapping", where=str(path),
+                       hint="write top-level `key: value` entries, e.g. `extends:`, `models:`, `settings:`")
     return data
 
 
@@ -294,7 +316,8 @@ def _enums(raw: dict, where: str) -> dict[str, Enumerator]:
     for eid, e in (raw or {}).items():
         opts = tuple(Option(value=int(o["value"]), key=str(o["key"]), name=str(o["name"])) for o in e["options"])
         if len({o.value for o in opts}) != len(opts) or len({o.key for o in opts}) != len(opts):
-            raise CdfError(f"enumerator {eid}: duplicate value or key", where=where)
+            raise CdfError(f"enumerator {eid}: duplicate value or key", where=where,
+                           hint=f"give each option under `enums: {eid}: options:` its own `value:` and `key:`")
         out[eid] = Enumerator(id=eid, title=e.get("title", eid), options=opts, flags=bool(e.get("flags")),
                               exclusive=tuple(tuple(x) for x in e.get("exclusive", ())),
                               source=e.get("source", ""), note=e.get("note", ""))
@@ -311,12 +334,17 @@ def _setting(raw: dict, enums: dict[str, Enumerator], where: str) -> Setting:
     if "enum" in raw:
         enum = enums.get(raw["enum"])
         if enum is None:
-            raise CdfError(f"setting {key}: unknown enumerator {raw['enum']!r}", where=where)
+            raise CdfError(f"setting {key}: unknown enumerator {raw['enum']!r}", where=where,
+                           hint=_name_hint(raw["enum"], enums, "`enum:` names a key of `enums:`"))
         options = tuple(o for o in enum.options if o.key not in set(without))
     elif "flags" in raw:
         enum = enums.get(raw["flags"])
         if enum is None or not enum.flags:
-            raise CdfError(f"setting {key}: {raw['flags']!r} is not a flag enumerator", where=where)
+            hint = (f"add `flags: true` to `enums: {enum.id}`, or write `enum: {enum.id}` for a single choice"
+                    if enum is not None else
+                    _name_hint(raw["flags"], [e.id for e in enums.values() if e.flags],
+                               "`flags:` names a key of `enums:` that has `flags: true`"))
+            raise CdfError(f"setting {key}: {raw['flags']!r} is not a flag enumerator", where=where, hint=hint)
         flags = True
         options = enum.combinations(without)
     cmd = raw.get("command")
@@ -357,24 +385,36 @@ def _imagers(raw: dict) -> tuple[Imager, ...]:
 def _check_setting(s: Setting, where: str) -> None:
     if not (1 <= len(s.param) <= PARAM_NAME_MAX) or not s.param.isascii():
         raise CdfError(f"setting {s.key}: PARAM_EXT name {s.param!r} must be 1–{PARAM_NAME_MAX} ASCII characters",
-                       where=where)
+                       where=where,
+                       hint=(f"shorten `param:` to at most {PARAM_NAME_MAX} characters" if len(s.param) > PARAM_NAME_MAX
+                             else "write `param:` in ASCII letters, digits and _")
+                       + " (PARAM_EXT param_id is char[16])")
     if s.type not in CDF_TYPES:
-        raise CdfError(f"setting {s.key}: type {s.type!r} is not a definition type", where=where)
+        raise CdfError(f"setting {s.key}: type {s.type!r} is not a definition type", where=where,
+                       hint=f"set `type:` to one of {', '.join(CDF_TYPES)}")
     if s.default is None:
         return
     if s.options:
         if not any(o.value == s.default for o in s.options):
-            raise CdfError(f"setting {s.key}: default {s.default} is not among its options", where=where)
+            left_out = s.enum.by_value(s.default) if s.enum is not None else None
+            hint = f"set `default:` to one of the option values {_values_text(o.value for o in s.options)}"
+            if left_out is not None:
+                hint = f"`without:` leaves out option {left_out.key!r}: keep it, or {hint}"
+            raise CdfError(f"setting {s.key}: default {s.default} is not among its options", where=where, hint=hint)
     else:
         if s.min is None or s.max is None:
-            raise CdfError(f"setting {s.key}: needs options or min and max (MAVSDK drops it otherwise)", where=where)
+            raise CdfError(f"setting {s.key}: needs options or min and max (MAVSDK drops it otherwise)", where=where,
+                           hint="add `min:` and `max:`, or give it options with `enum:` or `flags:`")
         if not (s.min <= s.default <= s.max):
-            raise CdfError(f"setting {s.key}: default {s.default} outside {s.min}..{s.max}", where=where)
+            raise CdfError(f"setting {s.key}: default {s.default} outside {s.min}..{s.max}", where=where,
+                           hint=f"set `default:` between {_fmt(s.min)} and {_fmt(s.max)}, or widen `min:`/`max:`")
     if s.is_integer:
         lo, hi = INTEGER_RANGES[s.type]
         values = [o.value for o in s.options] + [v for v in (s.min, s.max, s.default) if v is not None]
         if any(int(v) != v or not lo <= v <= hi for v in values):
-            raise CdfError(f"setting {s.key}: a value does not fit {s.type}", where=where)
+            raise CdfError(f"setting {s.key}: a value does not fit {s.type}", where=where,
+                           hint=f"{s.type} takes whole numbers {lo}..{hi}: fix `default:`, `min:`, `max:` or the "
+                                "options, or change `type:`")
 
 
 def _load_table(path: Path, read: Callable[[Path], dict] = _read_yaml) -> list[Camera]:
@@ -389,7 +429,10 @@ def _load_table(path: Path, read: Callable[[Path], dict] = _read_yaml) -> list[C
     raw_settings: list[dict] = []
     for group in merged.get("groups", []):
         if group not in (base.get("groups") or {}):
-            raise CdfError(f"unknown setting group {group!r}", where=where)
+            hint = (_name_hint(group, base["groups"], f"`groups:` names groups of {raw['extends']}.yaml")
+                    if base.get("groups") else
+                    "`groups:` needs `extends:` naming a vendor table that defines `groups:`")
+            raise CdfError(f"unknown setting group {group!r}", where=where, hint=hint)
         raw_settings.extend(base["groups"][group])
     raw_settings.extend(raw.get("settings", []))
     settings = []
@@ -397,26 +440,34 @@ def _load_table(path: Path, read: Callable[[Path], dict] = _read_yaml) -> list[C
         settings.append(_setting({**s, **overrides.get(s["key"], {})}, enums, where))
     unknown_overrides = set(overrides) - {s.key for s in settings}
     if unknown_overrides:
-        raise CdfError(f"overrides name unknown settings: {', '.join(sorted(unknown_overrides))}", where=where)
+        raise CdfError(f"overrides name unknown settings: {', '.join(sorted(unknown_overrides))}", where=where,
+                       hint=_name_hint(sorted(unknown_overrides)[0], [s.key for s in settings],
+                                       "`overrides:` is keyed by the `key:` of a setting of this model"))
     params = [s.param for s in settings]
     keys = [s.key for s in settings]
-    for names, what in ((params, "PARAM_EXT name"), (keys, "setting key")):
+    for names, what, entry in ((params, "PARAM_EXT name", "param"), (keys, "setting key", "key")):
         dupes = {n for n in names if names.count(n) > 1}
         if dupes:
-            raise CdfError(f"duplicate {what}: {', '.join(sorted(dupes))}", where=where)
+            raise CdfError(f"duplicate {what}: {', '.join(sorted(dupes))}", where=where,
+                           hint=f"give each setting its own `{entry}:` (settings come from `settings:` and `groups:`)")
     commands = merged.get("commands") or {}
     for s in settings:
         _check_setting(s, where)
         for _, hidden in s.hides:
             missing = [h for h in hidden if h not in params]
             if missing:
-                raise CdfError(f"setting {s.key}: hides unknown {', '.join(missing)}", where=where)
+                raise CdfError(f"setting {s.key}: hides unknown {', '.join(missing)}", where=where,
+                               hint=_name_hint(missing[0], params, "`hides:` lists the `param:` names of settings",
+                                               aliases={o.key: o.param for o in settings}))
         if s.command and s.command.cmd and s.command.cmd not in commands:
-            raise CdfError(f"setting {s.key}: command {s.command.cmd} is not in the commands table", where=where)
+            raise CdfError(f"setting {s.key}: command {s.command.cmd} is not in the commands table", where=where,
+                           hint=_name_hint(s.command.cmd, commands, "`command: cmd:` names a key of `commands:`"))
         if s.command:
             for k, _ in s.command.when:
                 if k not in keys:
-                    raise CdfError(f"setting {s.key}: 'when' names unknown setting {k}", where=where)
+                    raise CdfError(f"setting {s.key}: 'when' names unknown setting {k}", where=where,
+                                   hint=_name_hint(k, keys, "`when:` is keyed by the `key:` of a setting",
+                                                   aliases={o.param: o.key for o in settings}))
     notes = tuple(str(v) for k, v in merged.items() if k.endswith("_note") and isinstance(v, str))
     cameras = []
     for m in merged["models"]:
@@ -453,7 +504,9 @@ def load_catalogue(tables_dir: Path | None = None) -> Catalogue:
     ids = [c.id for c in cameras]
     dupes = {i for i in ids if ids.count(i) > 1}
     if dupes:
-        raise CdfError(f"camera id used twice: {', '.join(sorted(dupes))}", where=str(directory))
+        tables = sorted({c.table for c in cameras if c.id in dupes})
+        raise CdfError(f"camera id used twice: {', '.join(sorted(dupes))}", where=str(directory),
+                       hint=f"give each `models:` entry its own `id:` (see {', '.join(tables)})")
     return Catalogue(cameras=tuple(cameras))
 
 

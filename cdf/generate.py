@@ -132,10 +132,12 @@ def _load_locales(directory: str) -> tuple[Locale, ...]:
         try:
             raw = yaml.safe_load(path.read_text(encoding="utf-8"))
         except yaml.YAMLError as err:
-            raise CdfError(f"cannot parse locale table: {err}", where=str(path)) from None
+            raise CdfError(f"cannot parse locale table: {err}", where=str(path),
+                           hint="fix the YAML at the line and column it names; quote texts with a colon") from None
         strings = (raw or {}).get("strings") if isinstance(raw, dict) else None
         if not isinstance(strings, dict):
-            raise CdfError("a locale table needs a mapping `strings: {English: translation}`", where=str(path))
+            raise CdfError("a locale table needs a mapping `strings: {English: translation}`", where=str(path),
+                           hint='start with `strings:`, then one indented `"English": "translation"` line per text')
         pairs = []
         for original, translated in strings.items():
             if not isinstance(original, str) or not isinstance(translated, str):
@@ -159,12 +161,15 @@ def _check_text(text: str, what: str, where: str) -> None:
         raise CdfError(f"{what}: {text!r} contains {' '.join(bad)}, which XML would write as an entity",
                        where=where, hint="QGroundControl's localisation never matches entities; reword it")
     if any(ord(c) < 0x20 for c in text):
-        raise CdfError(f"{what}: {text!r} contains a control character", where=where)
+        raise CdfError(f"{what}: {text!r} contains a control character", where=where,
+                       hint="write it on one line without tabs (a YAML `|` block keeps its line breaks)")
 
 
 def _integer(s: Setting, value: float | int, where: str) -> str:
     if isinstance(value, bool) or int(value) != value:
-        raise CdfError(f"setting {s.key}: {value!r} is not a whole number for {s.type}", where=where)
+        raise CdfError(f"setting {s.key}: {value!r} is not a whole number for {s.type}", where=where,
+                       hint="write 1 or 0, not true or false" if isinstance(value, bool) else
+                       "give `default:`, `min:`, `max:` and `step:` whole values, or make `type:` float")
     lo, hi = INTEGER_RANGES[s.type]
     if not lo <= int(value) <= hi:
         raise CdfError(f"setting {s.key}: {value} does not fit {s.type} ({lo}..{hi})", where=where,
@@ -175,7 +180,8 @@ def _integer(s: Setting, value: float | int, where: str) -> str:
 def _real(s: Setting, value: float | int, where: str) -> str:
     v = float(value)
     if not math.isfinite(v):
-        raise CdfError(f"setting {s.key}: {value!r} is not a finite number", where=where)
+        raise CdfError(f"setting {s.key}: {value!r} is not a finite number", where=where,
+                       hint="write finite numbers in `default:`, `min:`, `max:` and `step:` (no .inf or .nan)")
     if s.decimals is not None:
         text = f"{v:.{int(s.decimals)}f}"
         if float(text) == v:
@@ -267,14 +273,19 @@ def definition_view(camera: Camera, locales: Iterable[Locale] | None = None) -> 
         if s.options:
             values = [_number(s, o.value, w) for o in s.options]
             if len(set(values)) != len(values):
-                raise CdfError("two options have the same value", where=w)
+                raise CdfError("two options have the same value", where=w,
+                               hint=f"give each flag of `enums: {s.enum.id}` its own bit (0x01, 0x02, 0x04, ...)"
+                               if s.flags and s.enum is not None else
+                               f"{s.type} cannot tell these option values apart: use an integer `type:`")
             default = _number(s, s.default, w)
             if values.count(default) != 1:
                 raise CdfError(f"default {default} is not exactly one of the options {', '.join(values)}", where=w,
                                hint="MAVSDK rejects the whole file when the default matches no option")
             unknown = set(hides) - {o.value for o in s.options}
             if unknown:
-                raise CdfError(f"hides names option values {sorted(unknown)} that are not options", where=w)
+                raise CdfError(f"hides names option values {sorted(unknown)} that are not options", where=w,
+                               hint=f"key `hides:` by this setting's option values: {', '.join(values[:8])}"
+                                    + (", ..." if len(values) > 8 else ""))
             for o, value in zip(s.options, values):
                 _check_text(o.name, f"option {value}", w)
                 excludes = tuple(p for p in hides.get(o.value, ()) if p in in_cdf and p != s.param)
@@ -290,12 +301,14 @@ def definition_view(camera: Camera, locales: Iterable[Locale] | None = None) -> 
                                hint="the spec does not combine min/max with exclusions; give it options")
             lo, hi = float(s.min), float(s.max)
             if not lo <= float(s.default) <= hi:
-                raise CdfError(f"default {s.default} outside {s.min}..{s.max}", where=w)
+                raise CdfError(f"default {s.default} outside {s.min}..{s.max}", where=w,
+                               hint="a bug in wiris-tools (the catalogue loader refuses this first): please report it")
             default = _number(s, s.default, w)
             attributes += [("min", _number(s, s.min, w)), ("max", _number(s, s.max, w))]
             if s.step is not None:
                 if float(s.step) <= 0:
-                    raise CdfError(f"step {s.step} must be positive", where=w)
+                    raise CdfError(f"step {s.step} must be positive", where=w,
+                                   hint="give `step:` a positive value, or leave it out")
                 attributes.append(("step", _number(s, s.step, w)))
             if s.decimals is not None and not s.is_integer:
                 attributes.append(("decimalPlaces", str(int(s.decimals))))
@@ -353,7 +366,8 @@ def _localize(camera: Camera, settings: tuple[Setting, ...], params: list[Parame
                                "identity string, which QGroundControl's localisation would replace too",
                                where=w, hint="reword the label or option name in the catalogue table")
             if sv.original.strip("-0123456789.") == "":
-                raise CdfError(f"{camera.id}: numeric text {sv.original!r} cannot be localised safely", where=w)
+                raise CdfError(f"{camera.id}: numeric text {sv.original!r} cannot be localised safely", where=w,
+                               hint="remove it from the locale table, or reword that label or option name")
             if sv.translated in originals:
                 raise CdfError(f"{camera.id}: translation {sv.translated!r} is itself an original string; "
                                "QGroundControl applies strings one after another and would translate it again",
@@ -392,7 +406,8 @@ def definition_file_name(camera: Camera) -> str:
     """The published file name: vendor, model and definition version, e.g. `workswell_wiris-pro_v1.xml`.
     A new version is a new file, so a hosted definition never changes under a URI a camera reports."""
     if camera.definition_version is None:
-        raise CdfError(f"{camera.id} has no definition_version", where=camera.table or camera.id)
+        raise CdfError(f"{camera.id} has no definition_version", where=camera.table or camera.id,
+                       hint=f"add `definition_version:` (1..65535) to the {camera.id} entry under `models:`")
     return f"{_slug(camera.vendor)}_{_slug(camera.model)}_v{camera.definition_version}.xml"
 
 

@@ -96,9 +96,12 @@ def read_file(path: str | Path) -> bytes:
     except FileNotFoundError:
         raise CdfError("no such file", where=str(path), hint="check the path") from None
     except IsADirectoryError:
-        raise CdfError("is a directory, not a camera definition file", where=str(path)) from None
+        raise CdfError("is a directory, not a camera definition file", where=str(path),
+                       hint="name the .xml or .xml.xz file itself (a bundle lists its files in manifest.json)"
+                       ) from None
     except OSError as err:
-        raise CdfError(f"cannot read: {err.strerror or err}", where=str(path)) from None
+        raise CdfError(f"cannot read: {err.strerror or err}", where=str(path),
+                       hint="check the path and that you may read the file") from None
 
 
 class _HttpOnlyRedirects(urllib.request.HTTPRedirectHandler):
@@ -168,9 +171,13 @@ def _fetch(url: str, timeout_s: float, deadline: float) -> bytes:
                            hint="is the server up and reachable?") from None
         raise CdfError(f"cannot fetch: {reason}", where=url, hint="check the URL and the network") from None
     except http.client.HTTPException as err:  # malformed status line, too many headers, ...
-        raise CdfError(f"broken HTTP answer: {type(err).__name__}: {err}", where=url) from None
+        if isinstance(err, http.client.InvalidURL):  # http.client refuses the URL itself: nothing was asked
+            raise CdfError(f"not a valid URL ({err})", where=url,
+                           hint="fix the URL (a space as %20, the port in digits)") from None
+        raise CdfError(f"broken HTTP answer: {type(err).__name__}: {err}", where=url,
+                       hint="is it an HTTP server? check the URL's host and port") from None
     except (OSError, ValueError) as err:
-        raise CdfError(f"cannot fetch: {err}", where=url) from None
+        raise CdfError(f"cannot fetch: {err}", where=url, hint="check the URL and the network") from None
 
 
 def _read_bounded(resp, url: str, deadline: float) -> bytes:

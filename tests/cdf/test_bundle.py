@@ -257,8 +257,44 @@ def test_a_failure_while_moving_files_rolls_back(tmp_path, monkeypatch):
 
 def test_output_path_that_is_a_file_is_refused(tmp_path):
     (tmp_path / "f").write_text("x")
-    with pytest.raises(CdfError, match="not a directory"):
+    with pytest.raises(CdfError, match="not a directory") as err:
         build_bundle(tmp_path / "f", ["wiris-pro"])
+    assert err.value.where == str(tmp_path / "f") and "-o" in err.value.hint
+
+
+@pytest.mark.parametrize("kind", ["directory", "symlink"])
+def test_a_directory_or_symlink_under_a_published_name_is_refused(tmp_path, kind):
+    out = tmp_path / "cdf"
+    out.mkdir()
+    target = out / "workswell_wiris-pro_v1.xml"
+    if kind == "directory":
+        target.mkdir()
+    else:
+        (tmp_path / "elsewhere.xml").write_bytes(cdf.generate.definition_xml(catalogue().get("wiris-pro")))
+        target.symlink_to(tmp_path / "elsewhere.xml")
+    with pytest.raises(CdfError, match="not a regular file") as err:
+        build_bundle(out, ["wiris-pro"], base_url=BASE)
+    assert err.value.where == str(target) and "move it away" in err.value.hint
+    assert sorted(p.name for p in out.iterdir()) == [target.name]
+
+
+def test_a_model_without_definition_version_is_refused_with_a_hint(tmp_path):
+    tables = table_copy(tmp_path)
+    edit_yaml(tables / "wiris-pro.yaml", lambda data: data["models"][0].pop("definition_version"))
+    with pytest.raises(CdfError, match="wiris-pro has no definition_version") as err:
+        build_bundle(tmp_path / "o", ["wiris-pro"], cat=load_catalogue(tables))
+    assert err.value.where == "wiris-pro.yaml" and "`definition_version:`" in err.value.hint
+    assert not (tmp_path / "o").exists()
+
+
+def test_an_xz_twin_that_does_not_inflate_back_is_reported_as_a_bug(tmp_path, monkeypatch):
+    import cdf.bundle
+
+    monkeypatch.setattr(cdf.bundle, "xz_bytes", lambda data: lzma.compress(data + b" ", format=lzma.FORMAT_XZ))
+    with pytest.raises(CdfError, match="xz twin does not inflate") as err:
+        build_bundle(tmp_path / "o", ["wiris-pro"], xz=True)
+    assert "report" in err.value.hint and "--xz" in err.value.hint
+    assert not (tmp_path / "o").exists()
 
 
 @pytest.mark.parametrize("out", ["d" * 300, "/proc/wiris-bundle"])
@@ -266,6 +302,7 @@ def test_an_output_directory_the_system_refuses_is_an_error(tmp_path, out):
     before = sorted(tmp_path.iterdir())
     r = CliRunner().invoke(cli, ["cdf", "build", "--all", "-o", str(tmp_path / out)])
     assert r.exit_code == 1 and "internal error" not in r.output and "cannot" in r.output, r.output
+    assert "\n  hint: " in r.output
     assert sorted(tmp_path.iterdir()) == before
 
 

@@ -306,27 +306,80 @@ def test_a_model_without_definition_is_refused_with_a_hint():
 ])
 def test_unsafe_settings_are_refused(change, match):
     cam = catalogue().get("wiris-pro")
-    with pytest.raises(CdfError, match=match):
+    with pytest.raises(CdfError, match=match) as err:
         definition_xml(_with_setting(cam, "layout", **change))
+    assert err.value.hint
+
+
+# Table values the catalogue loader lets through but the generator refuses (or, the last, never sees).
+@pytest.mark.parametrize("key, change, match, hint", [
+    ("layout", {"label": "HDMI\tlayout"}, "control character", "one line"),
+    ("layout", {"default": True}, "True is not a whole number for uint32", "not true or false"),
+    ("layout", {"hides": ((7, ("BLEND_OPACITY",)),)}, r"hides names option values \[7\]", "0, 1, 2, 3"),
+    ("capture", {"options": (Option(1, "a", "A"), Option(1, "b", "B"))}, "two options have the same value",
+     "own bit"),
+    ("blend_opacity", {"step": 0.5}, "0.5 is not a whole number for uint32", "`step:`"),
+    ("zoom", {"step": 0}, "step 0 must be positive", "`step:`"),
+    ("zoom", {"max": float("inf")}, "inf is not a finite number", ".inf"),
+    ("zoom", {"default": 20.0}, "default 20.0 outside", "bug in wiris-tools"),
+])
+def test_unsafe_values_are_refused_with_a_hint(key, change, match, hint):
+    cam = catalogue().get("wiris-pro")
+    with pytest.raises(CdfError, match=match) as err:
+        definition_xml(_with_setting(cam, key, **change))
+    assert err.value.where == f"cdf/tables/wiris-pro.yaml: setting {key}"
+    assert hint in err.value.hint, err.value.hint
 
 
 def test_a_default_outside_the_options_is_refused():
     cam = catalogue().get("wiris-pro")
-    with pytest.raises(CdfError, match="exactly one of the options"):
+    with pytest.raises(CdfError, match="exactly one of the options") as err:
         definition_xml(_with_setting(cam, "layout", default=9))
+    assert err.value.hint
 
 
 def test_a_range_without_max_is_refused():
     cam = catalogue().get("wiris-pro")
-    with pytest.raises(CdfError, match="min and max"):
+    with pytest.raises(CdfError, match="min and max") as err:
         definition_xml(_with_setting(cam, "zoom", max=None))
+    assert err.value.hint
 
 
 @pytest.mark.parametrize("version", [0, 65536, None])
 def test_definition_version_must_fit_uint16_and_not_be_zero(version):
     cam = dataclasses.replace(catalogue().get("wiris-pro"), definition_version=version)
-    with pytest.raises(CdfError, match="definition_version"):
+    with pytest.raises(CdfError, match="definition_version") as err:
         definition_xml(cam)
+    assert err.value.hint
+    if version is None:
+        with pytest.raises(CdfError, match="wiris-pro has no definition_version") as err:
+            definition_file_name(cam)
+        assert err.value.where == "wiris-pro.yaml" and "`definition_version:`" in err.value.hint
+
+
+@pytest.mark.parametrize("name, text, match, hint", [
+    ("de_DE.yaml", 'strings:\n  "Zoom": [Zoom\n', "cannot parse locale table", "line and column"),
+    ("de_DE.yaml", "- Zoom\n- Zoom\n", "needs a mapping `strings:", "`strings:`"),
+    ("de_DE.yaml", "strings:\n  Off: Aus\n", "both sides must be text", "quote"),
+    ("de_DE.yaml", 'strings:\n  "Zoom": "Zoom\\tfaktor"\n', "control character", "one line"),
+    ("de.yaml", "strings: {}\n", "is not ll_CC.yaml", "rename"),
+])
+def test_broken_locale_tables_are_refused_with_a_hint(tmp_path, name, text, match, hint):
+    (tmp_path / name).write_text(text, encoding="utf-8")
+    with pytest.raises(CdfError, match=match) as err:
+        load_locales(tmp_path)
+    assert err.value.where == str(tmp_path / name)
+    assert hint in err.value.hint, err.value.hint
+
+
+def test_a_numeric_option_name_cannot_be_translated():
+    cam = catalogue().get("wiris-pro")
+    s = cam.setting("main_camera")
+    bad = _with_setting(cam, "main_camera", options=(s.options[0], Option(1, "visible", "1.5")))
+    de = Locale("de_DE", (("1.5", "1,5"),) + tuple(load_locales()[1].strings))
+    with pytest.raises(CdfError, match="numeric text '1.5'") as err:
+        definition_xml(bad, [de])
+    assert "locale table" in err.value.hint
 
 
 # --------------------------------------------------------------------------------------- the loader

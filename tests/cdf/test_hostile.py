@@ -6,7 +6,9 @@ from __future__ import annotations
 import http.server
 import lzma
 import socket
+import struct
 import threading
+import time
 import tracemalloc
 from contextlib import contextmanager
 
@@ -265,12 +267,51 @@ def test_server_that_never_answers_times_out():
 
 
 def test_unsupported_scheme_and_missing_file(tmp_path):
-    with pytest.raises(CdfError, match="scheme"):
+    with pytest.raises(CdfError, match="scheme") as err:
         validate_source("mftp://camera.xml")
-    with pytest.raises(CdfError, match="no such file"):
+    assert "http" in err.value.hint
+    with pytest.raises(CdfError, match="no such file") as err:
         validate_source(tmp_path / "nope.xml")
-    with pytest.raises(CdfError, match="directory"):
+    assert err.value.hint
+    with pytest.raises(CdfError, match="directory") as err:
         validate_source(tmp_path)
+    assert err.value.where == str(tmp_path) and ".xml" in err.value.hint
+    (tmp_path / "a.xml").write_bytes(GOOD)
+    with pytest.raises(CdfError, match="cannot read") as err:   # a path through a file
+        validate_source(tmp_path / "a.xml" / "b.xml")
+    assert err.value.hint
+
+
+@pytest.mark.parametrize("url", ["http://127.0.0.1:abc/cdf.xml", "http://127.0.0.1:1/a b.xml"])
+def test_a_url_http_client_refuses_says_to_fix_the_url(url):
+    with pytest.raises(CdfError, match="not a valid URL") as err:
+        validate_source(url, timeout_s=2)
+    assert err.value.where == url and "fix the URL" in err.value.hint
+
+
+def test_a_connection_reset_while_downloading_is_a_cdf_error_with_a_hint():
+    listener = socket.socket()
+    listener.bind(("127.0.0.1", 0))
+    listener.listen(1)
+
+    def reset():
+        conn, _ = listener.accept()
+        conn.recv(65536)
+        conn.sendall(b"HTTP/1.0 200 OK\r\nContent-Type: application/xml\r\n\r\n<mavlinkcamera>")
+        time.sleep(0.2)   # the client is reading the body by now
+        conn.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))   # close with RST
+        conn.close()
+
+    t = threading.Thread(target=reset, daemon=True)
+    t.start()
+    url = f"http://127.0.0.1:{listener.getsockname()[1]}/cdf.xml"
+    try:
+        with pytest.raises(CdfError, match="cannot fetch") as err:
+            validate_source(url, timeout_s=2)
+        assert err.value.where == url and err.value.hint
+    finally:
+        listener.close()
+        t.join(5)
 
 
 def test_empty_and_binary_input():
@@ -332,6 +373,7 @@ def test_server_with_endless_headers_or_garbage(answer):
         with pytest.raises(CdfError) as err:
             validate_source(f"http://127.0.0.1:{listener.getsockname()[1]}/cdf.xml", timeout_s=0.5)
         assert "HTTP" in str(err.value) or "too slowly" in str(err.value)
+        assert err.value.hint
     finally:
         stop.set()
         listener.close()

@@ -332,6 +332,15 @@ def test_cli_json_one_object_per_file(tmp_path):
     assert all(set(o) == {"file", "valid", "profile", "parameters", "findings"} for o in objs)
 
 
+def test_cli_says_what_to_do_about_a_source_it_cannot_read(tmp_path):
+    r = CliRunner().invoke(cli, ["cdf", "validate", str(tmp_path)])
+    assert r.exit_code == 1
+    line = next(x for x in r.output.splitlines() if " CDF001 " in x)
+    assert line.startswith(f"{tmp_path}: ERROR CDF001 is a directory") and "(hint: name the .xml" in line
+    r = CliRunner().invoke(cli, ["cdf", "validate", "--json", str(tmp_path)])
+    assert "(hint: " in json.loads(r.output)["findings"][0]["message"]
+
+
 def test_cli_usage_errors_exit_2():
     runner = CliRunner()
     assert runner.invoke(cli, ["cdf", "validate"]).exit_code == 2
