@@ -302,6 +302,12 @@ def _read_yaml(path: Path) -> dict:
     loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml when present: 10x faster, same result
     try:
         data = yaml.load(path.read_text(encoding="utf-8"), Loader=loader)
+    except FileNotFoundError:
+        raise CdfError("no such catalogue table", where=str(path),
+                       hint="`extends:` names a table of the same directory, without .yaml (e.g. workswell)") from None
+    except (OSError, UnicodeDecodeError) as err:
+        raise CdfError(f"cannot read catalogue table: {getattr(err, 'strerror', None) or err}", where=str(path),
+                       hint="tables are UTF-8 text files the user may read") from None
     except yaml.YAMLError as err:
         raise CdfError(f"cannot parse catalogue table: {err}", where=str(path),
                        hint="fix the YAML at the line and column it names (indentation, quotes, colons)") from None
@@ -418,6 +424,18 @@ def _check_setting(s: Setting, where: str) -> None:
 
 
 def _load_table(path: Path, read: Callable[[Path], dict] = _read_yaml) -> list[Camera]:
+    """The cameras of one family table; an entry without a key the loader needs, or of the wrong kind, is a
+    CdfError naming the table (the named checks below say more where they apply)."""
+    try:
+        return _cameras_of_table(path, read)
+    except (KeyError, TypeError, ValueError, AttributeError, OverflowError) as err:
+        what = f"missing key {err}" if isinstance(err, KeyError) else f"{type(err).__name__}: {err}"
+        raise CdfError(f"a table entry is incomplete or of the wrong kind ({what})", where=path.name,
+                       hint="compare the entry with the same one in wiris-pro.yaml (enums need options: with "
+                            "value, key, name; settings need key: and param:)") from None
+
+
+def _cameras_of_table(path: Path, read: Callable[[Path], dict]) -> list[Camera]:
     raw = read(path)
     where = path.name
     base: dict = {}

@@ -179,6 +179,17 @@ BROKEN_TABLES = {
                                    "camera id used twice: rededge-mx", "{dir}", RE),
     "camera-id-twice-in-two-tables": (RE, _data(lambda d: d["models"][0].update(id="wiris-pro")),
                                       "camera id used twice: wiris-pro", "{dir}", PRO),
+    # these crashed as internal errors (FileNotFoundError, UnicodeDecodeError, KeyError, OverflowError)
+    "extends-unknown-table": (PRO, _text(lambda t: t.replace("extends: workswell", "extends: workswel", 1)),
+                              "no such catalogue table", "{dir}/workswel.yaml", "`extends:`"),
+    "not-utf8": (RE, lambda p: p.write_bytes(p.read_bytes() + b"# \xff\n"), "cannot read catalogue table",
+                 "{dir}/" + RE, "UTF-8"),
+    "enumerator-without-options": (RE, _data(lambda d: d["enums"]["raw_format"].pop("options")),
+                                   "missing key 'options'", RE, "enums need options:"),
+    "setting-without-key": (RE, _data(lambda d: _setting(d, "wifi").pop("key")), "missing key 'key'", RE,
+                            "settings need key:"),
+    "integer-setting-max-inf": (RE, _data(lambda d: _setting(d, "wifi").update(type="uint8", max=float("inf"))),
+                                "OverflowError", RE, "compare the entry"),
 }
 
 
