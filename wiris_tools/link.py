@@ -92,7 +92,7 @@ _RESULT_HINTS = {
     mavlink2.MAV_RESULT_COMMAND_INT_ONLY: "the target takes this command only as COMMAND_INT (Link.command_int)",
 }
 # any other result (MAV_RESULT_CANCELLED, a number this dialect does not define)
-_OTHER_RESULT_HINT = "a result this MAVLink dialect does not explain: see the target's documentation or firmware"
+_OTHER_RESULT_HINT = "a result this tool has no advice for: see the target's documentation or firmware"
 
 
 def command_name(command: int) -> str:
