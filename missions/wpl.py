@@ -28,7 +28,7 @@ from pathlib import Path
 
 from missions.errors import PlanError
 from missions.items import FRAME_GLOBAL, MISSION_TYPE_MISSION, MissionItem
-from missions.planfile import FLOAT32_MAX, MAX_ITEMS, _scale, atomic_write, check_finite, xy_hint
+from missions.planfile import FLOAT32_MAX, MAX_ITEMS, READ_HINT, _scale, atomic_write, check_finite, xy_hint
 
 Home = tuple[float, float, float]
 
@@ -37,7 +37,6 @@ HEADER = "QGC WPL 110"
 # nothing this tool could not read again.
 MAX_WPL_BYTES = 16 * 1024 * 1024
 SIZE_HINT = "a waypoint file of 65535 items is about 6 MB, at most 12 MB: is this the right file?"
-READ_HINT = "check the path and that you may read the file"
 CMD_NAV_WAYPOINT = 16   # MAV_CMD_NAV_WAYPOINT (common.xml)
 
 
