@@ -86,12 +86,6 @@ def _writers(compiled: Compiled, rep: dict, sim) -> list[tuple[str, Callable[[Pa
     return out
 
 
-def _file_mode() -> int:
-    umask = os.umask(0)
-    os.umask(umask)
-    return 0o666 & ~umask
-
-
 def _stale_parts(out_dir: Path, name: str, keep: set[str]) -> list[Path]:
     pat = re.compile(re.escape(name) + r"\.part\d+\.(plan|waypoints)$")
     if not out_dir.is_dir():
@@ -101,6 +95,7 @@ def _stale_parts(out_dir: Path, name: str, keep: set[str]) -> list[Path]:
 
 def write_outputs(compiled: Compiled, out_dir: str | Path, rep: dict | None = None, sim=None) -> list[Path]:
     """Write every output file of `compiled` into `out_dir`; return their paths (in the order above)."""
+    from missions.planfile import new_file_mode
     from missions.report import report, simulate
 
     out_dir = Path(out_dir)
@@ -131,7 +126,7 @@ def write_outputs(compiled: Compiled, out_dir: str | Path, rep: dict | None = No
         old_dir = tmp / "old"
         new_dir.mkdir()
         old_dir.mkdir()
-        mode = _file_mode()
+        mode = new_file_mode()
         for fname, write in writers:
             write(new_dir / fname)
             os.chmod(new_dir / fname, mode)     # temp files are 0600; outputs are ordinary files

@@ -35,6 +35,7 @@ import contextlib
 import json
 import math
 import os
+import stat
 import tempfile
 from decimal import ROUND_HALF_UP, Decimal
 from pathlib import Path
@@ -300,10 +301,25 @@ def check_writable(path: str | Path) -> None:
     os.unlink(tmp)
 
 
+def new_file_mode() -> int:
+    """The permissions a new file gets here (0666 less the umask): mkstemp's temporary files are 0600."""
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o666 & ~umask
+
+
+def _mode_for(path: Path) -> int:
+    try:
+        return stat.S_IMODE(os.stat(path).st_mode)  # a file replaced keeps its permissions
+    except OSError:
+        return new_file_mode()
+
+
 @contextlib.contextmanager
 def replacing(path: Path, what: str = "the file") -> Iterator[Path]:
     """A temporary file beside `path` to write, renamed onto `path` when the block ends; on any error it is
-    removed and an existing file at `path` stays unchanged. An OSError becomes a PlanError naming `what`."""
+    removed and an existing file at `path` stays unchanged. An OSError becomes a PlanError naming `what`.
+    The result has the replaced file's permissions, or a new file's (not the temporary file's 0600)."""
     try:
         fd, tmp = _temp_beside(path)
     except OSError as err:
@@ -311,6 +327,7 @@ def replacing(path: Path, what: str = "the file") -> Iterator[Path]:
     os.close(fd)
     try:
         yield Path(tmp)
+        os.chmod(tmp, _mode_for(path))
         os.replace(tmp, path)
     except BaseException as err:
         Path(tmp).unlink(missing_ok=True)

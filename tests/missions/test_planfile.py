@@ -143,6 +143,22 @@ def test_file_form_writes_atomically(tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["m.plan"]
 
 
+def test_a_written_file_has_ordinary_permissions_or_keeps_those_it_replaces(tmp_path):
+    # mkstemp's temporary file is 0600: downloads (atomic_write) came out readable by their owner only
+    import os
+
+    umask = os.umask(0o022)
+    try:
+        target = tmp_path / "m.plan"
+        planfile.atomic_write(target, "{}")
+        assert target.stat().st_mode & 0o777 == 0o644
+        target.chmod(0o640)
+        planfile.atomic_write(target, "{}\n")
+        assert target.stat().st_mode & 0o777 == 0o640 and target.read_text() == "{}\n"
+    finally:
+        os.umask(umask)
+
+
 @pytest.mark.parametrize("mutate,where", [
     (lambda d: d.__setitem__("fileType", "Mission"), "fileType"),
     (lambda d: d.pop("geoFence"), "x.plan"),

@@ -104,6 +104,17 @@ def test_html_is_self_contained(mission, tmp_path):
     assert f"{100 * rep['coverage']['thermal']:.2f} %" in text
 
 
+def test_a_preview_is_an_ordinary_file(mission, tmp_path):
+    import os
+
+    umask = os.umask(0o022)
+    try:
+        out = write_preview(mission, tmp_path / "p.svg")
+    finally:
+        os.umask(umask)
+    assert out.stat().st_mode & 0o777 == 0o644   # not the temporary file's 0600
+
+
 def test_unknown_suffix_is_a_plan_error_and_writes_nothing(mission, tmp_path):
     with pytest.raises(PlanError) as e:
         write_preview(mission, tmp_path / "p.jpg")
