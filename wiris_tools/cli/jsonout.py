@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import json
-
 import click
-
-from missions.jsonfinite import finite
 
 
 def echo_json(obj, indent: int | None = None) -> None:
     """Cameras and vehicles send NaN for "unknown" (and a broken one may send inf): written as null."""
+    import json  # here, not at module level: `wiris --help` imports this module (tests/test_cli_startup.py)
+
+    from missions.jsonfinite import finite
+
     click.echo(json.dumps(finite(obj), indent=indent, allow_nan=False, default=str))
