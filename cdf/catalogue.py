@@ -231,6 +231,12 @@ class Camera:
     def setting_by_param(self, param: str) -> Setting | None:
         return next((s for s in self.settings if s.param == param), None)
 
+    def option_key(self, key: str, value: Any) -> Any:
+        """How a plan writes `value` of setting `key`: its option's key when the setting has one for it."""
+        s = self.setting(key)
+        option = s.enum.by_value(value) if s is not None and s.enum else None
+        return option.key if option is not None else value
+
     def imager(self, imager_id: str) -> Imager | None:
         return next((i for i in self.imagers if i.id == imager_id), None)
 

@@ -107,9 +107,7 @@ def _unmet_hint(cam: Any, values: Sequence[tuple[str, Any]], state: dict) -> str
         s = cam.setting(key)
         for wkey, wval in (s.command.when if s is not None and s.command is not None else ()):
             if state.get(wkey) != wval:
-                ws = cam.setting(wkey)
-                option = ws.enum.by_value(wval) if ws is not None and ws.enum else None
-                text = f"{wkey}: {option.key if option is not None else wval}"
+                text = f"{wkey}: {cam.option_key(wkey, wval)}"
                 if text not in need:
                     need.append(text)
     if need:

@@ -586,7 +586,7 @@ def _check_settings(camera: Any, settings: Any, path: tuple, conv: _Yaml, proble
         if s.command and s.command.when:
             for wkey, wval in s.command.when:
                 if merged.get(wkey) != wval:
-                    opt = _option_key(camera, wkey, wval)
+                    opt = camera.option_key(wkey, wval)
                     problems.append(Problem(_at(conv, path + (key,), key=True),
                                             f"{key} takes effect only with {wkey}: {opt}",
                                             f"add `{wkey}: {opt}` to the same settings"))
@@ -598,20 +598,13 @@ def _check_settings(camera: Any, settings: Any, path: tuple, conv: _Yaml, proble
             continue
         trigger = next((k for k, v in slot.when if k in given and given[k] == v), None)
         if trigger is not None and all(merged.get(k) == v for k, v in slot.when):
-            opt = _option_key(camera, trigger, given[trigger])
+            opt = camera.option_key(trigger, given[trigger])
             problems.append(Problem(_at(conv, path + (trigger,)),
                                     f"{trigger}: {opt} also needs {s.key} ({s.label}): the {slot.message} message "
                                     "carries it and has no value meaning 'keep'",
                                     f"add `{s.key}` to the same settings"))
     state.update(given)
     return tuple(raw), tuple(values)
-
-
-def _option_key(camera: Any, key: str, value: Any) -> Any:
-    """How a plan writes `value` of setting `key`: its option's key when the setting has one for it."""
-    s = camera.setting(key)
-    option = s.enum.by_value(value) if s is not None and s.enum else None
-    return option.key if option is not None else value
 
 
 def _meaning(data: dict, conv: _Yaml, problems: list[Problem], base_dir: Path) -> tuple[dict, list[str]]:
