@@ -297,8 +297,9 @@ def _name_hint(name: Any, known: Iterable[str], rule: str, aliases: dict[str, st
     return f"{rule}: {listed}" if len(listed) <= 60 else f"{rule}; check the spelling"
 
 
-def _values_text(values: Iterable[float | int], most: int = 8) -> str:
-    shown = [_fmt(v) for v in values]
+def short_list(texts: Iterable[str], most: int = 8) -> str:
+    """The first `most` texts, comma-separated, and "..." when there are more (values listed in a hint)."""
+    shown = list(texts)
     return ", ".join(shown[:most]) + (", ..." if len(shown) > most else "")
 
 
@@ -409,7 +410,7 @@ def _check_setting(s: Setting, where: str) -> None:
     if s.options:
         if not any(o.value == s.default for o in s.options):
             left_out = s.enum.by_value(s.default) if s.enum is not None else None
-            hint = f"set `default:` to one of the option values {_values_text(o.value for o in s.options)}"
+            hint = f"set `default:` to one of the option values {short_list(_fmt(o.value) for o in s.options)}"
             if left_out is not None:
                 hint = f"`without:` leaves out option {left_out.key!r}: keep it, or {hint}"
             raise CdfError(f"setting {s.key}: default {s.default} is not among its options", where=where, hint=hint)

@@ -35,7 +35,7 @@ from decimal import Decimal
 from pathlib import Path
 from typing import Iterable
 
-from cdf.catalogue import INTEGER_RANGES, PARAM_NAME_MAX, Camera, Catalogue, Setting
+from cdf.catalogue import INTEGER_RANGES, PARAM_NAME_MAX, Camera, Catalogue, Setting, short_list
 from cdf.errors import CdfError
 
 TEMPLATE = "camera_definition.xml.j2"
@@ -284,8 +284,7 @@ def definition_view(camera: Camera, locales: Iterable[Locale] | None = None) -> 
             unknown = set(hides) - {o.value for o in s.options}
             if unknown:
                 raise CdfError(f"hides names option values {sorted(unknown)} that are not options", where=w,
-                               hint=f"key `hides:` by this setting's option values: {', '.join(values[:8])}"
-                                    + (", ..." if len(values) > 8 else ""))
+                               hint=f"key `hides:` by this setting's option values: {short_list(values)}")
             for o, value in zip(s.options, values):
                 _check_text(o.name, f"option {value}", w)
                 excludes = tuple(p for p in hides.get(o.value, ()) if p in in_cdf and p != s.param)
