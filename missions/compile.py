@@ -16,6 +16,7 @@ no_optics, mission_split, px4_single_capture_all.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any
 
@@ -56,19 +57,26 @@ def _check_reach(home: Any, lat: float, lon: float, what: str, where: str) -> No
                         hint="check the coordinates of home and of this step (latitude and longitude swapped?)")
 
 
-def _rededge_tolerance(alts: list[float]) -> tuple[float, float]:
-    """operatingAlt and opAltTolerance covering every survey altitude the RedEdge flies. The tolerance keeps it
-    from shooting while climbing; a quarter of the altitude (at least 10 m) is our choice, not MicaSense's."""
-    lo, hi = min(alts), max(alts)
-    mid = (lo + hi) / 2.0
-    return mid, (hi - lo) / 2.0 + max(10.0, 0.25 * mid)
+def _rededge_survey(alts: list[float], overlaps: list[tuple[float, float]]):
+    """The RedEdge overlap-mode parameters covering every survey it flies, in the camera's integers: it captures
+    from operatingAlt - opAltTolerance up, so the target is the lowest survey altitude (rounded down: were the
+    camera to space its captures by the target altitude's footprint, higher surveys only gain overlap) and the
+    tolerance reaches a margin below it, so that it does not shoot while climbing (a quarter of the altitude, at
+    least 10 m: our choice, not MicaSense's). The overlaps are the most demanding of the surveys (rounded up)."""
+    from missions.setup import RedEdgeSurvey
+
+    lowest = min(alts)
+    target = max(int(math.floor(lowest)), 1)
+    threshold = lowest - max(10.0, 0.25 * lowest)
+    return RedEdgeSurvey(target, max(int(math.ceil(target - threshold)), 0),
+                         int(math.ceil(max(f for f, _s in overlaps))), int(math.ceil(max(s for _f, s in overlaps))))
 
 
 def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -> Compiled:
     from cdf.catalogue import catalogue
     from missions.lua import render_script
     from missions.params import autopilot_params
-    from missions.setup import RedEdgeSurvey, setup_steps
+    from missions.setup import setup_steps
     from missions.survey import MAX_PHOTOS
 
     plan = path_or_plan if isinstance(path_or_plan, Plan) else load_plan(path_or_plan)
@@ -104,7 +112,8 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     areas: list[AreaInfo] = []
     intent: list[Any] = []
     rededge_alts: dict[str, list[float]] = {}
-    rededge_overlap: dict[str, tuple[float, float]] = {}
+    rededge_overlap: dict[str, list[tuple[float, float]]] = {}
+    rededge_speeds: list[tuple[str, float, float, Any]] = []   # (payload, altitude, speed, where) per survey
     altitudes: list[tuple[float, str]] = []
     speed = plan.vehicle.speed_mps
     if not any(isinstance(s, TakeoffStep) for s in plan.mission):
@@ -148,12 +157,12 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
             interval = optics.check_interval(info, trig, speed, where=where_speed) if moving else None
             for other in step.payloads:
                 if cameras[other].protocol == "rededge-serial":
-                    # its own overlap mode: its own footprint and the plan's front overlap, at the same speed
+                    # its own overlap mode: its own footprint and front overlap (checked once all surveys are
+                    # known: the camera holds one overlap, the most demanding), at the same speed
                     if other in infos and other != lead:
-                        optics.check_interval(infos[other], optics.trigger_m(infos[other], alt, step.front_pct),
-                                              speed, where=where_speed)
+                        rededge_speeds.append((other, alt, speed, where_speed))
                     rededge_alts.setdefault(other, []).append(alt)
-                    rededge_overlap.setdefault(other, (step.front_pct, step.side_pct))
+                    rededge_overlap.setdefault(other, []).append((step.front_pct, step.side_pct))
                 elif other == lead:
                     continue
                 elif other not in infos:
@@ -240,11 +249,11 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
             warnings.append(f"altitude_above_120m: {alt:g} m above home at {where}; most rules allow "
                             f"{MAX_AGL_M:g} m above ground without a permit (ground assumed flat at home's height)")
 
-    rededge = {}
-    for name, alts in rededge_alts.items():
-        op_alt, tol = _rededge_tolerance(alts)
-        front, side = rededge_overlap[name]
-        rededge[name] = RedEdgeSurvey(op_alt, tol, front, side)
+    rededge = {name: _rededge_survey(alts, rededge_overlap[name]) for name, alts in rededge_alts.items()}
+    for name, alt, step_speed, where_speed in rededge_speeds:
+        own = dict(next(p.values for p in plan.payloads if p.name == name))   # the plan's setting wins
+        front = own.get("overlap_along_pct", rededge[name].front_pct)
+        optics.check_interval(infos[name], optics.trigger_m(infos[name], alt, front), step_speed, where=where_speed)
     try:
         setup = setup_steps(plan.payloads, cameras, rededge)
     except PlanError as e:

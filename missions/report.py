@@ -193,7 +193,9 @@ def self_triggering(compiled: Compiled) -> dict[str, tuple[float, float, float]]
     """Payloads the setup puts in a capture mode of their own: name -> (altitude, tolerance, front overlap %).
 
     A RedEdge in overlap mode (autoCapMode 2, MicaSense's recommended mode) shoots from its own GPS whenever it
-    is within opAltTolerance of operatingAlt and has moved (1 − overlapAlongTrk) of a footprint: the autopilot's
+    is no more than opAltTolerance below operatingAlt (higher is fine: "when the sensor's altitude is below the
+    Target Altitude Tolerance from the Target Altitude, the sensor stops capturing", RedEdge-MX Integration
+    Guide) and has moved (1 − overlapAlongTrk) of a footprint, taken here at operatingAlt: the autopilot's
     trigger commands do not reach it, so its photos follow the path and altitude, not the trigger items.
     """
     params: dict[str, dict[str, float]] = {}
@@ -578,11 +580,11 @@ def _photos(compiled: Compiled, verts: Sequence[Vertex], times: np.ndarray, w: _
     for name, (op_alt, tol, front_pct) in self_triggering(compiled).items():
         pay = compiled.payload(name)
         d = pay.footprint_m(op_alt)[1] * (1.0 - front_pct / 100.0)
-        inband = np.abs(alts - op_alt) <= tol + 1e-6
+        inband = alts >= op_alt - tol - 1e-6
         # it shoots on transits too: the plan's photo budget holds them (checked before they are placed)
         in_band_m = float(np.hypot(*np.diff(xy, axis=0).T)[inband[:-1] & inband[1:]].sum())
-        check_photo_budget(in_band_m / d, f"flight's {name} payload (shooting by itself wherever it flies at "
-                                          f"{op_alt:g} ± {tol:g} m, transits included)")
+        check_photo_budget(in_band_m / d, f"flight's {name} payload (shooting by itself wherever it flies "
+                                          f"{op_alt - tol:g} m or higher, transits included)")
         k = 0
         while k < len(verts) - 1:
             if inband[k] and inband[k + 1]:
@@ -720,9 +722,9 @@ def _trigger_intervals(compiled: Compiled, w: _Walk, verts: Sequence[Vertex],
     for s0, s1, iv, pl, _n, src in w.time_spans:
         for p in pl:
             out.append((p, iv, iv, src))
-    for name, (op_alt, _tol, front_pct) in self_triggering(compiled).items():
+    for name, (op_alt, tol, front_pct) in self_triggering(compiled).items():
         d = compiled.payload(name).footprint_m(op_alt)[1] * (1.0 - front_pct / 100.0)
-        spd = max((v.speed_mps for v in verts if abs(v.alt_m - op_alt) <= _tol), default=compiled.speed_mps)
+        spd = max((v.speed_mps for v in verts if v.alt_m >= op_alt - tol - 1e-6), default=compiled.speed_mps)
         if spd > 0:
             out.append((name, d, d / spd, -1))
     return out

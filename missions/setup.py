@@ -124,12 +124,14 @@ def _describe(cmd: CameraCommand, camera: Any, values: Mapping[str, Any]) -> str
 
 @dataclass(frozen=True)
 class RedEdgeSurvey:
-    """What the RedEdge overlap mode needs from the plan."""
+    """What the RedEdge overlap mode needs from the plan, as the camera's integer parameters hold it: it
+    captures whenever it is at least altitude_m - altitude_tolerance_m above the ground (serial API
+    opAltTolerance: "distance below the operating altitude to enable automatic capture modes")."""
 
-    altitude_m: float
-    altitude_tolerance_m: float
-    front_pct: float
-    side_pct: float
+    altitude_m: int
+    altitude_tolerance_m: int
+    front_pct: int
+    side_pct: int
 
 
 def setup_steps(payloads: Iterable[Any], cameras: Mapping[str, Any],
@@ -158,9 +160,13 @@ def setup_steps(payloads: Iterable[Any], cameras: Mapping[str, Any],
     return tuple(steps)
 
 
-def _param_step(p: Any, param_id: str, value: float, why: str) -> SetupStep:
-    return SetupStep(description=why, target_component=p.component_id, kind="param_set", param_id=param_id,
-                     value=float(value), type="MAV_PARAM_TYPE_REAL32", expect="PARAM_VALUE", payload=p.name)
+def _param_step(p: Any, s: Any, value: float | int, why: str) -> SetupStep:
+    """A classic PARAM_SET of catalogue setting `s`, typed as the camera's parameter is (the camera reads the
+    value's bytes as that type: `wiris camera apply` packs them so)."""
+    value = s.check(value)
+    ptype = "MAV_PARAM_TYPE_" + ("REAL32" if s.type == "float" else s.type.upper())
+    return SetupStep(description=why, target_component=p.component_id, kind="param_set", param_id=s.param,
+                     value=value, type=ptype, expect="PARAM_VALUE", payload=p.name)
 
 
 # DIGICAM_CONFIGURE's value for "every imager" in its extra_param field (serial API: "Set to 255 for all")
@@ -175,7 +181,7 @@ def _rededge_steps(p: Any, cam: Any, survey: RedEdgeSurvey | None) -> list[Setup
     shown: list[str] = []             # the plan's settings behind them, for the step's description
     for key, value, s in message_settings(cam, p.values):
         if s.command.message == "PARAM_SET":
-            param_sets.append(_param_step(p, s.param, value, f"{key} = {written.get(key)!r} (plan setting)"))
+            param_sets.append(_param_step(p, s, value, f"{key} = {written.get(key)!r} (plan setting)"))
         elif s.command.message == "DIGICAM_CONFIGURE":
             digicam[s.command.field] = int(value)
             shown.append(f"{key} = {written.get(key)!r}")
@@ -184,22 +190,25 @@ def _rededge_steps(p: Any, cam: Any, survey: RedEdgeSurvey | None) -> list[Setup
                             "sequence does not send", hint="set it in the RedEdge web page (http://192.168.10.254)")
     if survey is not None:
         auto = {
-            "autoCapMode": (cam.setting("auto_capture").check("overlap"),
-                            "RedEdge overlap mode (autoCapMode 2): it triggers itself from GPS, MicaSense's "
-                            "recommended mode; autopilot trigger commands do not reach it"),
-            "operatingAlt": (survey.altitude_m, "overlap mode's target altitude: the survey altitude above take-off"),
+            "autoCapMode": ("overlap", "RedEdge overlap mode (autoCapMode 2): it triggers itself from GPS, "
+                                       "MicaSense's recommended mode; autopilot trigger commands do not reach it"),
+            "operatingAlt": (survey.altitude_m, "overlap mode's target altitude: the lowest survey altitude above "
+                                                "take-off"),
             "opAltTolerance": (survey.altitude_tolerance_m,
-                               "capture only within this many metres of the target altitude (not while climbing)"),
-            "overlapAlongTrk": (survey.front_pct, "front overlap of the plan (overlap mode computes along-track only)"),
+                               "it captures from this many metres below the target altitude up (not while "
+                               "climbing to it)"),
+            "overlapAlongTrk": (survey.front_pct, "front overlap of the plan (overlap mode computes along-track "
+                                                  "only)"),
             "overlapCrossTrk": (survey.side_pct, "side overlap of the plan (the lines are spaced by the planner)"),
         }
-        for key, (value, why) in auto.items():
-            s = cam.setting_by_param(key)
-            if s is not None and s.key in user:
+        for param, (value, why) in auto.items():
+            s = cam.setting_by_param(param)
+            if s is None:
+                raise PlanError(f"payload {p.name}: the catalogue's {cam.id} has no parameter {param}",
+                                hint="the RedEdge table in cdf/tables/ lists the overlap-mode parameters; restore it")
+            if s.key in user:
                 continue   # the plan's own setting wins
-            if s is not None:
-                s.check(value)
-            steps.append(_param_step(p, key, value, why))
+            steps.append(_param_step(p, s, value, why))
     steps += param_sets
     if digicam:
         fields = tuple(sorted({**digicam, "extra_param": ALL_IMAGERS}.items()))

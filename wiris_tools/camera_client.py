@@ -422,22 +422,32 @@ class CameraClient:
         raise LinkError(f"{name}: no PARAM_EXT_ACK after {self.retries + 1} tries ({self.timeout_s:g} s each)",
                         where=where or name, hint="is the camera still connected? does it speak PARAM_EXT?")
 
-    def set_param(self, name: str, value: float, *, where: str | None = None) -> float:
-        """Classic PARAM_SET (a RedEdge's parameters): the camera answers PARAM_VALUE with what it holds."""
+    def set_param(self, name: str, value: float | int, cdf_type: str = "float", *,
+                  where: str | None = None) -> float | int:
+        """Classic PARAM_SET (a RedEdge's parameters), the value byte-wise as `cdf_type` (the camera reads the
+        4 bytes as its parameter's type: paramext.encode_classic); the camera answers PARAM_VALUE with what
+        it holds."""
         def ours(m: Any) -> bool:
             return m.param_id == name
 
-        msg = self.link.mav.param_set_encode(self.system, self.component, name.encode(), float(value),
-                                             mavlink2.MAV_PARAM_TYPE_REAL32)
+        try:
+            carried = paramext.encode_classic(value, cdf_type)
+        except paramext.WireValueError as err:
+            raise LinkError(f"{name}: {err}", where=where or name,
+                            hint="a classic parameter is at most 4 bytes: uint8…int32 or float") from None
+        msg = self.link.mav.param_set_encode(self.system, self.component, name.encode(), carried,
+                                             paramext.classic_type(cdf_type))
         with self.link.inbox("PARAM_VALUE", src_component=self.component, predicate=ours) as box:
             for _attempt in range(self.retries + 1):
                 self.link.send(msg)
                 answer = box.get(self.timeout_s)
                 if answer is not None:
-                    if not math.isclose(answer.param_value, float(value), rel_tol=1e-6, abs_tol=1e-6):
-                        raise LinkError(f"{name} = {value}: the camera kept {answer.param_value:g}",
-                                        where=where or name, hint="the value is outside what the camera accepts")
-                    return answer.param_value
+                    held = paramext.decode_classic(answer.param_value, answer.param_type)
+                    if held is None or not math.isclose(held, value, rel_tol=1e-6, abs_tol=1e-6):
+                        shown = f"{held:g}" if held is not None else f"a value of type {answer.param_type}"
+                        raise LinkError(f"{name} = {value}: the camera kept {shown}", where=where or name,
+                                        hint="the value is outside what the camera accepts")
+                    return held
         raise LinkError(f"{name}: no PARAM_VALUE after {self.retries + 1} tries ({self.timeout_s:g} s each)",
                         where=where or name, hint="is the camera connected, and is the parameter name right?")
 
@@ -544,7 +554,7 @@ class CameraClient:
         comp = self.component
         self.component = target
         try:
-            held = self.set_param(step.param_id, float(step.value), where=where)
+            held = self.set_param(step.param_id, step.value, step.type, where=where)
         except LinkError as err:
             raise LinkError(f"stopped the sequence: {err.message}",
                             where=where, hint=getattr(err, "hint", None)) from None
@@ -698,8 +708,23 @@ def parse_setup(data: Any, where: str = "setup") -> list[Step]:
                 paramext.encode(value, ptype)
             except paramext.WireValueError as err:
                 raise LinkError(f"{pid}: {err}", where=loc, hint="type is a definition type: uint8…int64, float, double") from None
+        else:
+            ptype = _classic_type_name(ptype)
+            try:
+                paramext.encode_classic(value, ptype)
+            except paramext.WireValueError as err:
+                raise LinkError(f"{pid}: {err}", where=loc,
+                                hint='type is the parameter\'s MAV_PARAM_TYPE, e.g. "MAV_PARAM_TYPE_UINT32" or '
+                                     '"MAV_PARAM_TYPE_REAL32" (4 bytes at most), with a value that fits it') from None
         steps.append(Step(i, desc, kind, comp, None, (), "", pid, value, ptype))
     return steps
+
+
+def _classic_type_name(ptype: str) -> str:
+    """A param_set step's type as a definition type name: "MAV_PARAM_TYPE_UINT32" (as compile writes it) ->
+    "uint32", "MAV_PARAM_TYPE_REAL32" -> "float"; a definition type name stays as it is."""
+    name = ptype.upper().removeprefix("MAV_PARAM_TYPE_").lower()
+    return "float" if name == "real32" else name
 
 
 def load_setup(path: str | Path) -> list[Step]:

@@ -364,20 +364,51 @@ def test_cli_info_settings_set_capture(pro):
 
 
 def test_rededge_parameters_through_the_client(tmp_path):
+    steps = [SetupStep("overlap mode", 100, "param_set", param_id="autoCapMode", value=2,
+                       type="MAV_PARAM_TYPE_UINT32", expect="PARAM_VALUE"),
+             SetupStep("target altitude", 100, "param_set", param_id="operatingAlt", value=90,
+                       type="MAV_PARAM_TYPE_INT32", expect="PARAM_VALUE"),
+             SetupStep("timer", 100, "param_set", param_id="timerPeriod", value=1.5,
+                       type="MAV_PARAM_TYPE_REAL32", expect="PARAM_VALUE"),
+             SetupStep("impossible mode", 100, "param_set", param_id="autoCapMode", value=9,
+                       type="MAV_PARAM_TYPE_UINT32", expect="PARAM_VALUE")]
+    path = _setup_file(tmp_path, steps)
+    with start_emulator("rededge-mx", "udpin:127.0.0.1:0") as emu:
+        result = CliRunner().invoke(cli, ["camera", "apply", path, "--connect", _url(emu), "--mavlink1"])
+        assert result.exit_code == 1, result.output
+        assert "step 4 (impossible mode)" in result.output and "kept 2" in result.output
+        assert "  hint: " in result.output
+        with emu.lock:
+            assert emu.state.values["autoCapMode"] == 2 and emu.state.values["operatingAlt"] == 90
+            assert emu.state.values["timerPeriod"] == 1.5
+
+
+def test_rededge_integer_parameter_sent_as_a_float_is_refused(tmp_path):
+    """The camera reads PARAM_SET's 4 bytes as its parameter's own type ("implemented as a union"): autoCapMode
+    2 sent as the float 2.0 (what this tool sent before) is the integer 1073741824 to it, not a mode."""
     steps = [SetupStep("overlap mode", 100, "param_set", param_id="autoCapMode", value=2.0,
-                       type="MAV_PARAM_TYPE_REAL32", expect="PARAM_VALUE"),
-             SetupStep("target altitude", 100, "param_set", param_id="operatingAlt", value=90.0,
-                       type="MAV_PARAM_TYPE_REAL32", expect="PARAM_VALUE"),
-             SetupStep("impossible mode", 100, "param_set", param_id="autoCapMode", value=9.0,
                        type="MAV_PARAM_TYPE_REAL32", expect="PARAM_VALUE")]
     path = _setup_file(tmp_path, steps)
     with start_emulator("rededge-mx", "udpin:127.0.0.1:0") as emu:
         result = CliRunner().invoke(cli, ["camera", "apply", path, "--connect", _url(emu), "--mavlink1"])
         assert result.exit_code == 1, result.output
-        assert "step 3 (impossible mode)" in result.output and "kept 2" in result.output
-        assert "  hint: " in result.output
+        assert "autoCapMode = 2.0: the camera kept 0" in result.output
         with emu.lock:
-            assert emu.state.values["autoCapMode"] == 2 and emu.state.values["operatingAlt"] == 90
+            assert emu.state.values["autoCapMode"] == 0
+
+
+@pytest.mark.parametrize("step,error", [
+    ({"value": 2.5, "type": "MAV_PARAM_TYPE_UINT32"}, "not a whole number for uint32"),
+    ({"value": 2, "type": "MAV_PARAM_TYPE_UINT64"}, "does not fit a classic parameter's 4 bytes"),
+    ({"value": 2, "type": "MAV_PARAM_TYPE_NOPE"}, "does not fit a classic parameter's 4 bytes"),
+    ({"value": -5000000, "type": "MAV_PARAM_TYPE_INT32"}, "cannot be carried in a float's bytes"),
+    ({"value": 5000000000, "type": "MAV_PARAM_TYPE_UINT32"}, "does not fit uint32"),
+])
+def test_setup_param_set_types_are_checked(step, error):
+    with pytest.raises(LinkError) as err:
+        parse_setup({"format": "wiris-setup", "version": 1, "steps": [
+            {"kind": "param_set", "target_component": 100, "param_id": "autoCapMode", **step}]}, "s.json")
+    assert error in str(err.value) and err.value.hint
 
 
 def test_rededge_exposure_reaches_every_imager(tmp_path):
@@ -405,9 +436,9 @@ def test_rededge_exposure_reaches_every_imager(tmp_path):
         assert len(received) == 4                     # CameraClient's default retries=3: four sends
         assert all(m.get_msgId() == 154 and m.target_component == 100 for m in received)
         with emu.lock:
-            assert emu.state.exposure_mode == 2
-            # serial API: "to specify 1/60sec, send 60"; ISO "4. ISO800"
-            assert [(e.shutter_divisor, e.iso) for e in emu.state.exposures] == [(2000, 4)] * 5
+            assert emu.state.exposure_mode == 4          # the API page: <li value="4">Manual</li>
+            # serial API: "to specify 1/60sec, send 60"; ISO gain <li value="8">ISO800</li>
+            assert [(e.shutter_divisor, e.iso) for e in emu.state.exposures] == [(2000, 8)] * 5
         # without --mavlink1 the frames would be MAVLink 2, which the RedEdge API does not promise to read:
         # with no answer to miss, that would pass unnoticed, so the step is refused before sending
         received.clear()

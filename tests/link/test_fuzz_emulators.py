@@ -15,6 +15,7 @@ from pymavlink.dialects.v20 import ardupilotmega as m
 
 from cdf.catalogue import catalogue
 from emu_wire import Wire
+from wiris_tools.emulate import paramext
 from wiris_tools.emulate.rededge import RedEdgeState
 from wiris_tools.emulate.runner import start_emulator
 from wiris_tools.emulate.wiris import new_wiris
@@ -113,14 +114,17 @@ def test_truncated_and_corrupted_frames(seed, cut, flip):
 def test_rededge_state_messages_with_extreme_values(lat, lon, alt, roll, shot, comp):
     g = Wire(system=3, component=1, mavlink1=True)
     cam = RedEdgeState(MX)
-    for key, value in (("autoCapMode", 2), ("operatingAlt", 0.0), ("opAltTolerance", 1000.0)):
-        cam.handle(g(g.mav.param_set_encode(3, 100, key.encode(), value, m.MAV_PARAM_TYPE_REAL32)), 0)
+    for key, value in (("autoCapMode", 2), ("operatingAlt", 0), ("opAltTolerance", 1000)):
+        cam.handle(g(g.mav.param_set_encode(3, 100, key.encode(), paramext.encode_classic(value, "uint32"),
+                                            m.MAV_PARAM_TYPE_UINT32)), 0)
+    assert cam._auto_mode() == "overlap" and cam.values["opAltTolerance"] == 1000
     msgs = [g(g.mav.global_position_int_encode(0, lat, lon, alt, 0, 0, 0, 0, 0)),
             g(g.mav.gps_raw_int_encode(2**63, 3, lat, lon, alt, 0, 0, 0, 0, 0)),
             g(g.mav.attitude_encode(0, roll, roll, roll, 0, 0, 0)),
             g(g.mav.mount_status_encode(0, comp, lat, lon, alt)),
             g(g.mav.digicam_control_encode(3, comp, 0, 0, 0, 0, shot, 0, 0, roll)),
-            g(g.mav.param_set_encode(3, comp, b"timerPeriod", roll, m.MAV_PARAM_TYPE_REAL32))]
+            g(g.mav.param_set_encode(3, comp, b"timerPeriod", roll, m.MAV_PARAM_TYPE_REAL32)),
+            g(g.mav.param_set_encode(3, comp, b"operatingAlt", roll, m.MAV_PARAM_TYPE_REAL32))]   # any 4 bytes
     _feed(cam, msgs)
 
 

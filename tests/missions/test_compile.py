@@ -399,6 +399,28 @@ def test_rededge_alone_sets_its_own_overlap_mode_and_gets_no_trigger_items(tmp_p
     assert c.payloads[0].gsd_cm(120) == pytest.approx(8.33, abs=0.01)
 
 
+def test_rededge_overlap_mode_covers_every_survey_in_its_integers(tmp_path):
+    """The camera captures from operatingAlt - opAltTolerance up (serial API: "distance ... below the operating
+    altitude to enable automatic capture modes") and holds one overlap: the lowest survey altitude, a margin
+    below it, the most demanding overlaps, each an integer of the parameter's type."""
+    def ch(doc):
+        doc["payloads"] = {"ms": {"camera": "rededge-m"}}
+        survey(doc)["payloads"] = ["ms"]
+        survey(doc)["altitude_m"] = 60.5
+        survey(doc)["overlap"] = {"front": 70, "side": 72.2}
+        second = copy.deepcopy(doc["mission"][1])
+        second["survey"]["altitude_m"] = 45.7
+        second["survey"]["overlap"] = {"front": 80.4, "side": 60}
+        doc["mission"].insert(2, second)
+    c = build(tmp_path, ch)
+    got = {s.param_id: (s.value, s.type) for s in c.setup}
+    assert got["operatingAlt"] == (45, "MAV_PARAM_TYPE_INT32")
+    # shooting from 45.7 - 11.425 m up: 34.275 m, so the tolerance below the integer target is 11 m
+    assert got["opAltTolerance"] == (11, "MAV_PARAM_TYPE_UINT32")
+    assert got["overlapAlongTrk"] == (81, "MAV_PARAM_TYPE_UINT32")
+    assert got["overlapCrossTrk"] == (73, "MAV_PARAM_TYPE_UINT32")
+
+
 def two_wiris(doc):
     doc["payloads"]["vis"] = {"camera": "wiris-security", "component_id": 102}
     survey(doc)["payloads"] = ["thermal", "vis"]

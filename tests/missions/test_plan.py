@@ -115,7 +115,7 @@ REDEDGE_ONLY = BASE.replace("    camera: wiris-pro\n    lens_mm: 13\n    compone
 def test_rededge_exposure_settings_load_and_need_manual_mode(tmp_path):
     path = tmp_path / "ok.yaml"
     path.write_text(REDEDGE_ONLY.replace("SETTINGS", "exposure_mode: manual, shutter_divisor: 2000, iso: iso200"))
-    assert load_plan(path).payload("thermal").values == (("exposure_mode", 2), ("shutter_divisor", 2000), ("iso", 2))
+    assert load_plan(path).payload("thermal").values == (("exposure_mode", 4), ("shutter_divisor", 2000), ("iso", 2))
     p = one(REDEDGE_ONLY.replace("SETTINGS", "shutter_divisor: 2000"), tmp_path, "shutter_divisor takes effect only")
     assert "exposure_mode: manual" in p.hint
 

@@ -6,6 +6,7 @@ import math
 from pathlib import Path
 
 import pytest
+import yaml
 
 from handmade_mission import THERMAL, handmade
 from missions.compiled import Compiled
@@ -139,6 +140,25 @@ def test_rededge_in_overlap_mode_shoots_by_itself(tmp_path):
     # it shoots wherever it is at the survey altitude (in the turns too), never while climbing
     assert all(abs(p.alt_m - c.areas[0].altitude_m) <= 5.0 for p in own)
     assert report(c, sim)["coverage"]["multispectral"] >= 0.995
+
+
+def test_rededge_in_overlap_mode_shoots_above_its_target_too(tmp_path):
+    """Above operatingAlt it keeps shooting ("when the sensor's altitude is below the Target Altitude Tolerance
+    from the Target Altitude, the sensor stops capturing": nothing stops it higher up), so a second survey flown
+    higher is photographed by it as well."""
+    from missions.compile import compile_plan
+    path = _field_variant(tmp_path, external=False)
+    doc = yaml.safe_load(path.read_text())
+    survey = next(s for s in doc["mission"] if "survey" in s)
+    higher = {"survey": {**survey["survey"], "altitude_m": survey["survey"]["altitude_m"] + 30}}
+    doc["mission"].insert(doc["mission"].index(survey) + 1, higher)
+    path.write_text(yaml.safe_dump(doc, sort_keys=False))
+    c = compile_plan(path)
+    sim = simulate(c)
+    low = survey["survey"]["altitude_m"]
+    own = [p for p in sim.photos if "multispectral" in p.payloads]
+    assert any(p.alt_m > low + 25 for p in own) and any(abs(p.alt_m - low) < 1 for p in own)
+    assert all(p.alt_m >= low - max(10.0, 0.25 * low) - 1.0 for p in own)
 
 
 def test_rededge_on_external_trigger_is_not_reached_by_ardupilot(tmp_path):

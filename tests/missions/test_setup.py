@@ -89,10 +89,13 @@ def test_video_setting_refused():
 def test_rededge_overlap_mode_params():
     cam = catalogue().get("rededge-mx")
     p = Payload(name="ms", camera="rededge-mx", component_id=100)
-    steps = setup_steps([p], {"ms": cam}, {"ms": RedEdgeSurvey(60.0, 15.0, 80.0, 70.0)})
-    got = {s.param_id: s.value for s in steps}
-    assert got == {"autoCapMode": 2.0, "operatingAlt": 60.0, "opAltTolerance": 15.0, "overlapAlongTrk": 80.0,
-                   "overlapCrossTrk": 70.0}
+    steps = setup_steps([p], {"ms": cam}, {"ms": RedEdgeSurvey(60, 15, 80, 70)})
+    got = {s.param_id: (s.value, s.type) for s in steps}
+    # the serial API's "Supported Parameters" types: the camera reads the value's bytes as these
+    assert got == {"autoCapMode": (2, "MAV_PARAM_TYPE_UINT32"), "operatingAlt": (60, "MAV_PARAM_TYPE_INT32"),
+                   "opAltTolerance": (15, "MAV_PARAM_TYPE_UINT32"), "overlapAlongTrk": (80, "MAV_PARAM_TYPE_UINT32"),
+                   "overlapCrossTrk": (70, "MAV_PARAM_TYPE_UINT32")}
+    assert all(type(s.value) is int for s in steps)
     assert all(s.kind == "param_set" and s.target_component == 100 and s.expect == "PARAM_VALUE" for s in steps)
 
 
@@ -101,7 +104,7 @@ def test_rededge_plan_setting_wins():
     p = Payload(name="ms", camera="rededge-mx", component_id=100, settings=(("auto_capture", "timer"),),
                 values=(("auto_capture", 1),))
     steps = setup_steps([p], {"ms": cam}, {"ms": RedEdgeSurvey(60.0, 15.0, 80.0, 70.0)})
-    assert [s.value for s in steps if s.param_id == "autoCapMode"] == [1.0]
+    assert [s.value for s in steps if s.param_id == "autoCapMode"] == [1]
 
 
 def rededge(settings: dict) -> Payload:
@@ -115,12 +118,13 @@ def test_rededge_exposure_is_one_digicam_configure_for_every_imager():
     steps = setup_steps([p], {"ms": catalogue().get("rededge-mx")}, {"ms": RedEdgeSurvey(60.0, 15.0, 80.0, 70.0)})
     (s,) = [s for s in steps if s.kind == "message"]
     assert steps[-1] is s                         # after the overlap-mode PARAM_SETs
-    # serial API, DIGICAM_CONFIGURE (154): Mode "2. Manual"; Shutter Speed "to specify 1/60sec, send 60";
-    # ISO "3. ISO400"; Extra Command "Set to 255 for all"; the fields it ignores are left out (sent as 0)
+    # serial API page, DIGICAM_CONFIGURE (154): Mode <li value="4">Manual</li>; Shutter Speed "to specify
+    # 1/60sec, send 60"; ISO gain <li value="4">ISO400</li>; Extra Command "Set to 255 for all"; the fields it
+    # ignores are left out (sent as 0)
     assert s.message == "DIGICAM_CONFIGURE" and s.target_component == 100 and s.expect == "UNACKNOWLEDGED"
-    assert dict(s.fields) == {"mode": 2, "shutter_speed": 2000, "iso": 3, "extra_param": 255}
+    assert dict(s.fields) == {"mode": 4, "shutter_speed": 2000, "iso": 4, "extra_param": 255}
     doc = json.loads(dumps_setup("demo", steps))["steps"][-1]
-    assert doc["kind"] == "message" and doc["fields"] == {"extra_param": 255, "iso": 3, "mode": 2,
+    assert doc["kind"] == "message" and doc["fields"] == {"extra_param": 255, "iso": 4, "mode": 4,
                                                           "shutter_speed": 2000}
     assert doc["expect"] == {"result": "UNACKNOWLEDGED"}
     (auto,) = setup_steps([rededge({"exposure_mode": "auto"})], {"ms": catalogue().get("rededge-mx")})

@@ -4,6 +4,11 @@ The camera protocol sends a PARAM_EXT value as the bytes of the C union holding 
 devguide parameter_ext.md "Parameter Encoding"), tagged with MAV_PARAM_EXT_TYPE. QGC sends `bool` as UINT8
 (QGCCameraIO.cc). pymavlink hands received char[128] fields over with trailing NULs stripped (and a str view
 cut at the first NUL), so a binary value must be read from `_param_value_raw` and padded back.
+
+Classic PARAM_SET/PARAM_VALUE carry a 4-byte float. A RedEdge reads those bytes "as a union ... interpreted
+as the MAV_PARAM_TYPE listed" for the parameter (serial API PARAM_SET/PARAM_VALUE), i.e. byte-wise as well:
+an integer parameter's value is the integer's bytes, which as a float are a tiny number (2 -> 2.8e-45).
+encode_classic/decode_classic convert between the typed value and that float.
 """
 
 from __future__ import annotations
@@ -88,6 +93,46 @@ def decode_ext(raw: bytes, ext_type: int) -> float | int | None:
     if wt is None:
         return None
     return decode(raw, wt.cdf)
+
+
+# definition type -> MAV_PARAM_TYPE of a classic parameter (4 bytes at most: the value is a float's bytes)
+CLASSIC_TYPES = {"uint8": mavlink2.MAV_PARAM_TYPE_UINT8, "int8": mavlink2.MAV_PARAM_TYPE_INT8,
+                 "uint16": mavlink2.MAV_PARAM_TYPE_UINT16, "int16": mavlink2.MAV_PARAM_TYPE_INT16,
+                 "uint32": mavlink2.MAV_PARAM_TYPE_UINT32, "int32": mavlink2.MAV_PARAM_TYPE_INT32,
+                 "float": mavlink2.MAV_PARAM_TYPE_REAL32}
+_CLASSIC_BY_NUMBER = {number: cdf for cdf, number in CLASSIC_TYPES.items()}
+
+
+def classic_type(cdf_type: str) -> int:
+    """The MAV_PARAM_TYPE of a classic parameter of this definition type (WireValueError if 4 bytes cannot
+    carry it)."""
+    try:
+        return CLASSIC_TYPES[cdf_type.lower()]
+    except KeyError:
+        raise WireValueError(f"type {cdf_type!r} does not fit a classic parameter's 4 bytes") from None
+
+
+def encode_classic(value: float | int, cdf_type: str) -> float:
+    """The float whose 4 bytes are `value` as `cdf_type` (WireValueError if it does not fit, or if its bytes
+    are a signalling NaN pattern, which this Python's float conversion would not carry unchanged)."""
+    classic_type(cdf_type)
+    raw = encode(value, cdf_type)[:4]
+    carried = struct.unpack("<f", raw)[0]
+    if struct.pack("<f", carried) != raw:
+        raise WireValueError(f"{value!r} as {cdf_type} cannot be carried in a float's bytes")
+    return carried
+
+
+def decode_classic(param_value: float, param_type: int) -> float | int | None:
+    """The typed value a classic PARAM_VALUE carries (None for a type wider than 4 bytes or unknown)."""
+    cdf = _CLASSIC_BY_NUMBER.get(param_type)
+    if cdf is None:
+        return None
+    try:
+        raw = struct.pack("<f", param_value)
+    except (struct.error, OverflowError):
+        return None
+    return decode(raw, cdf)
 
 
 def param_id(msg) -> str:

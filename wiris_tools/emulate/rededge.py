@@ -9,24 +9,29 @@ What the API says, and how it is emulated:
 - HEARTBEAT about once a second with the API's fixed field values (catalogue `heartbeat`: type 0, autopilot 1,
   base mode 2, custom mode 3, system status 4) — not MAV_TYPE_CAMERA, so camera-v2 ground stations and
   ArduPilot's MAVLinkCamV2 backend do not discover it;
+- MAVLink 1 only (catalogue `link`): MAVLink 2 frames are ignored, as a real RedEdge drops them;
 - PING with target 0/0 is answered with the same sequence number, addressed to the sender;
 - state: GPS_RAW_INT (fix > 2 is a fix; its time sets UTC), or SYSTEM_TIME + GLOBAL_POSITION_INT; ATTITUDE;
   MOUNT_STATUS. Serial state is used for 5 s after it arrived (no internal GPS is emulated: after that the
   position is unknown, 0);
-- DIGICAM_CONFIGURE (154): mode 1 auto, 2 manual (others no effect); in a manual-mode message the shutter
-  divisor and ISO gain (1–4) apply to sensor `extra_param` (0–4) or all (255);
+- DIGICAM_CONFIGURE (154): mode 1 auto, 4 manual (others no effect); in a manual-mode message the shutter
+  divisor and ISO gain (1, 2, 4, 8 for ISO 100–800) apply to sensor `extra_param` (0–4) or all (255). (The
+  values are the API page's <li value="...">; the seed text's flattened lists renumber them 1, 2, 3, ...);
 - DIGICAM_CONTROL (155): shot 1 flight capture, 2 panel capture, anything else no capture; a commanded
   capture answers CAMERA_STATUS (TRIGGER) and CAMERA_FEEDBACK (CLOSEDLOOP) with position and attitude;
 - classic PARAM_REQUEST_LIST / PARAM_REQUEST_READ / PARAM_SET -> PARAM_VALUE for the catalogue's PARAM_SET
-  parameters (REAL32). A value outside the parameter's options or range is not applied and PARAM_VALUE
-  reports the unchanged value (the classic protocol's refusal);
+  parameters, each of its own MAV_PARAM_TYPE (REAL32, UINT32, INT32). The 4-byte value is read "as a union",
+  as the parameter's type whatever type the sender names, so an integer sent as a float (2.0 for
+  autoCapMode) is a huge number. A value outside the parameter's options or range is not applied and
+  PARAM_VALUE reports the unchanged value (the classic protocol's refusal);
 - anything whose target_component is not 100 or 0 is ignored; COMMAND_LONG is not part of the API and gets
   no answer (so MAV_CMD_DO_DIGICAM_CONTROL from an autopilot does not trigger it).
-- auto-capture: timer mode (autoCapMode 1) every timerPeriod (at least 1 s: "below 1 s it captures as fast
-  as it can, about 1 Hz"); overlap mode (2) from position updates: a capture each time the camera moved the
-  along-track footprint × (1 − overlapAlongTrk) since the last one, while its height above the ground
-  estimate is within opAltTolerance of operatingAlt. Auto captures send no MAVLink message (the API reports
-  only MAVLink-commanded captures); they are counted in `auto_captures`.
+- auto-capture, only while the height above the ground estimate is at least operatingAlt − opAltTolerance
+  ("distance, in meters, below the operating altitude to enable automatic capture modes"; no upper limit):
+  timer mode (autoCapMode 1) every timerPeriod (at least 1 s: "below 1 s it captures as fast as it can,
+  about 1 Hz"); overlap mode (2) from position updates: a capture each time the camera moved the along-track
+  footprint × (1 − overlapAlongTrk) since the last one. Auto captures send no MAVLink message (the API
+  reports only MAVLink-commanded captures); they are counted in `auto_captures`.
 
 Approximations (the API does not specify them): the ground level is the altitude of the first position fix
 (CAMERA_FEEDBACK.alt_rel is "above estimated ground level"); the camera's earth-frame roll/pitch/yaw are the
@@ -43,6 +48,7 @@ from typing import Any
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from cdf.catalogue import Camera, Setting
+from wiris_tools.emulate import paramext
 
 Message = Any
 
@@ -52,6 +58,8 @@ DEFAULT_SYSTEM_ID = 255      # "defaults to 255 otherwise"
 ALL_SENSORS = 255            # DIGICAM_CONFIGURE extra_param: "Set to 255 for all"
 EARTH_RADIUS_M = 6371008.8
 MIN_TIMER_S = 1.0
+UINT64_MAX = 2**64 - 1
+MAVLINK2_MAGIC = b"\xfd"
 
 
 @dataclass
@@ -83,16 +91,21 @@ class RedEdgeState:
         self.component = camera.default_component_id
         self.heartbeat_fields = dict(extra.get("heartbeat") or {})
         self.adopts = bool(extra.get("adopts_sender_system_id", False))
+        self.mavlink1_only = camera.mavlink_version == 1
         self.system_id = DEFAULT_SYSTEM_ID
         self.mav = mavlink2.MAVLink(None, srcSystem=self.system_id, srcComponent=self.component)
         self.params: tuple[Setting, ...] = tuple(s for s in camera.settings
                                                  if s.command is not None and s.command.message == "PARAM_SET")
-        self.values: dict[str, float] = {s.param: float(s.default) for s in self.params if s.default is not None}
+        self.values: dict[str, float | int] = {s.param: s.check(s.default) for s in self.params
+                                               if s.default is not None}
         imager = camera.imagers[0] if camera.imagers else None
         self.bands = int(imager.bands or 1) if imager else 1
         self.focal_mm = float(imager.lenses_mm[0]) if imager and imager.lenses_mm else 0.0
         self.sensor_mm = imager.sensor_size_mm if imager else None
-        self.exposure_mode = self._default("exposure_mode", 1)
+        modes = camera.setting("exposure_mode")
+        self.auto_mode, self.manual_mode = ((modes.option_by_key("auto").value, modes.option_by_key("manual").value)
+                                            if modes is not None else (1, 4))
+        self.exposure_mode = self._default("exposure_mode", self.auto_mode)
         shutter = self._default("shutter_divisor", 1000)
         iso = self._default("iso", 1)
         self.exposures = [Exposure(shutter, iso) for _ in range(self.bands)]
@@ -130,13 +143,17 @@ class RedEdgeState:
                                                  int(hb.get("system_status", 0))))
             self._next_heartbeat = now + HEARTBEAT_S
         if self._auto_mode() == "timer" and now >= self._next_timer:
-            self._auto_capture(now)
+            if self._high_enough():
+                self._auto_capture(now)
             self._next_timer = now + max(MIN_TIMER_S, self.values.get("timerPeriod", 2.0))
         return out
 
     def handle(self, msg: Message, now: float) -> list[Message]:
         mtype = msg.get_type()
         if mtype == "BAD_DATA" or mtype.startswith("UNKNOWN"):
+            return []
+        if self.mavlink1_only and bytes(msg.get_msgbuf()[:1]) == MAVLINK2_MAGIC:
+            self.ignored += 1     # "RedEdge uses Mavlink v1.0 messages": a MAVLink 2 frame is not read
             return []
         sender = (msg.get_srcSystem(), msg.get_srcComponent())
         if sender == (self.system_id, self.component):
@@ -213,20 +230,26 @@ class RedEdgeState:
     def _utc_us(self, now: float) -> int:
         if self.utc_base is not None:
             utc, at = self.utc_base
-            return int((utc + now - at) * 1e6)
-        return int((now + self.utc_offset_s) * 1e6)
+            t = int((utc + now - at) * 1e6)
+        else:
+            t = int((now + self.utc_offset_s) * 1e6)
+        return min(max(t, 0), UINT64_MAX)   # a GPS time near the end of uint64 must not break the answer
 
     def _height_m(self) -> float | None:
         if self.pos is None or self.ground_mm is None:
             return None
         return (self.pos[2] - self.ground_mm) / 1000.0
 
-    def _overlap_check(self, now: float) -> None:
+    def _high_enough(self) -> bool:
+        """Whether the automatic capture modes are enabled: at most opAltTolerance below operatingAlt."""
         height = self._height_m()
         target = self.values.get("operatingAlt")
-        tolerance = self.values.get("opAltTolerance", 0.0)
-        if height is None or target is None or abs(height - target) > tolerance or not self.sensor_mm \
-                or not self.focal_mm:
+        return height is not None and target is not None and \
+            height >= target - self.values.get("opAltTolerance", 0)
+
+    def _overlap_check(self, now: float) -> None:
+        height = self._height_m()
+        if not self._high_enough() or not self.sensor_mm or not self.focal_mm:
             return
         lat, lon = self.pos[0], self.pos[1]
         if self._last_auto_pos is None:
@@ -244,10 +267,10 @@ class RedEdgeState:
         self._last_auto_pos = (lat, lon)
 
     def _on_digicam_configure(self, msg, now):
-        if msg.mode == 1:
-            self.exposure_mode = 1
-        elif msg.mode == 2:
-            self.exposure_mode = 2
+        if msg.mode == self.auto_mode:
+            self.exposure_mode = self.auto_mode
+        elif msg.mode == self.manual_mode:
+            self.exposure_mode = self.manual_mode
             sensors = range(self.bands) if msg.extra_param == ALL_SENSORS else (
                 [msg.extra_param] if msg.extra_param < self.bands else [])
             iso_setting = self.camera.setting("iso")
@@ -263,7 +286,7 @@ class RedEdgeState:
         if msg.shot not in (1, 2):
             return []
         self.capture_count += 1
-        index = self.capture_count
+        index = self.capture_count & 0xFFFF   # Image Index is uint16: it wraps
         valid_pos = self.pos is not None and self.fix and self._valid(self.pos_time, now)
         lat, lon, alt_mm = self.pos if valid_pos else (0, 0, 0)
         height = self._height_m() if valid_pos else 0.0
@@ -274,6 +297,7 @@ class RedEdgeState:
             pitch += self.mount[0]
             roll += self.mount[1]
             yaw += self.mount[2]
+        roll, pitch = _wrap180(roll), _wrap180(pitch)   # "earth frame, degrees, +-180"
         yaw %= 360.0
         t_us = self._utc_us(now)
         fb = Feedback(index, t_us, lat, lon, alt_mm / 1000.0, height or 0.0, roll, pitch, yaw, msg.shot == 2)
@@ -290,8 +314,9 @@ class RedEdgeState:
     # -- classic parameters --------------------------------------------------------------------
     def _param_value(self, index: int) -> Message:
         s = self.params[index]
-        return self.mav.param_value_encode(s.param.encode(), float(self.values.get(s.param, 0.0)),
-                                           mavlink2.MAV_PARAM_TYPE_REAL32, len(self.params), index)
+        value = paramext.encode_classic(self.values.get(s.param, 0), s.type)
+        return self.mav.param_value_encode(s.param.encode(), value, paramext.classic_type(s.type), len(self.params),
+                                           index)
 
     def _index(self, name: str) -> int | None:
         return next((i for i, s in enumerate(self.params) if s.param == name), None)
@@ -310,17 +335,17 @@ class RedEdgeState:
         if index is None:
             return []
         s = self.params[index]
-        value = msg.param_value
+        value = paramext.decode_classic(msg.param_value, paramext.classic_type(s.type))   # its own type, always
         if _allowed(s, value):
-            self.values[s.param] = float(value)
+            self.values[s.param] = value
             if s.key == "auto_capture":
                 self._last_auto_pos = None
                 self._next_timer = now
         return [self._param_value(index)]
 
 
-def _allowed(s: Setting, value: float) -> bool:
-    if not math.isfinite(value):
+def _allowed(s: Setting, value: float | int | None) -> bool:
+    if value is None or not math.isfinite(value):
         return False
     if s.options:
         return value == int(value) and any(o.value == int(value) for o in s.options)
@@ -329,6 +354,10 @@ def _allowed(s: Setting, value: float) -> bool:
     if s.max is not None and value > s.max:
         return False
     return True
+
+
+def _wrap180(deg: float) -> float:
+    return (deg + 180.0) % 360.0 - 180.0
 
 
 def _distance_m(a: tuple[int, int], b: tuple[int, int]) -> float:

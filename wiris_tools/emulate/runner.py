@@ -93,6 +93,8 @@ class Emulator:
                 self.link.send(msg)
             except LinkError:
                 self.send_failures += 1
+            except Exception:  # a message the camera logic filled wrongly (a field out of range): a bug, counted
+                self.errors += 1
 
     def _on_message(self, msg: Any) -> None:
         with self.lock:
