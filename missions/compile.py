@@ -116,6 +116,11 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     rededge_speeds: list[tuple[str, float, float, Any]] = []   # (payload, altitude, speed, where) per survey
     altitudes: list[tuple[float, str]] = []
     speed = plan.vehicle.speed_mps
+    if em.speed_is_airspeed:
+        warnings.append(f"speed_is_airspeed: ArduPilot flies a {plan.vehicle.frame}'s vehicle.speed_mps "
+                        f"({speed:g} m/s) as airspeed (a ground-speed DO_CHANGE_SPEED would set its minimum ground "
+                        "speed instead); with wind the ground speed differs, so photo intervals and flight time "
+                        "vary (distance triggering keeps its spacing)")
     if not any(isinstance(s, TakeoffStep) for s in plan.mission):
         warnings.append("no_takeoff: the mission has no takeoff step; it must be started with the vehicle in the air")
 
@@ -234,7 +239,7 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     items = emitted.items
     check_items(items, prof)
     limit = plan.vehicle.max_mission_items or prof.default_item_limit
-    parts = split_parts(items, limit)
+    parts = split_parts(items, limit, prof)
     for k, part in enumerate(parts):
         check_items(part, prof, where=f"part {k + 1}")
     if len(parts) > 1:

@@ -42,6 +42,11 @@ NAN = math.nan
 TAKEOFF_PITCH_DEG = 15.0       # fixed-wing minimum climb pitch of NAV_TAKEOFF param1 (ArduPlane, PX4)
 HOVER_HOLD_S = 4.0             # QGC's hover-and-capture delay (survey-planners §1.4)
 BRIDGE_PAUSE_S = 1.0           # hold between Lua bridge batches so the 5-item script queue drains
+# Steepest fixed-wing landing approach accepted: PX4 refuses a mission whose glide from the waypoint before
+# NAV_LAND is steeper than FW_LND_ANG (default 5°; FeasibilityChecker::checkFixedWindLandApproach), and an
+# ArduPlane given no approach dives onto the point. 5° is a normal glide slope for small fixed-wings.
+MAX_GLIDE_DEG = 5.0
+EARTH_RADIUS_M = 6371008.8
 
 
 @dataclass(frozen=True)
@@ -158,11 +163,20 @@ class Emitter:
             self._add(_nav(mavlink.MAV_CMD_NAV_TAKEOFF, lat, lon, alt_m, comment="take-off"))
         self.set_speed()
 
+    @property
+    def speed_is_airspeed(self) -> bool:
+        """ArduPlane (and QuadPlane in forward flight) reads a ground-speed DO_CHANGE_SPEED as its *minimum*
+        ground speed (Plane::do_change_speed sets MIN_GNDSPD, which stays after the mission, RTL included) and
+        keeps its cruise airspeed: the plan's speed has to be its airspeed there."""
+        return self.profile.name == "ardupilot" and self.frame in ("plane", "vtol")
+
     def set_speed(self) -> None:
-        # param1 SPEED_TYPE_GROUNDSPEED: the plan's speed is over ground (photo spacing depends on it);
-        # param3 -1 = throttle unchanged.
-        self._add(_do(mavlink.MAV_CMD_DO_CHANGE_SPEED, float(mavlink.SPEED_TYPE_GROUNDSPEED), self.speed_mps, -1.0,
-                      comment=f"survey speed {self.speed_mps:g} m/s"))
+        # param1 SPEED_TYPE_GROUNDSPEED: the plan's speed is over ground (photo spacing depends on it), except
+        # where it can only be an airspeed (above); param3 -1 = throttle unchanged.
+        kind = mavlink.SPEED_TYPE_AIRSPEED if self.speed_is_airspeed else mavlink.SPEED_TYPE_GROUNDSPEED
+        what = "airspeed" if self.speed_is_airspeed else "survey speed"
+        self._add(_do(mavlink.MAV_CMD_DO_CHANGE_SPEED, float(kind), self.speed_mps, -1.0,
+                      comment=f"{what} {self.speed_mps:g} m/s"))
         self.s.speed_set = True
 
     def track(self, t: Track, where: str | None = None) -> None:
@@ -318,6 +332,19 @@ class Emitter:
         self._add(MissionItem(command=mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH, frame=FRAME_MISSION,
                               comment="return to launch"))
 
+    def _check_glide(self, lat: float, lon: float, where: str | None) -> None:
+        plat, plon, alt = self.s.last_pos
+        dist = _distance_m(plat, plon, lat, lon)
+        need = alt / math.tan(math.radians(MAX_GLIDE_DEG))
+        if alt > 0 and dist < need:
+            angle = 90.0 if dist <= 0 else math.degrees(math.atan2(alt, dist))
+            raise PlanError(f"a fixed-wing landing from {alt:g} m over {dist:.0f} m is a {angle:.1f}° glide: PX4 "
+                            f"refuses the mission (FW_LND_ANG, default {MAX_GLIDE_DEG:g}°) and ArduPlane would dive",
+                            where=where,
+                            hint=f"end with `rtl: {{}}` (the autopilot flies home by its own rules), or give the "
+                                 f"landing point (land: {{lat: ..., lon: ...}}) at least {need:.0f} m from the last "
+                                 "waypoint, into the wind")
+
     def land(self, lat: float | None, lon: float | None, where: str | None = None) -> None:
         if lat is None or lon is None:
             if self.s.last_pos is None:
@@ -325,5 +352,14 @@ class Emitter:
                                 hint="give the landing point (land: {lat: 50.11, lon: 14.50}) or put a takeoff "
                                      "before it")
             lat, lon = self.s.last_pos[0], self.s.last_pos[1]
+        if self.frame == "plane" and self.s.last_pos is not None:
+            self._check_glide(lat, lon, where)
         cmd = mavlink.MAV_CMD_NAV_VTOL_LAND if self.frame == "vtol" else mavlink.MAV_CMD_NAV_LAND
         self._add(_nav(cmd, lat, lon, 0.0, comment="land"))
+
+
+def _distance_m(lat1: float, lon1: float, lat2: float, lon2: float) -> float:
+    """Great-circle distance (haversine): enough for a glide slope over a few kilometres."""
+    p1, p2 = math.radians(lat1), math.radians(lat2)
+    h = math.sin((p2 - p1) / 2) ** 2 + math.cos(p1) * math.cos(p2) * math.sin(math.radians(lon2 - lon1) / 2) ** 2
+    return 2 * EARTH_RADIUS_M * math.asin(min(1.0, math.sqrt(h)))

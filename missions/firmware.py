@@ -15,6 +15,7 @@ Sources (shared/reference/):
 from __future__ import annotations
 
 from dataclasses import dataclass
+import math
 
 from missions.errors import PlanError
 from missions.items import MissionItem, mavlink
@@ -47,6 +48,10 @@ class FirmwareProfile:
     # one (ArduPilot: AP_Camera::set_trigger_distance() calls `primary` only, AP_Camera.cpp; the first photo
     # of DO_SET_CAM_TRIGG_DIST param3 = 1 goes to every instance through take_picture()).
     distance_trigger_all: bool = True
+    # command -> the params (1-4) that may be NaN; None: NaN is accepted everywhere ("use the default", as the
+    # MAVLink spec says). ArduPilot refuses NaN elsewhere with MAV_MISSION_INVALID_PARAMn and aborts the upload
+    # (AP_Mission / MissionItemProtocol_Waypoints::sanity_check_params: a nan_mask per command, 0xff otherwise).
+    nan_params: dict[int, frozenset[int]] | None = None
 
     def accepts(self, command: int) -> bool:
         return command in self.accepted
@@ -102,6 +107,9 @@ ARDUPILOT = FirmwareProfile(
     script_messages=True, max_camera_instances=2,
     source="reference autopilots-and-cameras §2.2/§7; survey-planners §7.2; ArduPilot AP_Camera.cpp",
     distance_trigger_all=False,
+    nan_params={C.MAV_CMD_NAV_WAYPOINT: frozenset({4}), C.MAV_CMD_NAV_LAND: frozenset({4}),
+                C.MAV_CMD_NAV_TAKEOFF: frozenset({4}), C.MAV_CMD_NAV_VTOL_TAKEOFF: frozenset({4}),
+                C.MAV_CMD_NAV_VTOL_LAND: frozenset({3, 4})},
 )
 
 PX4 = FirmwareProfile(
@@ -151,6 +159,13 @@ def check_items(items: tuple[MissionItem, ...] | list[MissionItem], prof: Firmwa
         here = f"{where + ', ' if where else ''}mission item {i + 1} ({cmd_name(it.command)})"
         if not prof.accepts(it.command):
             raise PlanError(f"{prof.title} would reject this item at upload", where=here, hint=prof.rule(it.command))
+        if prof.nan_params is not None:
+            for k, v in enumerate((it.param1, it.param2, it.param3, it.param4), 1):
+                if math.isnan(v) and k not in prof.nan_params.get(it.command, ()):
+                    raise PlanError(f"param{k} is NaN, which {prof.title} refuses for this command at upload "
+                                    f"(MAV_MISSION_INVALID_PARAM{k})", where=here,
+                                    hint="a bug in wiris-tools (the compiler emitted an item it must not): please "
+                                         "report it with the plan")
         # MISSION_ITEM_INT carries params 5/6 as int32: no NaN, no fractions (reference §4.2)
         if not (isinstance(it.x, int) and isinstance(it.y, int)) or not (-2**31 <= it.x < 2**31 and -2**31 <= it.y < 2**31):
             raise PlanError("params 5/6 (x/y) must be int32 in MISSION_ITEM_INT", where=here,
@@ -187,7 +202,7 @@ def _resume_prefix(last_nav: MissionItem, speed: MissionItem | None, trig: dict[
     return out
 
 
-def _suffix(last_nav: MissionItem, trig: dict[int, MissionItem]) -> list[MissionItem]:
+def _suffix(last_nav: MissionItem, trig: dict[int, MissionItem], prof: FirmwareProfile) -> list[MissionItem]:
     """End of a non-final part: camera off and wait in place (ArduPlane would fly home on mission end)."""
     out = []
     if _camera_on(trig):
@@ -197,13 +212,15 @@ def _suffix(last_nav: MissionItem, trig: dict[int, MissionItem]) -> list[Mission
         if C.MAV_CMD_DO_TRIGGER_CONTROL in trig and trig[C.MAV_CMD_DO_TRIGGER_CONTROL].param1 == 1:
             out.append(MissionItem(command=C.MAV_CMD_DO_TRIGGER_CONTROL, frame=C.MAV_FRAME_MISSION, param2=-1.0,
                                    param3=-1.0, comment="part end: camera off"))
+    # param4 (yaw): NaN keeps the heading where it is accepted; ArduPilot refuses NaN here and ignores the yaw
+    nan_ok = prof.nan_params is None or 4 in prof.nan_params.get(C.MAV_CMD_NAV_LOITER_UNLIM, ())
     out.append(MissionItem(command=C.MAV_CMD_NAV_LOITER_UNLIM, frame=last_nav.frame, x=last_nav.x, y=last_nav.y,
-                           z=last_nav.z, param4=float("nan"),
+                           z=last_nav.z, param4=float("nan") if nan_ok else 0.0,
                            comment="part end: wait here, upload the next part, switch to AUTO again"))
     return out
 
 
-def split_parts(items: tuple[MissionItem, ...], limit: int) -> tuple[tuple[MissionItem, ...], ...]:
+def split_parts(items: tuple[MissionItem, ...], limit: int, prof: FirmwareProfile) -> tuple[tuple[MissionItem, ...], ...]:
     """`items` as missions of at most `limit` items each. A part ends after a positional NAV item with the
     camera switched off and NAV_LOITER_UNLIM there (the vehicle waits; ArduPlane would otherwise RTL at mission
     end); the next part starts with the speed, a waypoint at that position and the camera trigger as it was,
@@ -232,7 +249,7 @@ def split_parts(items: tuple[MissionItem, ...], limit: int) -> tuple[tuple[Missi
             elif it.command in _TRIGGER_STATE:
                 tr[it.command] = it
             if it.command in _POSITIONAL and (it.x or it.y):
-                size = len(prefix) + (j - start + 1) + len(_suffix(it, tr))
+                size = len(prefix) + (j - start + 1) + len(_suffix(it, tr, prof))
                 if size <= limit and j > start:
                     best = j
                     states.append((j, spd, dict(tr)))
@@ -244,6 +261,6 @@ def split_parts(items: tuple[MissionItem, ...], limit: int) -> tuple[tuple[Missi
                                  "vehicle.max_mission_items or fly fewer in-flight camera changes in a row")
         _, speed, trig = next(s for s in states if s[0] == best)
         last_nav = items[best]
-        parts.append(tuple(prefix) + tuple(items[start:best + 1]) + tuple(_suffix(last_nav, trig)))
+        parts.append(tuple(prefix) + tuple(items[start:best + 1]) + tuple(_suffix(last_nav, trig, prof)))
         prefix = _resume_prefix(last_nav, speed, trig)
         start = best + 1

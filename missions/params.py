@@ -16,9 +16,20 @@ from missions.errors import PlanError
 
 # ArduPilot SERIALn ports tried for cameras, in order: TELEM2, then SERIAL4/5 (GPS2/spare UARTs on most boards).
 ARDUPILOT_PORTS = (2, 4, 5, 6)
-# PX4 MAV_n instances and the port each is put on (MAV_n_CONFIG values: 102 TELEM 2, 103 TELEM 3, 104 TELEM/SERIAL 4).
-PX4_PORTS = ((1, 102, "SER_TEL2_BAUD", "TELEM 2"), (2, 103, "SER_TEL3_BAUD", "TELEM 3"),
-             (3, 104, "SER_TEL4_BAUD", "TELEM 4"))
+# SERIALn ports that speak MAVLink in ArduPilot's stock layout (USB, TELEM1, TELEM2; SERIAL3 is the GPS).
+ARDUPILOT_STOCK_MAVLINK = (0, 1, 2)
+
+
+def _ardupilot_channel(port: int, camera_ports: list[int]) -> int:
+    """The MAVLink channel of SERIAL`port`, which its SRn_ stream rates belong to: ArduPilot numbers channels
+    by counting the serial ports set to MAVLink, in port order (GCS::setup_uarts; ArduPilot #28646: "SRx
+    parameters are meant for the x mavlink channel, not for the x serial port"). Counted with the stock layout
+    plus the camera ports this template sets to MAVLink."""
+    return len({p for p in (*ARDUPILOT_STOCK_MAVLINK, *camera_ports) if p < port})
+# PX4 MAV_n instances and the port each is put on (MAV_n_CONFIG values: 102 TELEM 2, 103 TELEM 3). PX4 has three
+# MAVLink instances, MAV_0..MAV_2 (src/modules/mavlink/module.yaml: num_instances 3), and MAV_0 is the ground
+# station's telemetry (default TELEM 1): two are free for cameras.
+PX4_PORTS = ((1, 102, "SER_TEL2_BAUD", "TELEM 2"), (2, 103, "SER_TEL3_BAUD", "TELEM 3"))
 
 Param = tuple[str, float, str]
 
@@ -27,6 +38,7 @@ def _ardupilot(payloads: list[Any], cameras: Mapping[str, Any], infos: Mapping[s
                instances: Mapping[str, int], needs_lua: bool) -> list[Param]:
     out: list[Param] = []
     ports = iter(ARDUPILOT_PORTS)
+    used: list[int] = []
     for p in payloads:
         cam = cameras[p.name]
         try:
@@ -35,6 +47,11 @@ def _ardupilot(payloads: list[Any], cameras: Mapping[str, Any], infos: Mapping[s
             raise PlanError("more cameras than free serial ports in the parameter template",
                             hint="wire the extra camera by hand") from None
         port = f"SERIAL{n}"
+        ch = _ardupilot_channel(n, used)
+        used.append(n)
+        sr = f"SR{ch}"
+        chan_note = (f"{sr} = MAVLink channel {ch}, {port} counted after the other MAVLink ports (stock: SERIAL0-2; "
+                     f"recount if yours differ; ArduPilot 4.7 names it MAV{ch + 1}_)")
         if cam.protocol == "rededge-serial":
             out += [
                 (f"{port}_PROTOCOL", 1, f"{p.name} (RedEdge) port: MAVLink 1 — the RedEdge speaks only MAVLink v1 "
@@ -42,11 +59,12 @@ def _ardupilot(payloads: list[Any], cameras: Mapping[str, Any], infos: Mapping[s
                 (f"{port}_BAUD", 57, f"{p.name}: 57600 baud (RedEdge serial API)"),
                 # RedEdge geotags from GPS_RAW_INT (its time_usec sets UTC) or SYSTEM_TIME + GLOBAL_POSITION_INT,
                 # not both: stream GPS_RAW_INT (EXT_STAT group) and ATTITUDE (EXTRA1), nothing position-group.
-                (f"SR{n}_EXT_STAT", 5, f"{p.name}: GPS_RAW_INT at 5 Hz for the RedEdge's overlap mode and geotags"),
-                (f"SR{n}_EXTRA1", 5, f"{p.name}: ATTITUDE at 5 Hz (RedEdge records aircraft attitude)"),
-                (f"SR{n}_POSITION", 0, f"{p.name}: no GLOBAL_POSITION_INT — the RedEdge wants GPS_RAW_INT or "
-                                       "SYSTEM_TIME+GLOBAL_POSITION_INT, not both"),
-                (f"SR{n}_EXTRA3", 0, f"{p.name}: no SYSTEM_TIME (see SR{n}_POSITION)"),
+                (f"{sr}_EXT_STAT", 5, f"{p.name}: GPS_RAW_INT at 5 Hz for the RedEdge's overlap mode and geotags; "
+                                      f"{chan_note}"),
+                (f"{sr}_EXTRA1", 5, f"{p.name}: ATTITUDE at 5 Hz (RedEdge records aircraft attitude)"),
+                (f"{sr}_POSITION", 0, f"{p.name}: no GLOBAL_POSITION_INT — the RedEdge wants GPS_RAW_INT or "
+                                      "SYSTEM_TIME+GLOBAL_POSITION_INT, not both"),
+                (f"{sr}_EXTRA3", 0, f"{p.name}: no SYSTEM_TIME (see {sr}_POSITION)"),
             ]
             continue
         i = instances[p.name]
@@ -54,7 +72,8 @@ def _ardupilot(payloads: list[Any], cameras: Mapping[str, Any], infos: Mapping[s
             (f"{port}_PROTOCOL", 2, f"{p.name} ({cam.model}) port: MAVLink 2 (Workswell manual §5.2); {port} = the "
                                     "port it is wired to; not private, so PARAM_EXT settings from the GCS are routed"),
             (f"{port}_BAUD", 57, f"{p.name}: 57600 baud (Workswell manual §5.2)"),
-            (f"SR{n}_POSITION", 5, f"{p.name}: GLOBAL_POSITION_INT at 5 Hz, which the camera geotags with (manual §6.1)"),
+            (f"{sr}_POSITION", 5, f"{p.name}: GLOBAL_POSITION_INT at 5 Hz, which the camera geotags with (manual §6.1); "
+                                  f"{chan_note}"),
             (f"CAM{i}_TYPE", 6, f"{p.name} is camera instance {i}: MAVLinkCamV2 — ArduPilot finds it by its "
                                 "MAV_TYPE_CAMERA heartbeat and sends IMAGE_START_CAPTURE per trigger (reference "
                                 "§2.1). If it is not found (heartbeat type unverified for WIRIS, reference §8), use 5: "
@@ -89,8 +108,9 @@ def _px4(payloads: list[Any], cameras: Mapping[str, Any], triggers: set[str]) ->
         try:
             n, cfg, baud, label = next(ports)
         except StopIteration:
-            raise PlanError("more cameras than MAVLink instances in the parameter template",
-                            hint="wire the extra camera by hand") from None
+            raise PlanError(f"{len(payloads)} MAVLink cameras, but PX4 has three MAVLink instances (MAV_0..MAV_2) and "
+                            "MAV_0 is the ground station's telemetry", hint="connect the cameras through a companion "
+                            "computer or a MAVLink router on one port, or fly at most two of them") from None
         out += [
             (f"MAV_{n}_CONFIG", cfg, f"{p.name} ({cam.model}) on {label}: change to the port it is wired to"),
             (f"MAV_{n}_MODE", 2, f"{p.name}: Onboard mode (PX4 camera docs) — streams GPS/position for geotags"),

@@ -91,8 +91,10 @@ def write_wpl(items, /, *args, home: Home | None = None, firmware: str | None = 
 
     `write_wpl(items, home)` returns the text. File form, used by missions.outputs:
     `write_wpl(path, items, home=..., firmware=...)` also writes it to `path` atomically.
-    `firmware` is accepted for symmetry with write_plan; the file is the same for both stacks
-    (PX4 tools skip row 0 as home too).
+    `firmware` is accepted for symmetry with write_plan; the file is the same for both stacks: row 0 is home
+    in the format (Mission Planner writes it so, QGroundControl reads it so for either stack). MAVSDK's
+    importer (MissionImport::parse_mission_planner) does not: it uploads row 0 as a mission item (and for
+    ArduPilot puts another home in front), so MAVSDK users load NAME.plan instead (README, limitations).
     """
     if isinstance(items, (str, os.PathLike)):
         if len(args) != 1:

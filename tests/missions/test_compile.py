@@ -215,8 +215,26 @@ def test_rededge_alongside_gets_overlap_mode_and_port(tmp_path):
     got = {s.param_id: s.value for s in c.setup if s.kind == "param_set"}
     assert got["autoCapMode"] == 2 and got["operatingAlt"] == 40 and got["overlapAlongTrk"] == 80
     params = {n: v for n, v, _ in c.params}
-    assert params["SERIAL4_PROTOCOL"] == 1 and params["SR4_EXT_STAT"] > 0 and params["CAM1_TYPE"] == 6
+    # SRn is the n-th MAVLink channel, not SERIALn (ArduPilot #28646): with SERIAL0-2 MAVLink and SERIAL3 the GPS,
+    # SERIAL4 is channel 3; SR4 would be a channel that does not exist, and the RedEdge would get no GPS
+    assert params["SERIAL4_PROTOCOL"] == 1 and params["SR3_EXT_STAT"] > 0 and params["CAM1_TYPE"] == 6
+    assert params["SR2_POSITION"] > 0 and not any(n.startswith("SR4_") for n in params)
     assert "CAM2_TYPE" not in params          # the RedEdge is not an AP_Camera instance
+
+
+def test_px4_has_two_mavlink_instances_for_cameras(tmp_path):
+    """PX4 has MAV_0..MAV_2 and MAV_0 is the ground station's: a third MAVLink camera has no MAV_3 to go to."""
+    def two(doc):
+        doc["payloads"]["vis"] = {"camera": "wiris-security", "component_id": 102}
+    params = {n for n, _v, _ in build(tmp_path, two, firmware="px4").params}
+    assert {"MAV_1_CONFIG", "MAV_2_CONFIG"} <= params and not any(n.startswith("MAV_3") for n in params)
+
+    def three(doc):
+        two(doc)
+        doc["payloads"]["vis2"] = {"camera": "wiris-security", "component_id": 103}
+    with pytest.raises(PlanError) as ei:
+        build(tmp_path, three, firmware="px4")
+    assert "MAV_0..MAV_2" in ei.value.message and ei.value.hint
 
 
 def test_rededge_and_wiris_both_on_100(tmp_path):
@@ -257,6 +275,38 @@ def test_warnings_altitude_and_assumed_optics(tmp_path):
 def test_takeoff_per_frame(tmp_path, frame, first, p1):
     c = build(tmp_path, lambda d: d["vehicle"].update(frame=frame))
     assert names(c.items)[0] == first and c.items[0].param1 == p1 and c.items[0].z == 30
+
+
+@pytest.mark.parametrize("frame", ["plane", "vtol", "copter"])
+@pytest.mark.parametrize("fw", ["ardupilot", "px4"])
+def test_speed_type_per_firmware_and_frame(tmp_path, frame, fw):
+    """ArduPlane reads a ground-speed DO_CHANGE_SPEED as its minimum ground speed (Plane::do_change_speed:
+    `case 1: aparm.min_gndspeed_cm.set(...)`), so a plane's or VTOL's speed is sent as airspeed there."""
+    c = build(tmp_path, lambda d: d["vehicle"].update(frame=frame), firmware=fw)
+    speeds = [it for it in c.items if it.command == m.MAV_CMD_DO_CHANGE_SPEED]
+    air = fw == "ardupilot" and frame != "copter"
+    assert speeds and all(it.param1 == (m.SPEED_TYPE_AIRSPEED if air else m.SPEED_TYPE_GROUNDSPEED) and it.param2 == 5
+                          for it in speeds)
+    assert any(w.startswith("speed_is_airspeed:") for w in c.warnings) == air
+
+
+@pytest.mark.parametrize("fw", ["ardupilot", "px4"])
+def test_plane_landing_needs_a_glide_slope(tmp_path, fw):
+    """A fixed-wing NAV_LAND straight under the last waypoint: PX4 refuses the mission (FW_LND_ANG, 5° by
+    default) and ArduPlane would dive; an approach of 40 m over 460 m (5°) or more is accepted."""
+    def under(doc):
+        doc["vehicle"]["frame"] = "plane"
+        doc["mission"][-1] = {"land": {}}
+    with pytest.raises(PlanError) as ei:
+        build(tmp_path, under, firmware=fw)
+    assert "glide" in ei.value.message and "rtl" in ei.value.hint and ei.value.where
+
+    def far(doc):
+        under(doc)
+        doc["mission"].insert(-1, {"waypoint": {"lat": 50.1100, "lon": 14.5000, "alt_m": 40}})
+        doc["mission"][-1] = {"land": {"lat": 50.1100 - 470 / 111195.0, "lon": 14.5000}}
+    c = build(tmp_path, far, firmware=fw)
+    assert c.items[-1].command == m.MAV_CMD_NAV_LAND
 
 
 def test_self_intersecting_area_located(tmp_path):

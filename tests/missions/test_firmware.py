@@ -88,9 +88,10 @@ def long_mission(legs: int) -> tuple[MissionItem, ...]:
 
 
 @pytest.mark.parametrize("limit", [12, 17, 40, 99])
-def test_parts_fit_and_resume(limit):
+@pytest.mark.parametrize("prof", [ARDUPILOT, PX4], ids=["ardupilot", "px4"])
+def test_parts_fit_and_resume(limit, prof):
     items = long_mission(30)
-    parts = split_parts(items, limit)
+    parts = split_parts(items, limit, prof)
     assert len(parts) > 1
     assert all(len(p) <= limit for p in parts)
     # every original item appears, in order, across the parts
@@ -99,6 +100,8 @@ def test_parts_fit_and_resume(limit):
     for prev, nxt in zip(parts, parts[1:]):
         end = prev[-1]
         assert end.command == cmd("NAV_LOITER_UNLIM")
+        # ArduPilot refuses NaN in LOITER_UNLIM's params (sanity_check_params): every part must upload
+        assert math.isnan(end.param4) if prof is PX4 else end.param4 == 0.0
         # the next part starts with the speed, then a waypoint where the previous part waits
         assert nxt[0].command == cmd("DO_CHANGE_SPEED")
         assert nxt[1].command == cmd("NAV_WAYPOINT") and (nxt[1].x, nxt[1].y, nxt[1].z) == (end.x, end.y, end.z)
@@ -111,19 +114,34 @@ def test_parts_fit_and_resume(limit):
         if on:
             assert resumed[0].param1 == 8.0 and resumed[0].param3 == 0.0
             assert prev[-2].command == cmd("DO_SET_CAM_TRIGG_DIST") and prev[-2].param1 == 0.0
-        check_items(nxt, ARDUPILOT)
+    for part in parts:
+        check_items(part, prof)
+
+
+def test_ardupilot_nan_params_refused_where_its_upload_refuses_them():
+    """AP_Mission::sanity_check_params: NaN only in param4 of WAYPOINT/LAND/TAKEOFF/VTOL_TAKEOFF and params 3-4
+    of VTOL_LAND; any other NaN is MAV_MISSION_INVALID_PARAMn and the upload aborts. PX4 takes NaN."""
+    check_items((_wp(0),), ARDUPILOT)
+    check_items((MissionItem(command=cmd("NAV_VTOL_LAND"), param3=math.nan, param4=math.nan, x=1, y=1),), ARDUPILOT)
+    for item, k in ((MissionItem(command=cmd("NAV_LOITER_UNLIM"), param4=math.nan, x=1, y=1), 4),
+                    (MissionItem(command=cmd("NAV_WAYPOINT"), param2=math.nan, x=1, y=1), 2),
+                    (MissionItem(command=cmd("DO_SET_CAM_TRIGG_DIST"), frame=FRAME_MISSION, param3=math.nan), 3)):
+        with pytest.raises(PlanError) as ei:
+            check_items((item,), ARDUPILOT)
+        assert f"param{k} is NaN" in ei.value.message and ei.value.hint
+        check_items((item,), PX4)
 
 
 def test_fits_unsplit():
     items = long_mission(3)
-    assert split_parts(items, len(items)) == (items,)
+    assert split_parts(items, len(items), ARDUPILOT) == (items,)
 
 
 def test_split_impossible_names_the_count():
     items = (_wp(0),) + tuple(MissionItem(command=cmd("DO_SEND_SCRIPT_MESSAGE"), frame=FRAME_MISSION, param1=1)
                               for _ in range(30)) + (_wp(1),)
     with pytest.raises(PlanError) as ei:
-        split_parts(items, 20)
+        split_parts(items, 20, ARDUPILOT)
     assert "32 items" in ei.value.message and "20" in ei.value.message
     assert "vehicle.max_mission_items" in ei.value.hint
 
