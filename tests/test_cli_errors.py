@@ -97,3 +97,18 @@ def test_a_number_option_refuses_nan_and_inf_as_a_usage_error(args, tmp_path, mo
     assert result.exit_code == 2
     assert f"'{args[-1]}' is not a finite number" in result.stderr and "Traceback" not in result.output
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("args", [["cdf", "models"], ["mission", "schema"]])
+def test_a_reader_that_goes_away_is_not_an_internal_error(args):
+    """`wiris cdf models | head -0`: the pipe's reader is gone before the command writes. A closed pipe ends the
+    command quietly (exit 1, as the pipe's end), not with "internal error" or Python's "Exception ignored"."""
+    import subprocess
+    import sys
+
+    child = subprocess.Popen([sys.executable, "-c", "from wiris_tools.cli import main; main()", *args],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    child.stdout.close()                       # no reader from the start: every write is EPIPE
+    _out, err = child.communicate(timeout=60)
+    assert child.returncode == 1, err
+    assert err == b"", err

@@ -26,6 +26,15 @@ class WirisGroup(click.Group):
             raise
         except KeyboardInterrupt:
             _interrupted(ctx)
+        except BrokenPipeError:
+            # the reader went away (`wiris ... | head`): not a bug of ours. Point stdout at /dev/null so that the
+            # flush at exit does not raise again, and end quietly as a closed pipe ends `cat`, with a failure code.
+            # (Files a command writes are complete before it prints its summary.)
+            try:
+                os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            except (OSError, ValueError):
+                pass
+            ctx.exit(1)
         except Exception as err:
             if _raised_by_an_interrupt(err):
                 _interrupted(ctx)
