@@ -730,9 +730,13 @@ def _meaning(data: dict, conv: _Yaml, problems: list[Problem], base_dir: Path) -
                                             f"{side} overlap {v} % is above the {MAX_OVERLAP_PCT:g} % this planner "
                                             "accepts", "photos would be closer than GNSS position noise; "
                                             "thermal mapping usually flies 90/80"))
-            if body.get("trigger") == "hover" and isinstance(data.get("vehicle"), dict) \
-                    and data["vehicle"].get("frame") == "plane":
-                problems.append(Problem(_at(conv, base + ("trigger",)), "a plane cannot hover",
+            frame = data["vehicle"].get("frame") if isinstance(data.get("vehicle"), dict) else None
+            if body.get("trigger") == "hover" and frame in ("plane", "vtol"):
+                # a VTOL flies the mission in fixed-wing flight after NAV_VTOL_TAKEOFF (the compiler emits no
+                # transition back to multicopter): ArduPlane drops NAV_WAYPOINT's hold time, PX4 flies through
+                problems.append(Problem(_at(conv, base + ("trigger",)),
+                                        "a plane cannot hover" if frame == "plane" else
+                                        "a VTOL flies the mission in fixed-wing flight and cannot hover there",
                                         "use trigger: distance"))
             area, exclude = body.get("area"), body.get("exclude")
             # a wrong type of either (exclude: 5) is the schema's finding: only strings are looked up here

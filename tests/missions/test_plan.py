@@ -295,3 +295,13 @@ def test_a_mapping_of_the_wrong_type_hints_its_keys(tmp_path):
     p = one(BASE.replace("  - rtl: {}", "  - rtl: 1"), tmp_path, "rtl must be")
     assert p.message.endswith("must be a mapping or nothing, got 1")  # not "object or null"
     assert "write {}" in p.hint
+
+
+@pytest.mark.parametrize("frame,needle", [("plane", "a plane cannot hover"), ("vtol", "fixed-wing flight")])
+def test_hover_refused_for_fixed_wing_flight(tmp_path, frame, needle):
+    """After NAV_VTOL_TAKEOFF a VTOL flies the mission as a plane (no transition back is emitted): ArduPlane drops
+    NAV_WAYPOINT's hold time and PX4 flies through, so hover-and-capture would photograph nothing it promised."""
+    text = BASE.replace("frame: copter", f"frame: {frame}").replace("overlap: {front: 80, side: 70}",
+                                                                      "overlap: {front: 80, side: 70}\n      trigger: hover")
+    p = one(text, tmp_path, needle)
+    assert "trigger: distance" in p.hint
