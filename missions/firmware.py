@@ -196,8 +196,10 @@ def _resume_prefix(last_nav: MissionItem, speed: MissionItem | None, trig: dict[
         for cmd in _TRIGGER_STATE:
             it = trig.get(cmd)
             if it is not None:
-                # no extra photo on resume: the previous part's last photo is already there
-                out.append(it.with_(param3=0.0, comment="resume: camera trigger as it was")
+                # a photo at once on resume (param3 1): the previous part's last photo was up to one trigger
+                # distance before the cut, and without it the next would come one distance after the resume
+                # point, a gap of up to twice the spacing (split_parts prefers cuts with the camera off anyway)
+                out.append(it.with_(param3=1.0, comment="resume: camera trigger as it was, a photo at once")
                            if cmd == C.MAV_CMD_DO_SET_CAM_TRIGG_DIST else it.with_(comment="resume: camera trigger"))
     return out
 
@@ -238,8 +240,9 @@ def split_parts(items: tuple[MissionItem, ...], limit: int, prof: FirmwareProfil
         if len(prefix) + remaining <= limit:
             parts.append(tuple(prefix) + tuple(items[start:]))
             return tuple(parts)
-        # find the last cut (after a positional NAV) that fits with prefix and suffix
-        best = None
+        # find the last cut (after a positional NAV) that fits with prefix and suffix, preferring one where the
+        # camera is off (between lines): a cut inside a line breaks its photo spacing
+        best = best_off = None
         spd, tr = speed, dict(trig)
         states = []
         for j in range(start, len(items)):
@@ -253,12 +256,16 @@ def split_parts(items: tuple[MissionItem, ...], limit: int, prof: FirmwareProfil
                 if size <= limit and j > start:
                     best = j
                     states.append((j, spd, dict(tr)))
+                    if not _camera_on(tr):
+                        best_off = j
                 elif size > limit:
                     break
         if best is None:
             raise PlanError(f"the mission has {len(items)} items and cannot be split into parts of at most {limit}",
                             hint="a stretch of the mission has no waypoint to split at within the limit; raise "
                                  "vehicle.max_mission_items or fly fewer in-flight camera changes in a row")
+        if best_off is not None:
+            best = best_off
         _, speed, trig = next(s for s in states if s[0] == best)
         last_nav = items[best]
         parts.append(tuple(prefix) + tuple(items[start:best + 1]) + tuple(_suffix(last_nav, trig, prof)))

@@ -112,10 +112,33 @@ def test_parts_fit_and_resume(limit, prof):
         resumed = [it for it in nxt if it.command == cmd("DO_SET_CAM_TRIGG_DIST") and it.comment.startswith("resume")]
         assert bool(resumed) == on
         if on:
-            assert resumed[0].param1 == 8.0 and resumed[0].param3 == 0.0
+            assert resumed[0].param1 == 8.0 and resumed[0].param3 == 1.0
             assert prev[-2].command == cmd("DO_SET_CAM_TRIGG_DIST") and prev[-2].param1 == 0.0
     for part in parts:
         check_items(part, prof)
+
+
+def test_cuts_fall_between_lines_when_they_can():
+    """A cut inside a line breaks its photo spacing: every part of long_mission (lines of 3 waypoints, camera
+    off between them) ends with the camera already off, so nothing needs resuming."""
+    parts = split_parts(long_mission(30), 17, ARDUPILOT)
+    assert len(parts) > 2
+    for part in parts[1:]:
+        assert not [it for it in part if it.comment.startswith("resume: camera")]
+
+
+def test_a_cut_inside_a_line_resumes_with_a_photo():
+    """One long line (camera on throughout): the cut must fall inside it. The previous part's last photo is up to
+    one trigger distance before the cut, so the next part shoots at once (param3 1) instead of one distance after
+    the resume point (a gap of up to twice the spacing)."""
+    items = (long_mission(0)[:2] + (_trig(8.0),) + tuple(_wp(k) for k in range(40)) + (_trig(0.0),)
+             + long_mission(0)[-1:])
+    parts = split_parts(items, 15, PX4)
+    assert len(parts) > 2
+    for prev, part in zip(parts, parts[1:]):
+        assert prev[-2].command == cmd("DO_SET_CAM_TRIGG_DIST") and prev[-2].param1 == 0.0
+        (resumed,) = [it for it in part if it.comment.startswith("resume: camera")]
+        assert resumed.param1 == 8.0 and resumed.param3 == 1.0
 
 
 def test_ardupilot_nan_params_refused_where_its_upload_refuses_them():
