@@ -33,7 +33,7 @@ from cdf.errors import CdfError
 from wiris_tools.emulate import paramext
 from wiris_tools.emulate.definition import Definition, DefParam, parse_definition
 from wiris_tools.errors import LinkError
-from wiris_tools.link import Link, command_name, result_name
+from wiris_tools.link import IN_PROGRESS_TIMEOUTS, Link, command_name, result_name
 
 CAMERA_COMPONENTS = range(mavlink2.MAV_COMP_ID_CAMERA, mavlink2.MAV_COMP_ID_CAMERA6 + 1)
 MAX_SETUP_BYTES = 1024 * 1024
@@ -138,6 +138,21 @@ def _nan_params(values: list[float | None]) -> list[float]:
     return [math.nan if v is None else float(v) for v in values]
 
 
+# A camera that answers a request with these does not report that part (a camera without storage, an
+# older one without capture status): `wiris camera info` says "not reported" and carries on.
+_REFUSED = (mavlink2.MAV_RESULT_UNSUPPORTED, mavlink2.MAV_RESULT_DENIED)
+
+
+def _answered(err: LinkError) -> int | None:
+    """The MAV_RESULT a Link.command_long error reports ("... answered MAV_RESULT_DENIED"), or None when the
+    command was not answered at all."""
+    text = err.message
+    for value, entry in mavlink2.enums["MAV_RESULT"].items():
+        if text.endswith(f" answered {entry.name}"):
+            return value
+    return None
+
+
 class CameraClient:
     """The camera side of a Link (see the module docstring)."""
 
@@ -182,19 +197,25 @@ class CameraClient:
         return self.link.command_long(self.system, self.component, command, _nan_params(params),
                                       timeout=timeout_s or self.timeout_s, retries=self.retries)
 
-    def request(self, message: str, param2: float = math.nan, *, fallback: int | None = None,
-                fallback_param1: float = math.nan, count: int = 1, wait_s: float | None = None) -> list[Any]:
-        """Ask for `message` with REQUEST_MESSAGE (or the older dedicated command when that is UNSUPPORTED)
-        and return the copies that arrive (at least one, up to `count`)."""
+    def request(self, message: str, param2: float = 0.0, *, fallback: int | None = None,
+                fallback_params: tuple[float, ...] = (), count: int = 1, wait_s: float | None = None) -> list[Any]:
+        """Ask for `message` with REQUEST_MESSAGE (or the older dedicated command `fallback`, with
+        `fallback_params` first and 0 after, when that is UNSUPPORTED) and return the copies that arrive (at
+        least one, up to `count`).
+
+        Unused params are common.xml's defaults: REQUEST_MESSAGE params 3-7 "by default assumed not used (0)"
+        (param 7 = 0: the flight stack's default address), and the dedicated requests' "Reserved (default:0)".
+        A request changes nothing, so NaN (the Workswell manual's "keep") has no meaning here; a strict camera
+        refuses NaN where common.xml defines a MAV_BOOL ("values not equal to 0 or 1 are invalid")."""
         msg_id = getattr(mavlink2, f"MAVLINK_MSG_ID_{message}")
         wait = wait_s if wait_s is not None else self.timeout_s
         with self.link.inbox(message, src_system=self.system, src_component=self.component) as box:
             try:
-                self.command(mavlink2.MAV_CMD_REQUEST_MESSAGE, [msg_id, param2, None, None, None, None, None])
+                self.command(mavlink2.MAV_CMD_REQUEST_MESSAGE, [msg_id, param2, 0, 0, 0, 0, 0])
             except LinkError as err:
-                if fallback is None or "UNSUPPORTED" not in str(err):
+                if fallback is None or _answered(err) != mavlink2.MAV_RESULT_UNSUPPORTED:
                     raise
-                self.command(fallback, [fallback_param1, None, None, None, None, None, None])
+                self.command(fallback, [*fallback_params, *[0.0] * (7 - len(fallback_params))])
             got = []
             first = box.get(wait)
             if first is None:
@@ -210,8 +231,9 @@ class CameraClient:
 
     def information(self) -> CameraInfo:
         try:
+            # 521 param1: "Request camera capabilities (MAV_BOOL_TRUE)"
             m = self.request("CAMERA_INFORMATION", fallback=mavlink2.MAV_CMD_REQUEST_CAMERA_INFORMATION,
-                             fallback_param1=1)[0]
+                             fallback_params=(1,))[0]
         except LinkError as err:
             hb = self.link.heartbeats().get((self.system, self.component))
             if hb is not None and hb.type != mavlink2.MAV_TYPE_CAMERA and "no answer" in err.message:
@@ -227,23 +249,49 @@ class CameraClient:
             lens_id=m.lens_id, flags=m.flags, definition_version=m.cam_definition_version,
             definition_uri=_text(m.cam_definition_uri))
 
-    def storage(self) -> list[dict]:
-        """STORAGE_INFORMATION of every storage: asks for the first, then for the others it announces."""
-        first = self.request("STORAGE_INFORMATION", 0, fallback=mavlink2.MAV_CMD_REQUEST_STORAGE_INFORMATION,
-                             fallback_param1=0, count=16, wait_s=0.3)
+    def storage(self) -> list[dict] | None:
+        """STORAGE_INFORMATION of every storage: asks for the first, then for the others it announces.
+
+        None when the camera refuses the request (MAV_RESULT_UNSUPPORTED or DENIED: a camera without
+        storage reporting); a storage it refuses to describe on its own is left out. Silence is still a
+        LinkError: it says more about the link than about the camera."""
+        def ask(param2: float, count: int, wait_s: float | None) -> list[Any] | None:
+            # 525: param1 the storage id (0 for all in common.xml), param2 "Request storage information
+            # (MAV_BOOL_TRUE). Values not equal to 0 or 1 are invalid", so 1 and never NaN
+            try:
+                return self.request("STORAGE_INFORMATION", param2,
+                                    fallback=mavlink2.MAV_CMD_REQUEST_STORAGE_INFORMATION,
+                                    fallback_params=(param2, 1), count=count, wait_s=wait_s)
+            except LinkError as err:
+                if _answered(err) in _REFUSED:
+                    return None
+                raise
+
+        # param2 0: "0 for all" in common.xml; the Workswell manual numbers storages from 0 (its Storage ID),
+        # so a WIRIS sends the first only, with storage_count, and the loop below asks for the others
+        first = ask(0, 16, 0.3)
+        if first is None:
+            return None
         seen = {m.storage_id: m for m in first}
         count = max((m.storage_count for m in first), default=0)
         for sid in range(count):
             if sid not in seen and len(seen) < count:
-                for m in self.request("STORAGE_INFORMATION", sid, count=1):
+                for m in ask(sid, 1, None) or ():
                     seen[m.storage_id] = m
         return [{"id": m.storage_id, "name": _text(m.name), "status": m.status, "type": m.type,
                  "total_mib": m.total_capacity, "used_mib": m.used_capacity, "available_mib": m.available_capacity}
                 for _, m in sorted(seen.items())]
 
-    def capture_status(self) -> dict:
-        m = self.request("CAMERA_CAPTURE_STATUS", fallback=mavlink2.MAV_CMD_REQUEST_CAMERA_CAPTURE_STATUS,
-                         fallback_param1=1)[0]
+    def capture_status(self) -> dict | None:
+        """CAMERA_CAPTURE_STATUS; None when the camera refuses the request (UNSUPPORTED or DENIED)."""
+        try:
+            # 527 param1: "Request camera capture status (MAV_BOOL_TRUE)"
+            m = self.request("CAMERA_CAPTURE_STATUS", fallback=mavlink2.MAV_CMD_REQUEST_CAMERA_CAPTURE_STATUS,
+                             fallback_params=(1,))[0]
+        except LinkError as err:
+            if _answered(err) in _REFUSED:
+                return None
+            raise
         return {"image_status": m.image_status, "video_status": m.video_status, "image_interval_s": m.image_interval,
                 "recording_time_ms": m.recording_time_ms, "available_mib": m.available_capacity,
                 "image_count": m.image_count}
@@ -395,6 +443,7 @@ class CameraClient:
         def ours(m: Any) -> bool:
             return paramext.param_id(m) == name
 
+        busy_until: float | None = None    # as Link.command_long: IN_PROGRESS extends the wait, up to a cap
         with self.link.inbox("PARAM_EXT_ACK", src_system=self.system, src_component=self.component,
                              predicate=ours) as box:
             for _attempt in range(self.retries + 1):
@@ -403,9 +452,19 @@ class CameraClient:
                 while True:
                     ack = box.get(max(0.0, deadline - time.monotonic()))
                     if ack is None:
+                        if busy_until is not None and time.monotonic() >= busy_until:
+                            limit = IN_PROGRESS_TIMEOUTS * self.timeout_s
+                            raise LinkError(f"{name} = {value}: still not set {limit:g} s after the camera "
+                                            "answered PARAM_ACK_IN_PROGRESS", where=where or name,
+                                            hint="the camera reports the change as under way but never confirms "
+                                                 "it; check the camera, or give a longer --timeout (the wait is "
+                                                 f"capped at {IN_PROGRESS_TIMEOUTS} times the timeout)")
                         break
                     if ack.param_result == mavlink2.PARAM_ACK_IN_PROGRESS:
-                        deadline = time.monotonic() + self.timeout_s
+                        now = time.monotonic()
+                        if busy_until is None:
+                            busy_until = now + IN_PROGRESS_TIMEOUTS * self.timeout_s
+                        deadline = min(now + self.timeout_s, busy_until)
                         continue
                     held = paramext.decode_ext(paramext.raw_value(ack), ack.param_type)
                     if ack.param_result == mavlink2.PARAM_ACK_ACCEPTED:
@@ -458,7 +517,9 @@ class CameraClient:
         if count < 0 or interval_s < 0 or not math.isfinite(interval_s):
             raise LinkError("count and interval must not be negative", hint="e.g. --interval 2 --count 5")
         with self.link.inbox("CAMERA_IMAGE_CAPTURED", src_system=self.system, src_component=self.component) as box:
-            self.command(mavlink2.MAV_CMD_IMAGE_START_CAPTURE, [0, interval_s, count, 0, None, None, None])
+            # params 5-7 at common.xml's defaults (0, 0, NaN); the Workswell manual reads 0 in 5 (capture
+            # flags) and 6 (storage + 1) as "keep", like NaN
+            self.command(mavlink2.MAV_CMD_IMAGE_START_CAPTURE, [0, interval_s, count, 0, 0, 0, None])
             got = 0
             start = time.monotonic()
             try:
@@ -485,7 +546,9 @@ class CameraClient:
             finally:
                 if count != 1:
                     try:
-                        self.command(mavlink2.MAV_CMD_IMAGE_STOP_CAPTURE, [None] * 7)
+                        # param1 0 = "all cameras" (common.xml: a camera NACKs other values, NaN included,
+                        # and a refused stop would leave it capturing); 5-6 default 0, the rest NaN
+                        self.command(mavlink2.MAV_CMD_IMAGE_STOP_CAPTURE, [0, None, None, None, 0, 0, None])
                     except LinkError:
                         pass
 

@@ -94,6 +94,12 @@ _RESULT_HINTS = {
 # any other result (MAV_RESULT_CANCELLED, a number this dialect does not define)
 _OTHER_RESULT_HINT = "a result this tool has no advice for: see the target's documentation or firmware"
 
+# A command (or a PARAM_EXT_SET) reported IN_PROGRESS is waited for at most this many timeouts from the first
+# such report (10 s at the default 1 s), however many reports follow: each report extends the wait by one
+# timeout, and a target that reports progress for ever (seen: a camera repeating PARAM_ACK_IN_PROGRESS) used
+# to keep the caller waiting for ever. A longer timeout gives a slow operation (a format) more time.
+IN_PROGRESS_TIMEOUTS = 10
+
 
 def command_name(command: int) -> str:
     """MAV_CMD_… name of a command id (or the number when the dialect does not know it)."""
@@ -444,7 +450,8 @@ class Link:
 
         Resends up to `retries` times (confirmation 0, 1, 2, …) when no ACK arrives within
         `timeout` s. MAV_RESULT_IN_PROGRESS means "still working": we keep waiting (each report
-        extends the wait by `timeout`) and pass its progress (0-100, 255 = unknown) to `progress`.
+        extends the wait by `timeout`, up to IN_PROGRESS_TIMEOUTS × `timeout` after the first report)
+        and pass its progress (0-100, 255 = unknown) to `progress`.
         Returns the ACCEPTED ack; raises LinkError naming the command, target and result otherwise.
         """
         p = self._params(params, command)
@@ -494,6 +501,7 @@ class Link:
             return ts in (0, self.system) and tc in (0, self.component)
 
         tries = retries + 1
+        busy_until: float | None = None       # set by the first IN_PROGRESS: the latest we wait for the result
         with self.inbox("COMMAND_ACK", predicate=is_ours) as box:
             for attempt in range(tries):
                 self.send(encode(min(attempt, 255)))
@@ -502,13 +510,23 @@ class Link:
                     left = deadline - time.monotonic()
                     ack = box.get(max(left, 0.0)) if left > 0 else None
                     if ack is None:
+                        if busy_until is not None and time.monotonic() >= busy_until:
+                            limit = IN_PROGRESS_TIMEOUTS * timeout
+                            raise LinkError(f"{name} still not finished {limit:g} s after the target reported "
+                                            f"it IN_PROGRESS", where=where,
+                                            hint=f"the target reports progress but no result; check it, or give "
+                                                 f"a longer timeout (the wait is capped at {IN_PROGRESS_TIMEOUTS} "
+                                                 "times the timeout)")
                         break
                     if ack.result == mavlink2.MAV_RESULT_ACCEPTED:
                         return ack
                     if ack.result == mavlink2.MAV_RESULT_IN_PROGRESS:
                         if progress is not None:
                             progress(int(getattr(ack, "progress", 255)))
-                        deadline = time.monotonic() + timeout
+                        now = time.monotonic()
+                        if busy_until is None:
+                            busy_until = now + IN_PROGRESS_TIMEOUTS * timeout
+                        deadline = min(now + timeout, busy_until)
                         continue
                     hint = _RESULT_HINTS.get(ack.result, _OTHER_RESULT_HINT)
                     raise LinkError(f"{name} answered {result_name(ack.result)}", where=where, hint=hint)

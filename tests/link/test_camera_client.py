@@ -673,3 +673,173 @@ def test_ctrl_c_while_pymavlink_loads_stops_the_command(module):
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert proc.returncode == 130, proc.stderr
     assert "HEARTBEAT" not in proc.stderr
+
+
+def _scripted_camera(answer, component: int = 100):
+    """A camera on a real UDP socket: `answer(msg)` returns (MAV_RESULT, [messages to send after the ACK]) for
+    each COMMAND_LONG it gets; the commands are recorded with their params."""
+    from pymavlink.dialects.v20 import ardupilotmega as m
+
+    cam = Link("udpin:127.0.0.1:0", system=1, component=component, mav_type=m.MAV_TYPE_CAMERA, heartbeat_s=0.2)
+    seen: list[tuple[int, tuple[float, ...]]] = []
+
+    def on_cmd(msg):
+        params = (msg.param1, msg.param2, msg.param3, msg.param4, msg.param5, msg.param6, msg.param7)
+        seen.append((msg.command, params))
+        result, after = answer(msg, params)
+        cam.send(cam.mav.command_ack_encode(msg.command, result, 0, 0, msg.get_srcSystem(), msg.get_srcComponent()))
+        for out in after:
+            cam.send(out)
+
+    cam.subscribe(on_cmd, "COMMAND_LONG", to_me=True)
+    return cam, seen
+
+
+def _camera_information(mav):
+    from pymavlink.dialects.v20 import ardupilotmega as m
+
+    return mav.camera_information_encode(0, b"ACME".ljust(32, b"\0"), b"Cam".ljust(32, b"\0"), 0, 4.0, 0, 0, 640,
+                                         480, 0, m.CAMERA_CAP_FLAGS_CAPTURE_IMAGE, 0, b"")
+
+
+@pytest.mark.parametrize("refusal", ["MAV_RESULT_UNSUPPORTED", "MAV_RESULT_DENIED"])
+def test_info_of_a_camera_that_refuses_storage_and_capture_status_reports_them_missing(refusal):
+    """CAMERA_INFORMATION arrived: a camera that answers the storage and capture status requests UNSUPPORTED
+    or DENIED (one without storage) gets "not reported" (null with --json); `camera info` used to exit 1."""
+    from pymavlink.dialects.v20 import ardupilotmega as m
+
+    def answer(msg, params):
+        if msg.command == m.MAV_CMD_REQUEST_MESSAGE and params[0] == m.MAVLINK_MSG_ID_CAMERA_INFORMATION:
+            return m.MAV_RESULT_ACCEPTED, [_camera_information(cam.mav)]
+        if msg.command == m.MAV_CMD_REQUEST_MESSAGE:
+            return getattr(m, refusal), []
+        return m.MAV_RESULT_UNSUPPORTED, []
+
+    cam, _ = _scripted_camera(answer)
+    url = f"udpout:127.0.0.1:{cam.local_port}"
+    try:
+        text = CliRunner().invoke(cli, ["camera", "info", "--connect", url, "--timeout", "0.3"])
+        as_json = CliRunner().invoke(cli, ["camera", "info", "--connect", url, "--timeout", "0.3", "--json"])
+    finally:
+        cam.close()
+    assert text.exit_code == 0, text.output
+    assert "ACME Cam" in text.output and "storage: not reported" in text.output
+    assert "capture: not reported" in text.output
+    assert as_json.exit_code == 0, as_json.output
+    doc = json.loads(as_json.output)
+    assert doc["camera"]["model"] == "Cam" and doc["storage"] is None and doc["capture_status"] is None
+
+
+def test_silence_to_the_storage_request_is_still_an_error():
+    """Only a refusal means "not reported": no answer at all says something about the link."""
+    from pymavlink.dialects.v20 import ardupilotmega as m
+
+    def answer(msg, params):
+        if params[0] == m.MAVLINK_MSG_ID_CAMERA_INFORMATION:
+            return m.MAV_RESULT_ACCEPTED, [_camera_information(cam.mav)]
+        return m.MAV_RESULT_ACCEPTED, []        # acknowledged, and then nothing
+
+    cam, _ = _scripted_camera(answer)
+    try:
+        r = CliRunner().invoke(cli, ["camera", "info", "--connect", f"udpout:127.0.0.1:{cam.local_port}",
+                                     "--timeout", "0.3"])
+    finally:
+        cam.close()
+    assert r.exit_code == 1 and "sent no STORAGE_INFORMATION" in r.output and "  hint: " in r.output
+
+
+def test_requests_send_common_xml_values_in_their_unused_params():
+    """An older, strict camera: REQUEST_MESSAGE is UNSUPPORTED, and the dedicated requests' MAV_BOOL params
+    are checked as common.xml says ("values not equal to 0 or 1 are invalid"). The fallback 525 used to carry
+    NaN in param2 ("Request storage information (MAV_BOOL_TRUE)"), and REQUEST_MESSAGE NaN in params 3-7
+    ("by default assumed not used (0)"); the stop of a periodic capture NaN in param1, which such a camera
+    refuses (and the client ignored the refusal: the camera went on capturing)."""
+    from pymavlink.dialects.v20 import ardupilotmega as m
+
+    def boolean(v):
+        return v in (0.0, 1.0)
+
+    def answer(msg, params):
+        if msg.command == m.MAV_CMD_REQUEST_MESSAGE:
+            return m.MAV_RESULT_UNSUPPORTED, []
+        if msg.command == m.MAV_CMD_REQUEST_CAMERA_INFORMATION and boolean(params[0]):
+            return m.MAV_RESULT_ACCEPTED, [_camera_information(cam.mav)]
+        if msg.command == m.MAV_CMD_REQUEST_STORAGE_INFORMATION and boolean(params[1]):
+            return m.MAV_RESULT_ACCEPTED, [cam.mav.storage_information_encode(
+                0, 1, 1, m.STORAGE_STATUS_READY, 1000, 10, 990, 0, 0, m.STORAGE_TYPE_MICROSD, b"SD", 0)]
+        if msg.command == m.MAV_CMD_REQUEST_CAMERA_CAPTURE_STATUS and boolean(params[0]):
+            return m.MAV_RESULT_ACCEPTED, [cam.mav.camera_capture_status_encode(0, 0, 0, 0, 0, 990, 7)]
+        if msg.command == m.MAV_CMD_IMAGE_START_CAPTURE and params[0] == 0:
+            return m.MAV_RESULT_ACCEPTED, [cam.mav.camera_image_captured_encode(
+                0, 0, 100, 0, 0, 0, 0, [1, 0, 0, 0], i, 1, b"") for i in range(2)]
+        if msg.command == m.MAV_CMD_IMAGE_STOP_CAPTURE and params[0] == 0:
+            return m.MAV_RESULT_ACCEPTED, []    # common.xml: param1 0 = all cameras; other values are NACKed
+        return m.MAV_RESULT_DENIED, []
+
+    cam, seen = _scripted_camera(answer)
+    try:
+        with Link(f"udpout:127.0.0.1:{cam.local_port}", heartbeat_s=0.2) as link:
+            client = CameraClient(link, timeout_s=0.3, retries=0)
+            assert client.information().model == "Cam"
+            assert [s["name"] for s in client.storage()] == ["SD"]
+            assert client.capture_status()["image_count"] == 7
+            assert [shot.index for shot in client.capture(interval_s=1, count=2)] == [0, 1]
+    finally:
+        cam.close()
+    sent = {command: params for command, params in seen}
+    assert sent[m.MAV_CMD_IMAGE_START_CAPTURE][3:6] == (0, 0, 0)      # common.xml defaults; 0 keeps on a WIRIS
+    assert sent[m.MAV_CMD_IMAGE_STOP_CAPTURE][0] == 0
+    assert sent[m.MAV_CMD_REQUEST_STORAGE_INFORMATION] == (0, 1, 0, 0, 0, 0, 0)
+    assert sent[m.MAV_CMD_REQUEST_CAMERA_INFORMATION] == (1, 0, 0, 0, 0, 0, 0)
+    assert sent[m.MAV_CMD_REQUEST_CAMERA_CAPTURE_STATUS] == (1, 0, 0, 0, 0, 0, 0)
+    requests = [params for command, params in seen if command == m.MAV_CMD_REQUEST_MESSAGE]
+    assert len(requests) == 3 and all(p[1:] == (0, 0, 0, 0, 0, 0) for p in requests)
+
+
+def test_set_gives_up_on_a_camera_that_answers_in_progress_for_ever():
+    """A camera repeating PARAM_ACK_IN_PROGRESS and never finishing kept set_param_ext waiting for ever (each
+    report extended the wait); the module promises that every wait is bounded."""
+    import threading
+
+    from pymavlink.dialects.v20 import ardupilotmega as m
+
+    from wiris_tools.link import IN_PROGRESS_TIMEOUTS
+
+    cam = Link("udpin:127.0.0.1:0", system=1, component=100, mav_type=m.MAV_TYPE_CAMERA, heartbeat_s=0.2)
+    stop = threading.Event()
+    pending = []
+
+    def busy():
+        while not stop.is_set():
+            for msg in list(pending):
+                cam.send(cam.mav.param_ext_ack_encode(msg._param_id_raw, msg._param_value_raw, msg.param_type,
+                                                      m.PARAM_ACK_IN_PROGRESS))
+            stop.wait(0.05)
+
+    cam.subscribe(pending.append, "PARAM_EXT_SET", to_me=True)
+    reporter = threading.Thread(target=busy, daemon=True)
+    reporter.start()
+    outcome: dict = {}
+    try:
+        with Link(f"udpout:127.0.0.1:{cam.local_port}", heartbeat_s=0.2) as link:
+            client = CameraClient(link, timeout_s=0.1, retries=2)
+
+            def call():
+                try:
+                    outcome["value"] = client.set_param_ext("EMISSIVITY", 0.9, "float")
+                except LinkError as err:
+                    outcome["error"] = err
+
+            caller = threading.Thread(target=call, daemon=True)
+            started = time.monotonic()
+            caller.start()
+            caller.join(IN_PROGRESS_TIMEOUTS * 0.1 + 5)
+            waited = time.monotonic() - started
+            assert not caller.is_alive(), "still waiting on a camera that only answers IN_PROGRESS"
+    finally:
+        stop.set()
+        reporter.join(2)
+        cam.close()
+    err = outcome["error"]
+    assert "PARAM_ACK_IN_PROGRESS" in err.message and err.where == "EMISSIVITY" and "--timeout" in err.hint
+    assert IN_PROGRESS_TIMEOUTS * 0.1 <= waited < IN_PROGRESS_TIMEOUTS * 0.1 + 3

@@ -97,11 +97,12 @@ def test_camera_information_follows_the_table_and_common_xml(model, gcs):
 
 
 def test_camera_settings_reports_main_camera_and_zoom(pro, gcs):
-    """§6.4.2: mode_id carries the Main Camera enumerator, zoomLevel the zoom, focus NaN."""
+    """§6.4.2: mode_id carries the Main Camera enumerator, zoomLevel the zoom, focus NaN. zoomLevel is
+    common.xml's percentage of the zoom range (§6.4.2 prints the factor 1-10): 4x of 1-10x is 33.3 %."""
     pro.handle(gcs.cmd(m.MAV_CMD_SET_CAMERA_MODE, NAN, NAN, NAN, NAN, NAN, 2), 0)   # main camera visible (+1)
     pro.handle(gcs.cmd(m.MAV_CMD_DO_DIGICAM_CONTROL, NAN, 4.0), 0)
     s = only(pro.handle(gcs.cmd(m.MAV_CMD_REQUEST_CAMERA_SETTINGS, 1), 0), "CAMERA_SETTINGS")
-    assert s.mode_id == 1 and s.zoomLevel == 4.0 and math.isnan(s.focusLevel)
+    assert s.mode_id == 1 and s.zoomLevel == pytest.approx(100 * 3 / 9, abs=1e-3) and math.isnan(s.focusLevel)
     assert types(pro.handle(gcs.cmd(m.MAV_CMD_REQUEST_CAMERA_SETTINGS, 0), 0)) == ["COMMAND_ACK"]   # 0: no action
     assert ack_of(pro.handle(gcs.cmd(m.MAV_CMD_REQUEST_CAMERA_SETTINGS, 2), 0),
                   m.MAV_CMD_REQUEST_CAMERA_SETTINGS) == DENIED
@@ -127,7 +128,7 @@ def test_request_message_unknown_id_is_unsupported_and_nan_denied(pro, gcs):
 
 def test_commands_the_manual_does_not_list_are_unsupported(pro, gcs):
     listed = {name for name, _ in catalogue().get("wiris-pro").commands}
-    for cmd in (m.MAV_CMD_SET_CAMERA_FOCUS, m.MAV_CMD_SET_CAMERA_ZOOM, m.MAV_CMD_COMPONENT_ARM_DISARM, m.MAV_CMD_USER_4):
+    for cmd in (m.MAV_CMD_SET_CAMERA_FOCUS, m.MAV_CMD_COMPONENT_ARM_DISARM, m.MAV_CMD_USER_4):
         assert m.enums["MAV_CMD"][cmd].name not in listed
         assert ack_of(pro.handle(gcs.cmd(cmd, 1), 0), cmd) == UNSUPPORTED
     ci = gcs(gcs.mav.command_int_encode(1, 100, 0, m.MAV_CMD_REQUEST_CAMERA_INFORMATION, 0, 0, 1, 0, 0, 0, 0, 0, 0))
@@ -220,7 +221,7 @@ def test_one_state_behind_commands_and_param_ext(pro, gcs):
                                                            m.MAV_PARAM_EXT_TYPE_REAL32)), 0), "PARAM_EXT_ACK")
     assert ack.param_result == m.PARAM_ACK_ACCEPTED
     s = only(pro.handle(gcs.cmd(m.MAV_CMD_REQUEST_MESSAGE, m.MAVLINK_MSG_ID_CAMERA_SETTINGS), 0), "CAMERA_SETTINGS")
-    assert s.zoomLevel == 3.5
+    assert s.zoomLevel == pytest.approx(100 * 2.5 / 9, abs=1e-3)                    # 3.5x of 1-10x, in %
 
 
 def test_param_ext_list_covers_the_definition_with_declared_types(pro, gcs):
@@ -390,3 +391,141 @@ def test_infinite_storage_id_is_denied_not_a_crash(pro, gcs):
     """Found by the fuzzer: REQUEST_MESSAGE(STORAGE_INFORMATION, inf) raised OverflowError."""
     out = pro.handle(gcs.cmd(m.MAV_CMD_REQUEST_MESSAGE, m.MAVLINK_MSG_ID_STORAGE_INFORMATION, math.inf), 0)
     assert ack_of(out, m.MAV_CMD_REQUEST_MESSAGE) == DENIED
+
+
+@pytest.mark.parametrize("bad", [NAN, math.inf, -math.inf])
+def test_param_ext_set_refuses_non_finite_floats_and_every_command_is_still_answered(pro, gcs, bad):
+    """A REAL32 PARAM_EXT_SET of NaN or an infinity was ACCEPTED and stored; the next relative zoom
+    (DO_DIGICAM_CONTROL param 3) then raised ValueError and the sender got no COMMAND_ACK at all."""
+    floats = [p for p in pro.definition.params if p.type == "float"]
+    assert {"CAM_ZOOM", "EMISSIVITY", "RANGE_MAX_C"} <= {p.name for p in floats}
+    before = dict(pro.values)
+    for p in floats:
+        out = pro.handle(gcs(gcs.mav.param_ext_set_encode(1, 100, p.name.encode(), paramext.encode(bad, "float"),
+                                                          m.MAV_PARAM_EXT_TYPE_REAL32)), 0)
+        ack = only(out, "PARAM_EXT_ACK")
+        assert ack.param_result == m.PARAM_ACK_VALUE_UNSUPPORTED, p.name
+        # the ACK carries the value the camera keeps
+        assert paramext.decode(paramext.raw_value(ack), "float") == pytest.approx(before[p.name]), p.name
+    assert pro.values == before
+    out = pro.handle(gcs.cmd(m.MAV_CMD_DO_DIGICAM_CONTROL, NAN, NAN, 2), 0)
+    assert ack_of(out, m.MAV_CMD_DO_DIGICAM_CONTROL) == ACCEPTED and pro.value("zoom") == pytest.approx(1.2)
+    settings = only(pro.handle(gcs.cmd(m.MAV_CMD_REQUEST_CAMERA_SETTINGS, 1), 0), "CAMERA_SETTINGS")
+    assert math.isfinite(settings.zoomLevel)
+    assert pro.faults == 0
+
+
+def test_a_command_that_trips_over_a_stored_value_is_still_acknowledged(pro, gcs):
+    """Whatever ends up stored (here forced past the PARAM_EXT check), every command gets its COMMAND_ACK."""
+    pro.values["CAM_ZOOM"] = NAN
+    out = pro.handle(gcs.cmd(m.MAV_CMD_DO_DIGICAM_CONTROL, NAN, NAN, 2), 0)
+    assert ack_of(out, m.MAV_CMD_DO_DIGICAM_CONTROL) == ACCEPTED and pro.value("zoom") == pytest.approx(1.2)
+    pro.values["STORAGE"] = "ssd"          # a value of the wrong kind: the capture raises inside the emulator
+    out = pro.handle(gcs.cmd(m.MAV_CMD_IMAGE_START_CAPTURE, 0, 0, 1), 0)
+    assert ack_of(out, m.MAV_CMD_IMAGE_START_CAPTURE) == m.MAV_RESULT_FAILED and pro.faults == 1
+
+
+def _captured(out):
+    return [x.image_index for x in out if x.get_type() == "CAMERA_IMAGE_CAPTURED"]
+
+
+def test_image_captured_is_requested_by_image_index_even_after_the_history_is_trimmed(pro, gcs):
+    """REQUEST_MESSAGE(CAMERA_IMAGE_CAPTURED) param2 is the image_index (common.xml); it was read as a place in
+    the history, which keeps the last 1000 images: after 1005 images, index 0 answered with image 5."""
+    for i in range(1005):
+        pro.handle(gcs.cmd(m.MAV_CMD_IMAGE_START_CAPTURE, 0, 0, 1), i)
+
+    def ask(*params):
+        out = pro.handle(gcs.cmd(m.MAV_CMD_REQUEST_MESSAGE, m.MAVLINK_MSG_ID_CAMERA_IMAGE_CAPTURED, *params), 2000)
+        return ack_of(out, m.MAV_CMD_REQUEST_MESSAGE), _captured(out)
+
+    assert ask(5) == (ACCEPTED, [5])
+    assert ask(1004) == (ACCEPTED, [1004])
+    assert ask(1004, NAN) == (ACCEPTED, [1004])                    # param3 unused (a WIRIS-style sender's NaN)
+    assert ask(0) == (m.MAV_RESULT_FAILED, [])                     # given out, no longer held
+    assert ask(1005) == (DENIED, []) and ask(-2) == (DENIED, []) and ask(2.5) == (DENIED, [])
+    result, every = ask(-1)                                        # -1: all it still holds
+    assert result == ACCEPTED and every == list(range(5, 1005))
+    assert ask(1000, -1) == (ACCEPTED, [1000, 1001, 1002, 1003, 1004])   # param3 -1: that one and all after
+    assert ask(3, 6) == (ACCEPTED, [5, 6])                               # param3: the last of a range
+    assert ask(6, 3)[0] == DENIED
+
+
+def test_image_captured_after_a_counter_reset(pro, gcs):
+    for i in range(3):
+        pro.handle(gcs.cmd(m.MAV_CMD_IMAGE_START_CAPTURE, 0, 0, 1), i)
+    pro.handle(gcs.cmd(m.MAV_CMD_STORAGE_FORMAT, 0, 0, 1), 3)           # reset the image counter
+    assert ack_of(pro.handle(gcs.cmd(m.MAV_CMD_REQUEST_MESSAGE, m.MAVLINK_MSG_ID_CAMERA_IMAGE_CAPTURED, 0), 4),
+                  m.MAV_CMD_REQUEST_MESSAGE) == DENIED                  # index 0 is not given out again yet
+    out = pro.handle(gcs.cmd(m.MAV_CMD_REQUEST_MESSAGE, m.MAVLINK_MSG_ID_CAMERA_IMAGE_CAPTURED, -1), 4)
+    assert ack_of(out, m.MAV_CMD_REQUEST_MESSAGE) == ACCEPTED and _captured(out) == []
+
+
+@pytest.mark.parametrize("zoom_x,level", [(1.0, 0.0), (5.5, 50.0), (10.0, 100.0)])
+def test_zoom_level_is_a_percentage_of_the_range(pro, gcs, zoom_x, level):
+    """common.xml CAMERA_SETTINGS.zoomLevel: "percentage of the full range (0.0 to 100.0)"; §6.4.2 prints the
+    zoom factor 1-10, which a standard reader (QGC's, MAVSDK's slider) would take for 1-10 %."""
+    pro.handle(gcs.cmd(m.MAV_CMD_DO_DIGICAM_CONTROL, NAN, zoom_x), 0)
+    s = only(pro.handle(gcs.cmd(m.MAV_CMD_REQUEST_MESSAGE, m.MAVLINK_MSG_ID_CAMERA_SETTINGS), 0), "CAMERA_SETTINGS")
+    assert s.zoomLevel == pytest.approx(level)
+
+
+@pytest.mark.parametrize("model", WORKSWELL)
+def test_basic_zoom_flag_means_set_camera_zoom_works(model, gcs):
+    """CAMERA_CAP_FLAGS_HAS_BASIC_ZOOM is "basic zoom control (MAV_CMD_SET_CAMERA_ZOOM)" (common.xml), and the
+    camera advertised it while answering that command UNSUPPORTED (ArduPilot sends it when the flag is set).
+    ZOOM_TYPE_RANGE and ZOOM_TYPE_STEP map onto §6.3.2.2's zoom; success is answered with CAMERA_SETTINGS."""
+    cam_t = catalogue().get(model)
+    assert "CAMERA_CAP_FLAGS_HAS_BASIC_ZOOM" in cam_t.capabilities
+    cam = new_wiris(cam_t)
+    zoom = cam_t.setting("zoom")
+    out = cam.handle(gcs.cmd(m.MAV_CMD_SET_CAMERA_ZOOM, m.ZOOM_TYPE_RANGE, 50), 0)
+    assert ack_of(out, m.MAV_CMD_SET_CAMERA_ZOOM) == ACCEPTED
+    assert types(out) == ["COMMAND_ACK", "CAMERA_SETTINGS"] and out[1].zoomLevel == pytest.approx(50.0)
+    assert cam.value("zoom") == pytest.approx((zoom.min + zoom.max) / 2)
+    cam.handle(gcs.cmd(m.MAV_CMD_SET_CAMERA_ZOOM, m.ZOOM_TYPE_RANGE, 33), 0)      # the closest zoom step
+    assert cam.value("zoom") == pytest.approx(round(zoom.min + 0.33 * (zoom.max - zoom.min), 1))
+    before = cam.value("zoom")
+    assert ack_of(cam.handle(gcs.cmd(m.MAV_CMD_SET_CAMERA_ZOOM, m.ZOOM_TYPE_STEP, 1), 0),
+                  m.MAV_CMD_SET_CAMERA_ZOOM) == ACCEPTED
+    assert cam.value("zoom") == pytest.approx(before + zoom.step)
+    cam.handle(gcs.cmd(m.MAV_CMD_SET_CAMERA_ZOOM, m.ZOOM_TYPE_STEP, -1000), 0)    # goes no wider than the widest
+    assert cam.value("zoom") == zoom.min
+    for bad in ([m.ZOOM_TYPE_RANGE, 101], [m.ZOOM_TYPE_RANGE, -1], [m.ZOOM_TYPE_RANGE, NAN], [m.ZOOM_TYPE_STEP, 0.5],
+                [m.ZOOM_TYPE_CONTINUOUS, 1], [m.ZOOM_TYPE_FOCAL_LENGTH, 20], [NAN, 50]):
+        out = cam.handle(gcs.cmd(m.MAV_CMD_SET_CAMERA_ZOOM, *bad), 0)
+        assert types(out) == ["COMMAND_ACK"] and out[0].result == DENIED, bad
+    assert cam.value("zoom") == zoom.min
+
+
+def test_video_start_with_stream_id_0_keeps_the_video_id(pro, gcs):
+    """common.xml VIDEO_START_CAPTURE param1: "Video Stream ID (0 for all streams)", which ArduPilot's
+    MAVLinkCamV2 always sends; §6.3.2.9 reads param1 as Video ID flags and gives 0 no meaning. It was DENIED,
+    so no standard sender could record; 0 now keeps the current Video ID, like NaN."""
+    pro.handle(gcs.cmd(m.MAV_CMD_VIDEO_START_CAPTURE, 4), 0)                  # visible encoded
+    pro.handle(gcs.cmd(m.MAV_CMD_VIDEO_STOP_CAPTURE), 1)
+    out = pro.handle(gcs.cmd(m.MAV_CMD_VIDEO_START_CAPTURE, 0, 0, 0, NAN, 0, 0, NAN), 2)   # common.xml defaults
+    assert ack_of(out, m.MAV_CMD_VIDEO_START_CAPTURE) == ACCEPTED
+    assert pro.video_recording and pro.value("video") == 4
+
+
+def test_storage_format_reports_the_formatted_storage(pro, gcs):
+    """common.xml STORAGE_FORMAT: "Once format is complete, a STORAGE_INFORMATION message is sent"."""
+    pro.handle(gcs.cmd(m.MAV_CMD_IMAGE_START_CAPTURE, 0, 0, 1, 0, NAN, 2), 0)     # one image on the USB drive
+    assert pro.used_mib[1] > 0
+    out = pro.handle(gcs.cmd(m.MAV_CMD_STORAGE_FORMAT, 1, 1, 0), 1)
+    assert types(out) == ["COMMAND_ACK", "STORAGE_INFORMATION"] and out[0].result == ACCEPTED
+    info = out[1]
+    assert info.storage_id == 1 and info.used_capacity == 0 and info.available_capacity == info.total_capacity
+    # resetting the image counter alone formats nothing, so nothing is reported
+    assert types(pro.handle(gcs.cmd(m.MAV_CMD_STORAGE_FORMAT, 1, 0, 1), 2)) == ["COMMAND_ACK"]
+
+
+def test_storage_information_type_is_common_xml_storage_type(pro, gcs):
+    """§6.4.3 fills `type` with the Storage ID (0 SSD, 1 USB, 2 microSD); read as common.xml's STORAGE_TYPE those
+    say unknown, USB stick and SD card. The standard's types are sent; storage_id keeps the manual's 0-based
+    Storage ID, which its requests use too."""
+    out = pro.handle(gcs.cmd(m.MAV_CMD_REQUEST_STORAGE_INFORMATION), 0)
+    infos = [x for x in out if x.get_type() == "STORAGE_INFORMATION"]
+    assert [(i.storage_id, i.type) for i in infos] == [
+        (0, m.STORAGE_TYPE_HD), (1, m.STORAGE_TYPE_USB_STICK), (2, m.STORAGE_TYPE_MICROSD)]

@@ -6,10 +6,11 @@ from __future__ import annotations
 import math
 import random
 import socket
+import struct
 import time
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 from pymavlink.dialects.v20 import ardupilotmega as m
 
@@ -74,12 +75,18 @@ def test_wiris_commands_with_any_params(cmd, params, target):
 
 @settings(max_examples=100, deadline=None)
 @given(name=st.sampled_from(["LAYOUT", "EMISSIVITY", "CAM_ZOOM", "CAPTURE_FMT", "CAM_EV", "", "X" * 16]),
-       raw=st.binary(max_size=128), ptype=st.integers(0, 12))
+       raw=st.one_of(st.binary(max_size=128),   # and NaN / infinities as REAL32 and REAL64 bytes
+                     st.sampled_from([struct.pack(f, v) for f in ("<f", "<d")
+                                      for v in (math.nan, math.inf, -math.inf)])),
+       ptype=st.one_of(st.integers(0, 12), st.just(m.MAV_PARAM_EXT_TYPE_REAL32)))
+@example(name="CAM_ZOOM", raw=struct.pack("<f", math.nan), ptype=m.MAV_PARAM_EXT_TYPE_REAL32)
+@example(name="EMISSIVITY", raw=struct.pack("<f", -math.inf), ptype=m.MAV_PARAM_EXT_TYPE_REAL32)
 def test_wiris_param_ext_set_with_any_bytes(name, raw, ptype):
     state = _fresh_wiris()
     g = Wire()
     out = _feed(state, [g(g.mav.param_ext_set_encode(1, 100, name.encode(), raw.ljust(128, b"\0"), ptype))])
     assert [o.get_type() for o in out if o.get_type() != "HEARTBEAT"] == ["PARAM_EXT_ACK"]
+    assert all(v is None or math.isfinite(v) for v in state.values.values())    # NaN/inf bytes are refused
 
 
 @settings(max_examples=200, deadline=None)
@@ -160,15 +167,19 @@ def test_flood_over_udp_keeps_the_emulator_answering():
 
 
 SETTING_COMMANDS = sorted({getattr(m, s.command.cmd) for s in catalogue().get("wiris-pro").settings
-                           if s.command is not None and s.command.cmd})
+                           if s.command is not None and s.command.cmd} | {m.MAV_CMD_SET_CAMERA_ZOOM})
 PARAMS = [p.name for p in PRO.definition.params]
 action = st.one_of(
     st.tuples(st.just("cmd"), st.sampled_from(SETTING_COMMANDS), st.lists(floats, min_size=7, max_size=7)),
-    st.tuples(st.just("set"), st.sampled_from(PARAMS), st.floats(-2000, 2000, width=32)))
+    # NaN and the infinities as PARAM_EXT values: a stored NaN zoom once left DIGICAM_CONTROL unanswered
+    st.tuples(st.just("set"), st.sampled_from(PARAMS),
+              st.one_of(st.sampled_from([math.nan, math.inf, -math.inf]), st.floats(-2000, 2000, width=32))))
 
 
 @settings(max_examples=80, deadline=None)
 @given(actions=st.lists(action, min_size=1, max_size=25))
+@example(actions=[("set", "CAM_ZOOM", math.nan),                       # the reviewer's: then a relative zoom
+                  ("cmd", m.MAV_CMD_DO_DIGICAM_CONTROL, [math.nan, math.nan, 2.0] + [math.nan] * 4)])
 def test_commands_and_param_ext_share_one_consistent_state(actions):
     """Any sequence of setting commands and PARAM_EXT sets: a refusal changes nothing, every value stays
     allowed, and PARAM_EXT reads back exactly what the commands report."""
@@ -180,9 +191,13 @@ def test_commands_and_param_ext_share_one_consistent_state(actions):
         before = dict(state.values)
         if kind == "cmd":
             out = state.handle(g.cmd(what, *value), 0.0)
-            refused = any(o.get_type() == "COMMAND_ACK" and o.result != m.MAV_RESULT_ACCEPTED for o in out)
+            acks = [o for o in out if o.get_type() == "COMMAND_ACK"]
+            assert len(acks) == 1, (what, value)                 # every command is answered, once
+            refused = acks[0].result != m.MAV_RESULT_ACCEPTED
         else:
             p = state.definition.param(what)
+            if p.integer and not math.isfinite(value):
+                continue                                         # an integer type cannot carry it
             v = int(value) if p.integer else value
             try:
                 raw = paramext.encode(v, p.type)
@@ -193,6 +208,7 @@ def test_commands_and_param_ext_share_one_consistent_state(actions):
             refused = out[0].param_result != m.PARAM_ACK_ACCEPTED
         if refused:
             assert state.values == before
+        assert state.faults == 0
         for s in state.camera.settings:
             v = state.values.get(s.param)
             if v is None:
@@ -200,10 +216,13 @@ def test_commands_and_param_ext_share_one_consistent_state(actions):
             if s.options:
                 assert any(o.value == v for o in s.options), s.param
             elif s.min is not None:
-                assert s.min <= v <= s.max, s.param
+                assert s.min <= v <= s.max, (s.param, v)
+            else:
+                assert math.isfinite(v), (s.param, v)
     listed = state.handle(g(g.mav.param_ext_request_list_encode(1, 100)), 0.0)
     for msg, p in zip(listed, state.definition.params):
         assert paramext.decode(paramext.raw_value(msg), p.type) == pytest.approx(state.values[p.name],
                                                                                                rel=1e-6, abs=1e-6)
-    zoom = state.camera_settings(0.0).zoomLevel
-    assert zoom == pytest.approx(state.value("zoom"), rel=1e-6)
+    z = state.camera.setting("zoom")                        # zoomLevel: % of the zoom range (common.xml)
+    assert state.camera_settings(0.0).zoomLevel == pytest.approx(
+        100 * (state.value("zoom") - z.min) / (z.max - z.min), rel=1e-5, abs=1e-3)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 import socket
 import threading
+import time
 
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
@@ -100,6 +101,49 @@ def test_in_progress_keeps_waiting_and_reports_progress(links):
     seen: list[int] = []
     b.command_long(1, 100, mavlink2.MAV_CMD_STORAGE_FORMAT, [1, 1], timeout=1, progress=seen.append)
     assert seen == [10, 60] and r.confirmations == [0]
+
+
+def test_a_target_that_reports_progress_for_ever_is_given_up_on(links):
+    """IN_PROGRESS extended the wait by one timeout per report without end: a target repeating it kept the
+    caller waiting for ever. The wait is capped at IN_PROGRESS_TIMEOUTS timeouts after the first report."""
+    from wiris_tools.link import IN_PROGRESS_TIMEOUTS
+
+    a, b = links
+    b.wait_heartbeat(timeout=3, component=100)
+    stop = threading.Event()
+    asked = threading.Event()
+
+    def busy():                                    # "still formatting", every 50 ms, once asked
+        asked.wait(5)
+        while not stop.is_set():
+            a.send(a.mav.command_ack_encode(mavlink2.MAV_CMD_STORAGE_FORMAT, mavlink2.MAV_RESULT_IN_PROGRESS, 50,
+                                            0, 255, 190))
+            stop.wait(0.05)
+
+    a.subscribe(lambda msg: asked.set(), "COMMAND_LONG", to_me=True)
+    reporter = threading.Thread(target=busy, daemon=True)
+    reporter.start()
+    outcome: dict = {}
+
+    def call():
+        try:
+            outcome["ack"] = b.command_long(1, 100, mavlink2.MAV_CMD_STORAGE_FORMAT, [1, 1], timeout=0.1, retries=1,
+                                            progress=outcome.setdefault("progress", []).append)
+        except LinkError as err:
+            outcome["error"] = err
+
+    caller = threading.Thread(target=call, daemon=True)
+    started = time.monotonic()
+    caller.start()
+    caller.join(IN_PROGRESS_TIMEOUTS * 0.1 + 5)
+    waited = time.monotonic() - started
+    stop.set()
+    reporter.join(2)
+    assert not caller.is_alive(), "still waiting on a target that only reports progress"
+    err = outcome["error"]
+    assert "MAV_CMD_STORAGE_FORMAT" in str(err) and "IN_PROGRESS" in err.message and err.hint
+    assert IN_PROGRESS_TIMEOUTS * 0.1 <= waited < IN_PROGRESS_TIMEOUTS * 0.1 + 3
+    assert outcome["progress"][:1] == [50]
 
 
 def test_retries_increment_confirmation_then_fail_naming_command(links):

@@ -24,7 +24,8 @@ def _link_options(fn):
                   help="MAVLink 2 signing key file (64 hex characters or a passphrase).")
     @click.option("--mavlink1", is_flag=True, help="Send MAVLink 1 frames (a RedEdge's serial API).")
     @click.option("--timeout", type=FiniteRange(0.05, 60), default=1.0, show_default=True,
-                  help="Seconds to wait for each answer (each request is retried 3 times).")
+                  help="Seconds to wait for each answer (each request is retried 3 times; one the camera "
+                       "reports in progress is waited for up to 10 times this).")
     @click.option("--wait", "find_s", type=FiniteRange(0.1, 600), default=5.0, show_default=True,
                   help="Seconds to wait for the camera's HEARTBEAT.")
     @functools.wraps(fn)
@@ -86,10 +87,11 @@ def camera() -> None:
 @_link_options
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
 def info(url, component, system, signing_key, mavlink1, timeout, find_s, as_json) -> None:
-    """CAMERA_INFORMATION, storage and capture status."""
+    """CAMERA_INFORMATION, storage and capture status (a part the camera refuses to report is "not
+    reported", null with --json)."""
     with _camera(url, component, system, signing_key, mavlink1, timeout, find_s) as cam:
         information = cam.information()
-        storage = cam.storage()
+        storage = cam.storage()            # None: the camera answered UNSUPPORTED or DENIED
         status = cam.capture_status()
     if as_json:
         _echo_json({"camera": information.to_json(), "storage": storage, "capture_status": status})
@@ -100,10 +102,15 @@ def info(url, component, system, signing_key, mavlink1, timeout, find_s, as_json
                f"lens {i.lens_id}")
     click.echo(f"  capabilities: {', '.join(i.flag_names) or 'none'} (0x{i.flags:x})")
     click.echo(f"  definition v{i.definition_version}: {i.definition_uri or '(none)'}")
-    for s in storage:
+    if storage is None:
+        click.echo("  storage: not reported (the camera refused the request)")
+    for s in storage or ():
         click.echo(f"  storage {s['id']} {s['name'] or ''}: {_num(s['available_mib'])} of {_num(s['total_mib'])} MiB free")
-    click.echo(f"  capture: image status {status['image_status']}, video status {status['video_status']}, "
-               f"interval {_num(status['image_interval_s'])} s, {status['image_count']} images this session")
+    if status is None:
+        click.echo("  capture: not reported (the camera refused the request)")
+    else:
+        click.echo(f"  capture: image status {status['image_status']}, video status {status['video_status']}, "
+                   f"interval {_num(status['image_interval_s'])} s, {status['image_count']} images this session")
 
 
 @camera.command()

@@ -13,7 +13,7 @@ write are the same thing. One value table (`values`, keyed by PARAM_EXT name) si
 and PARAM_EXT: a USER_1 range change reads back as RANGE_MODE, a PARAM_EXT_SET of CAM_ZOOM shows in
 CAMERA_SETTINGS.
 
-Choices where the manual is silent (each also noted where it is made):
+Choices where the manual is silent or departs from common.xml (each also noted where it is made):
 - a command naming another component is ignored silently (§3.2); target_system is not checked (§3.2 and
   §5.1 speak only of the component id);
 - a command the manual does not list gets COMMAND_ACK UNSUPPORTED; a listed one with a value outside the
@@ -22,7 +22,16 @@ Choices where the manual is silent (each also noted where it is made):
   CAMERA_IMAGE_CAPTURED reports capture_result 0 with the index the image would have had, the image
   counter does not move, and a periodic capture stops;
 - RTSP (VIDEO_START/STOP_STREAMING, stream information) needs the separately sold Ethernet Stream SDK:
-  without it (the default) streaming commands are DENIED and VIDEO_STREAM_INFORMATION reports 0 streams.
+  without it (the default) streaming commands are DENIED and VIDEO_STREAM_INFORMATION reports 0 streams;
+- CAMERA_IMAGE_CAPTURED re-requested (§6.4.5) reads REQUEST_MESSAGE params 2-3 as common.xml does (image
+  index, -1 all, a range), from the last 1000 images it holds;
+- MAV_CMD_SET_CAMERA_ZOOM, which common.xml ties to the HAS_BASIC_ZOOM flag the manual claims, drives the
+  same zoom as DO_DIGICAM_CONTROL; VIDEO_START_CAPTURE param 1 = 0 (common.xml: all streams) keeps the
+  Video ID; STORAGE_FORMAT is followed by STORAGE_INFORMATION (common.xml);
+- where the manual's messages contradict common.xml the standard's values are sent, noted where it is done
+  (CAMERA_CAP_FLAGS, CAMERA_SETTINGS.zoomLevel in %, STORAGE_INFORMATION.type, CAMERA_IMAGE_CAPTURED units);
+- every command gets exactly one COMMAND_ACK: an exception inside the emulator (a bug) is answered
+  MAV_RESULT_FAILED and counted in `faults`.
 """
 
 from __future__ import annotations
@@ -41,6 +50,12 @@ from wiris_tools.serve import host_port
 Message = Any
 
 HEARTBEAT_S = 1.0
+# STORAGE_INFORMATION.type of each Storage ID option (§7.2.1, by its catalogue key). §6.4.3 fills `type` with
+# the Storage ID itself (0 SSD, 1 USB, 2 microSD); the field is common.xml's STORAGE_TYPE, where those numbers
+# read as unknown, USB stick and SD card, so the standard's types are sent. common.xml has no SSD: the
+# internal drive is its "HD mass storage type".
+STORAGE_TYPES = {"ssd": mavlink2.STORAGE_TYPE_HD, "usb": mavlink2.STORAGE_TYPE_USB_STICK,
+                 "microsd": mavlink2.STORAGE_TYPE_MICROSD}
 GPS_MESSAGES = ("GLOBAL_POSITION_INT", "GPS_STATUS")
 PARAM_EXT_MESSAGES = ("PARAM_EXT_REQUEST_LIST", "PARAM_EXT_REQUEST_READ", "PARAM_EXT_SET")
 
@@ -135,6 +150,7 @@ class WirisState:
         self.trigger_enabled = True
         self.menu_actions: list[int] = []
         self.ignored = 0                  # messages dropped by the component rule (§3.2)
+        self.faults = 0                   # commands answered FAILED because the emulator raised (a bug)
         self._next_heartbeat = now
         # Not in the Workswell manual: the emulator can also serve its definition over MAVLink FTP (mftp://),
         # the other transport common.xml allows for cam_definition_uri.
@@ -231,6 +247,12 @@ class WirisState:
             result, after = handler(params, changes, now)
         except CommandRefused:
             return [self._ack(msg, mavlink2.MAV_RESULT_DENIED)]
+        except (ArithmeticError, ValueError, TypeError):
+            # An emulator bug (a NaN stored by PARAM_EXT once made the relative zoom raise ValueError). The
+            # sender still gets its one COMMAND_ACK: without it, it retries and then reports a lost link, which
+            # hides the bug behind a radio problem. Counted in `faults`; tests and the fuzzer assert none.
+            self.faults += 1
+            return [self._ack(msg, mavlink2.MAV_RESULT_FAILED)]
         return [self._ack(msg, result), *after]
 
     def _check_limits(self, name: str, params: list[float]) -> None:
@@ -288,6 +310,10 @@ class WirisState:
 
     @staticmethod
     def _setting_value(s: Setting, value: float, nearest: bool) -> float | int:
+        if not math.isfinite(value):
+            # NaN and the infinities fit no range (every comparison with NaN is false, so the range test below
+            # would let it through) and would poison every later command that computes from the stored value
+            raise CommandRefused
         if s.options:
             if value != int(value) or not any(o.value == int(value) for o in s.options):
                 raise CommandRefused
@@ -333,11 +359,31 @@ class WirisState:
         if name == "VIDEO_STREAM_INFORMATION":
             return mavlink2.MAV_RESULT_ACCEPTED, self._streams(arg)
         if name == "CAMERA_IMAGE_CAPTURED":
-            # common.xml: param2 is the image index; §6.4.5 says the message can be requested
-            if not _finite(arg) or arg != int(arg) or not 0 <= int(arg) < len(self.history):
-                raise CommandRefused
-            return mavlink2.MAV_RESULT_ACCEPTED, [self._image_message(self.history[int(arg)])]
+            return self._captured_again(arg, params[2])
         return mavlink2.MAV_RESULT_UNSUPPORTED, []
+
+    def _captured_again(self, first: float, last: float) -> tuple[int, list[Message]]:
+        """CAMERA_IMAGE_CAPTURED re-requested (§6.4.5 says it can be; the manual gives the params no meaning,
+        so common.xml's): param2 the image_index of the first image, -1 for every image; param3 0 (or NaN,
+        unused) for that one image, -1 for it and all after it, else the index of the last one.
+
+        Looked up by image_index, not by place in `history`, which keeps the last 1000 images only. An index
+        never given out (or not a whole number) is DENIED; one given out but no longer held is FAILED (a valid
+        request the camera cannot serve); -1 and ranges send what is still held."""
+        if not _finite(first) or first != int(first) or not -1 <= first < self.image_count:
+            raise CommandRefused
+        if first == -1:
+            return mavlink2.MAV_RESULT_ACCEPTED, [self._image_message(shot) for shot in self.history]
+        if math.isnan(last) or last == 0:
+            last = first
+        elif last == -1:
+            last = self.image_count - 1
+        elif not _finite(last) or last != int(last) or last < first:
+            raise CommandRefused
+        wanted = [shot for shot in self.history if first <= shot.index <= last]
+        if not wanted:
+            return mavlink2.MAV_RESULT_FAILED, []
+        return mavlink2.MAV_RESULT_ACCEPTED, [self._image_message(shot) for shot in wanted]
 
     def _cmd_request_camera_information(self, params, changes, now):
         return mavlink2.MAV_RESULT_ACCEPTED, [self.camera_information(now)]
@@ -363,20 +409,54 @@ class WirisState:
         if zoom is not None and zoom.param not in changes and math.isnan(params[1]) and _finite(params[2]) \
                 and params[2] != 0:
             step = zoom.step or 1.0
-            current = float(self.values.get(zoom.param) or zoom.min or 1.0)
-            changes[zoom.param] = self._setting_value(zoom, current + params[2] * step, True)
+            changes[zoom.param] = self._setting_value(zoom, self._zoom_now(zoom) + params[2] * step, True)
         self._apply(changes)
         after = self._take_image(now) if params[4] == 1 else []
         return mavlink2.MAV_RESULT_ACCEPTED, after
 
+    def _cmd_set_camera_zoom(self, params, changes, now):
+        # Not in the manual's §6.3: common.xml's command behind CAMERA_CAP_FLAGS_HAS_BASIC_ZOOM, which the
+        # camera claims (workswell.yaml capabilities_note); mapped onto the one zoom setting of §6.3.2.2.
+        zoom = self.camera.setting("zoom")
+        kind, value = params[0], params[1]
+        if zoom is None or not _finite(value):
+            raise CommandRefused
+        if kind == mavlink2.ZOOM_TYPE_RANGE:
+            # "proportion of full camera range (a value between 0.0 and 100.0)"; like §6.3.2.2's absolute
+            # zoom, the camera goes to the closest zoom it has
+            if not 0.0 <= value <= 100.0 or zoom.min is None or zoom.max is None:
+                raise CommandRefused
+            target = zoom.min + value / 100.0 * (zoom.max - zoom.min)
+        elif kind == mavlink2.ZOOM_TYPE_STEP:
+            # "-1 for wide, 1 for tele": §6.3.2.2's relative zoom steps, whole numbers only
+            if value != int(value):
+                raise CommandRefused
+            target = self._zoom_now(zoom) + value * (zoom.step or 1.0)
+        else:
+            # ZOOM_TYPE_CONTINUOUS and ZOOM_TYPE_FOCAL_LENGTH: the manual describes no such zoom
+            raise CommandRefused
+        self._apply({zoom.param: self._setting_value(zoom, target, True)})
+        # common.xml: "Camera must respond with a CAMERA_SETTINGS message (on success)"
+        return mavlink2.MAV_RESULT_ACCEPTED, [self.camera_settings(now)]
+
+    def _zoom_now(self, zoom: Setting) -> float:
+        current = self.values.get(zoom.param)
+        if not _finite(current):      # nothing stored (a model without a default): start from the widest
+            current = zoom.min if zoom.min is not None else 1.0
+        return float(current)
+
     def _cmd_storage_format(self, params, changes, now):
         storage = self._storage_index(params[0])
+        after = []
         if params[1] == 1:
             self.used_mib[storage] = 0.0
+            # common.xml: "Once format is complete, a STORAGE_INFORMATION message is sent" (the manual is
+            # silent); formatting here is instant, so it follows the ACK at once
+            after.append(self.storage_information(storage, now))
         if params[2] == 1:
             self.image_count = 0
             self.history.clear()
-        return mavlink2.MAV_RESULT_ACCEPTED, []
+        return mavlink2.MAV_RESULT_ACCEPTED, after
 
     def _cmd_reset_camera_settings(self, params, changes, now):
         if params[0] == 1:
@@ -526,9 +606,20 @@ class WirisState:
         # CAMERA_MODE (0 image, 1 video). We follow the manual; a standard reader (MAVSDK) will take a
         # visible main camera for video mode.
         main = self.value("main_camera")
-        zoom = self.value("zoom")
-        return self.mav.camera_settings_encode(self.time_boot_ms(now), int(main or 0),
-                                               float(zoom) if zoom is not None else float("nan"), float("nan"))
+        return self.mav.camera_settings_encode(self.time_boot_ms(now), int(main or 0), self.zoom_level(),
+                                               float("nan"))
+
+    def zoom_level(self) -> float:
+        """CAMERA_SETTINGS.zoomLevel. §6.4.2 prints the zoom factor ("1-10 (12)"); common.xml defines "Current
+        zoom level as a percentage of the full range (0.0 to 100.0, NaN if not known)", which is what QGC's
+        and MAVSDK's zoom sliders show and what MAV_CMD_SET_CAMERA_ZOOM's ZOOM_TYPE_RANGE sets, so the
+        standard's percentage of the zoom setting's range is sent (the factor itself is CAM_ZOOM over
+        PARAM_EXT)."""
+        zoom = self.camera.setting("zoom")
+        value = self.value("zoom")
+        if zoom is None or not _finite(value) or zoom.min is None or zoom.max is None or zoom.max <= zoom.min:
+            return float("nan")
+        return round(100.0 * (float(value) - zoom.min) / (zoom.max - zoom.min), 4)
 
     def _storages(self, wire: float, now: float) -> list[Message]:
         count = len(self.config.storage_capacity_mib)
@@ -539,7 +630,11 @@ class WirisState:
         return [self.storage_information(int(wire), now)]
 
     def storage_information(self, storage: int, now: float) -> Message:
-        # §6.4.3: storage id and type carry the Storage ID enumerator (0 SSD, 1 USB, 2 microSD), count is 3.
+        # §6.4.3: storage id carries the Storage ID enumerator (0 SSD, 1 USB, 2 microSD), count is 3. common.xml
+        # numbers storages from 1, but the manual uses the same 0-based Storage ID wherever a storage is named
+        # (REQUEST_MESSAGE param2, REQUEST_STORAGE_INFORMATION, STORAGE_FORMAT), so the manual's numbering is
+        # kept: renumbering only here would break its requests, and renumbering STORAGE_FORMAT too would format
+        # another medium than a real camera does. `type` is common.xml's STORAGE_TYPE (STORAGE_TYPES above).
         # Its `status` row is a copy of another table's; common.xml's STORAGE_STATUS_READY is sent.
         total = self.config.storage_capacity_mib[storage]
         used = min(total, self.used_mib[storage])
@@ -551,7 +646,9 @@ class WirisState:
                      | mavlink2.STORAGE_USAGE_FLAG_VIDEO)
         return self.mav.storage_information_encode(
             self.time_boot_ms(now), storage, len(self.config.storage_capacity_mib), mavlink2.STORAGE_STATUS_READY,
-            total, used, total - used, 0.0, 0.0, storage, (option.name if option else "").encode()[:32], usage)
+            total, used, total - used, 0.0, 0.0,
+            STORAGE_TYPES.get(option.key, mavlink2.STORAGE_TYPE_OTHER) if option else mavlink2.STORAGE_TYPE_UNKNOWN,
+            (option.name if option else "").encode()[:32], usage)
 
     def _capture_status(self, now: float) -> Message:
         c = self.capture
@@ -632,6 +729,10 @@ class WirisState:
         return ack(mavlink2.PARAM_ACK_ACCEPTED, paramext.encode(value, p.type), wt.ext_type)
 
     def _param_problem(self, p: DefParam, value: float | int) -> str | None:
+        if not _finite(value):
+            # a REAL32/REAL64 PARAM_EXT_SET can carry NaN or an infinity; no setting has such a value (the
+            # definition's own check refuses them too), and a stored NaN broke the relative zoom
+            return "not a finite number"
         s = self._by_param.get(p.name)
         if s is not None:
             try:
