@@ -1,4 +1,5 @@
-"""Survey areas: read (inline [lat, lon] list, GeoJSON, KML), clean, validate, project, subtract exclusions.
+"""Survey areas: read (inline [lat, lon] list, GeoJSON, KML), clean, validate, project, subtract exclusions
+(dropping the slivers narrower than MIN_PART_WIDTH_M they cut off; `Area.excluded` keeps the zones as drawn).
 
     area = load_area("areas/north.kml", exclude=["areas/substation.geojson"], base_dir=plan_dir)
     area.geometry      # shapely Polygon | MultiPolygon in metres (x east, y north), exterior CCW
@@ -30,6 +31,12 @@ MAX_VERTICES = 200_000
 DEDUP_TOLERANCE_M = 0.01
 # Anything smaller is a degenerate (collinear) ring, not a survey area.
 MIN_AREA_M2 = 0.5
+# A piece of the area that an exclusion cuts off and that is nowhere this wide is dropped: a multirotor's
+# GNSS cross-track error is ~0.5–1 m (swaths.DEFAULT_EDGE_MARGIN_M), so a strip narrower than 1 m cannot be
+# flown or photographed without photographing the exclusion beside it, and such strips are almost always a
+# digitising gap (an exclusion drawn to "the boundary" that stops a few decimetres short), not ground anyone
+# wants surveyed. Kept, each became a part with lines, turns and photos of its own.
+MIN_PART_WIDTH_M = 1.0
 
 # GeoJSON "crs" names that mean WGS84 lon/lat (RFC 7946 dropped the member; old files still carry it).
 _WGS84_NAMES = ("CRS84", "CRS:84", "EPSG:4326", "EPSG::4326", "WGS84", "WGS 84")
@@ -52,6 +59,12 @@ class Area:
     geometry: Any                      # shapely Polygon | MultiPolygon, metres
     projection: LocalProjection
     source: str = ""
+    # the source polygons' holes and the exclusion zones as drawn (not clipped to the area), metres; empty when
+    # there are none, None when not recorded (an Area built by hand: its geometry's holes are all there is).
+    # The route keeps its turnarounds out of them and the report measures the path inside them.
+    excluded: Any = None
+    # pieces narrower than MIN_PART_WIDTH_M that the exclusions cut off and that were dropped: (count, m²)
+    dropped: tuple[int, float] = (0, 0.0)
 
     @property
     def area_m2(self) -> float:
@@ -452,20 +465,45 @@ def build_area(polygons: Sequence[LatLonPolygon], exclusions: Sequence[LatLonPol
     projected = [_project_polygon(p, projection) for p in polygons]
     geom = shapely.union_all(projected) if len(projected) > 1 else projected[0]
     _check_extent(geom, source)
+    from shapely.geometry import Polygon
+    holes = [Polygon(r) for p in projected for r in p.interiors]
+    cut = None
+    dropped = (0, 0.0)
     if exclusions:
         cut = shapely.union_all([_project_polygon(e, projection) for e in exclusions])
         geom = geom.difference(cut)
-        geom = _polygonal(geom)
+        geom, dropped = _drop_slivers(_polygonal(geom), cut)
         if geom.is_empty:
             raise PlanError("the area is empty once the exclusion zones are removed", where=source or None,
-                            hint="check that the exclusions do not cover the whole area")
+                            hint="check that the exclusions do not cover the whole area (pieces narrower than "
+                                 f"{MIN_PART_WIDTH_M:g} m that they leave are not surveyed)")
     geom = _polygonal(geom)
     if geom.geom_type == "Polygon":
         geom = orient(geom, 1.0)
     else:
         from shapely.geometry import MultiPolygon
         geom = MultiPolygon([orient(g, 1.0) for g in geom.geoms])
-    return Area(geom, projection, source)
+    zones = [*holes, *([cut] if cut is not None else [])]
+    excluded = (shapely.union_all(zones) if len(zones) > 1 else zones[0]) if zones else Polygon()
+    return Area(geom, projection, source, excluded, dropped)
+
+
+def _drop_slivers(geom: Any, cut: Any) -> tuple[Any, tuple[int, float]]:
+    """`geom` without the parts next to the exclusions `cut` that are nowhere MIN_PART_WIDTH_M wide (see there),
+    and (how many were dropped, their m²). Parts that do not touch an exclusion are the user's own polygons and
+    stay whatever their width."""
+    from shapely.geometry import MultiPolygon
+    parts = list(leaf_parts(geom, "Polygon"))
+    keep, gone = [], []
+    for g in parts:
+        # every point of a narrow part lies within half the width of its boundary, so its area is at most
+        # perimeter x half the width: a larger part is wide somewhere without the costlier inward buffer
+        narrow = g.area <= g.length * MIN_PART_WIDTH_M / 2.0 and g.buffer(-MIN_PART_WIDTH_M / 2.0).is_empty
+        (gone if narrow and g.distance(cut) < 1e-6 else keep).append(g)
+    if not gone:
+        return geom, (0, 0.0)
+    out = keep[0] if len(keep) == 1 else MultiPolygon(keep)
+    return out, (len(gone), float(sum(g.area for g in gone)))
 
 
 def _check_latitudes(p: LatLonPolygon) -> None:

@@ -11,6 +11,14 @@ Definitions (fractions in [0, 1]; multiply by 100 for percent):
   side overlap    photos of a span that lie on one straight line with one heading form a run (its
                   segment from first to last photo). For two runs with parallel headings (within 2°)
                   whose along-track ranges overlap, side overlap = 1 − lateral distance / across_m.
+                  A line that bends (a corridor along a track) is many short runs whose neighbours on
+                  the next line are seldom parallel: a run of a span with several runs takes instead the
+                  lateral offset of the nearest photo of another span beside it (along-track within half
+                  a footprint of its ends), across its line as flown (from the photo before it to the
+                  photo after it) — the neighbouring footprints reach it as far as that photo's. Where
+                  either is in a corner (its line turns more than 20° from the photo before to the one
+                  after) that side is not measured: coverage measures corners. A survey's lines are one
+                  run each and are measured by the parallel rule alone, as before.
                   Each run takes its nearest such neighbour on each side; the minimum over all runs and
                   sides is reported. Runs with no neighbour on a side (the outermost lines) contribute
                   nothing on that side, and a neighbour farther than across_m is no overlap but a gap,
@@ -37,6 +45,11 @@ from missions.footprint import Footprint
 from missions.triggers import PhotoPoint
 
 _PARALLEL_SIN = math.sin(math.radians(2.0))
+# A photo of a bent line whose neighbours on its line differ more than this in heading sits in a corner: the
+# line's direction there is no one direction and a lateral distance means little where the footprints turn
+# with the line. A run in a corner, or whose nearest neighbour on a side is, is not measured on that side (the
+# line beyond is no neighbour); coverage measures the corner. A GPS track's kinks turn a line by 5–20°.
+_CHAIN_TURN_DEG = 20.0
 
 
 @dataclass(frozen=True)
@@ -161,8 +174,28 @@ def min_side_overlap(photos: Sequence[PhotoPoint], fp: Footprint) -> float | Non
     a, b = a[keep], b[keep]
     if len(a) == 0:
         return None
-    par = np.abs(np.sin(H[b] - H[a])) < _PARALLEL_SIN
-    a, b = a[par], b[par]
+    # pieces of lines that bend (spans of more than one run) are measured against the neighbours' lines as
+    # flown; straight lines (a survey's: one run each) by the parallel rule
+    run_span = span[s]
+    ids, per_span = np.unique(run_span, return_counts=True)
+    is_bent = np.isin(run_span, ids[per_span > 1])
+    par = (np.abs(np.sin(H[b] - H[a])) < _PARALLEL_SIN) & ~is_bent[a]
+    lat_p, a_p = _parallel_lateral(S, E, H, a[par], b[par], fp)
+    lat_b, a_b = _bent_lateral(xy, h, span, s, e, np.nonzero(is_bent)[0], fp)
+    a, lat = np.concatenate([a_p, a_b]), np.concatenate([lat_p, lat_b])
+    if len(a) == 0:
+        return None
+    best = np.full((len(runs), 2), np.inf)
+    side = (lat > 0).astype(int)
+    np.minimum.at(best, (a, side), np.abs(lat))
+    vals = best[np.isfinite(best)]
+    return float(1.0 - vals.max() / fp.across_m) if len(vals) else None
+
+
+def _parallel_lateral(S: np.ndarray, E: np.ndarray, H: np.ndarray, a: np.ndarray, b: np.ndarray,
+                      fp: Footprint) -> tuple[np.ndarray, np.ndarray]:
+    """Signed lateral distance of parallel run b from run a, for the pairs side by side (their footprints overlap
+    along-track by at least half a footprint) and nearer than a footprint's width; and their a."""
     d = np.column_stack([np.sin(H[a]), np.cos(H[a])])
     n = np.column_stack([np.cos(H[a]), -np.sin(H[a])])
     lat = ((S[b] - S[a]) * n).sum(1)
@@ -170,17 +203,61 @@ def min_side_overlap(photos: Sequence[PhotoPoint], fp: Footprint) -> float | Non
     p1 = ((E[b] - S[a]) * d).sum(1)
     la = ((E[a] - S[a]) * d).sum(1)
     lo, hi = np.minimum(p0, p1), np.maximum(p0, p1)
-    # side by side: their footprints overlap along-track by at least half a footprint
     beside = (np.minimum(hi, la) - np.maximum(lo, 0.0)) > -fp.along_m / 2.0
     ok = beside & (np.abs(lat) > 1e-3) & (np.abs(lat) < fp.across_m)
-    if not ok.any():
-        return None
-    a, lat = a[ok], lat[ok]
-    best = np.full((len(runs), 2), np.inf)
-    side = (lat > 0).astype(int)
-    np.minimum.at(best, (a, side), np.abs(lat))
-    vals = best[np.isfinite(best)]
-    return float(1.0 - vals.max() / fp.across_m) if len(vals) else None
+    return lat[ok], a[ok]
+
+
+def _bent_lateral(xy: np.ndarray, h: np.ndarray, span: np.ndarray, s: np.ndarray, e: np.ndarray, a: np.ndarray,
+                  fp: Footprint) -> tuple[np.ndarray, np.ndarray]:
+    """For runs `a` of lines that bend (s/e: first and last photo index of each run): signed lateral offset of
+    the nearest photo of another span on each side, among those beside the run (within half a footprint of its
+    ends along-track) and nearer than a footprint's width; and their a. The neighbouring line's footprints reach
+    this run as far as its nearest photo there. Offsets are taken across the run's line as flown (from the
+    photo before it to the photo after it): a photo's own heading turns with every kink of a GPS track. A run
+    in a corner, or whose nearest photo on a side is in one, is not measured on that side (_CHAIN_TURN_DEG)."""
+    import shapely
+
+    if len(a) == 0:
+        return np.zeros(0), np.zeros(0, int)
+    last = len(xy) - 1
+
+    def along_line(i: np.ndarray, step: int) -> np.ndarray:
+        j = np.clip(i + step, 0, last)
+        return np.where(span[j] == span[i], j, i)
+
+    def corner(i: np.ndarray, j: np.ndarray) -> np.ndarray:
+        return np.degrees(np.abs(np.angle(np.exp(1j * (h[j] - h[i]))))) > _CHAIN_TURN_DEG
+
+    i0, i1 = along_line(s[a], -1), along_line(e[a], 1)
+    t = xy[i1] - xy[i0]
+    tl = np.hypot(t[:, 0], t[:, 1])
+    ok = (tl > 1e-9) & ~corner(i0, i1)
+    a, i0, t, tl = a[ok], i0[ok], t[ok], tl[ok]
+    d = t / tl[:, None]
+    n = np.column_stack([d[:, 1], -d[:, 0]])
+    S = xy[s[a]]
+    la = ((xy[e[a]] - S) * d).sum(1)
+    half = fp.along_m / 2.0
+    # the window beside each run: along-track from half a footprint before it to half a footprint after it,
+    # a footprint's width to each side
+    lo, hi = S - d * half, S + d * (la + half)[:, None]
+    ring = np.stack([lo - n * fp.across_m, hi - n * fp.across_m, hi + n * fp.across_m, lo + n * fp.across_m,
+                     lo - n * fp.across_m], axis=1)
+    tree = shapely.STRtree(shapely.points(xy))
+    r, q = tree.query(shapely.polygons(ring), predicate="intersects")
+    other = span[q] != span[s[a[r]]]
+    r, q = r[other], q[other]
+    w = xy[q] - S[r]
+    lat = (w * n[r]).sum(1)
+    near = (np.abs(lat) > 1e-3) & (np.abs(lat) < fp.across_m)
+    r, q, lat = r[near], q[near], lat[near]
+    order = np.lexsort((np.abs(lat), lat > 0, r))
+    r, q, lat = r[order], q[order], lat[order]
+    first = np.ones(len(r), bool)
+    first[1:] = (r[1:] != r[:-1]) | ((lat[1:] > 0) != (lat[:-1] > 0))
+    keep = first & ~corner(along_line(q, -1), along_line(q, 1))
+    return lat[keep], a[r[keep]]
 
 
 def outside_length_m(path_xy: np.ndarray, area: Any) -> float:

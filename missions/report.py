@@ -45,6 +45,10 @@ How the items are flown (the model, stated so it can be checked):
   stretch (a turnaround is not a front pair; a corridor's gentle bend is, and its lower overlap is real).
   Coverage below COVERAGE_TARGET and overlaps more than OVERLAP_SLACK below the request are warnings, not
   errors: the mission flies, the result is worse than asked.
+* Holes and exclusion zones: the whole flown path is measured inside each step's zones as drawn
+  (`Area.excluded`, so an exclusion across the boundary counts too), deeper than route.ZONE_EDGE_TOL_M (a
+  path along a zone's edge is beside it), split into metres with the camera on (distance or interval
+  triggering) and off, with the photos centred inside; more than a metre is the path_over_exclusion warning.
 """
 
 from __future__ import annotations
@@ -131,6 +135,7 @@ class Simulation:
     trigger_intervals: tuple[tuple[str, float, float, int], ...] = ()   # (payload, distance|interval value, seconds, item)
     notes: tuple[tuple[str, str], ...] = ()    # (code, message) found while simulating
     ends_on_ground: bool = False
+    camera_on: tuple[tuple[int, int], ...] = ()  # vertex ranges flown with distance or interval triggering on
 
     @property
     def xy(self) -> np.ndarray:
@@ -442,7 +447,8 @@ def simulate(compiled: Compiled) -> Simulation:
         vertices=tuple(verts), latlon=tuple(zip(lat.tolist(), lon.tolist())), photos=tuple(photos), projection=proj,
         path_length_m=horiz, climb_m=float(np.clip(dz, 0, None).sum()), flight_time_s=float(times[-1] + verts[-1].hold_s),
         flight_time_qgc_s=float(qgc), vertex_times_s=tuple(times.tolist()), trigger_intervals=tuple(intervals),
-        notes=tuple(w.notes), ends_on_ground=on_ground)
+        notes=tuple(w.notes), ends_on_ground=on_ground,
+        camera_on=tuple((s[0], s[1]) for s in w.dist_spans) + tuple((s[0], s[1]) for s in w.time_spans))
 
 
 def _mark_stops(verts: list[Vertex], copter: bool) -> list[Vertex]:
@@ -567,14 +573,17 @@ def _photos(compiled: Compiled, verts: Sequence[Vertex], times: np.ndarray, w: _
             raw.append((x, y, alt, hd, pl, span_id, src, tk))
             k += 1
         span_id += 1
-    # single photos: hover captures share a span while the heading holds (a line of hover points)
-    last_hd = None
+    # single photos: hover captures share a span while they go on along one line with one heading. The heading
+    # alone is not enough: a vehicle that reaches the next line's first stop through a detour arrives with the
+    # old line's heading, and that photo beside the last one (a side neighbour) became a front pair.
+    last: tuple[float, float, float] | None = None
     for vi, pl, src in sorted(w.singles, key=lambda s: (s[0], s[2])):
         v = verts[vi]
         hd = _vertex_heading(verts, vi, None)
-        if last_hd is None or abs(((hd - last_hd) + 180) % 360 - 180) > 1.0:
+        if last is None or abs(((hd - last[2]) + 180) % 360 - 180) > 1.0 \
+                or not _ahead_on_line(last[0], last[1], last[2], v.x, v.y):
             span_id += 1
-        last_hd = hd
+        last = (v.x, v.y, hd)
         raw.append((v.x, v.y, v.alt_m, hd, pl, span_id, src, float(times[vi])))
     # payloads that trigger themselves (RedEdge overlap mode): distance triggering wherever the altitude fits
     for name, (op_alt, tol, front_pct) in self_triggering(compiled).items():
@@ -608,6 +617,16 @@ def _photos(compiled: Compiled, verts: Sequence[Vertex], times: np.ndarray, w: _
     lat, lon = proj.to_latlon(arr[:, 0], arr[:, 1])
     return [Photo(r[0], r[1], float(la), float(lo), r[2], r[3], r[4], r[5], r[6], r[7])
             for r, la, lo in zip(raw, lat.tolist(), lon.tolist())]
+
+
+def _ahead_on_line(x0: float, y0: float, heading_deg: float, x1: float, y1: float) -> bool:
+    """(x1, y1) lies ahead of (x0, y0) on its line of flight: forward along the heading and off it by no more than
+    the lat/lon rounding of the items (1e-7° ≈ 1 cm) and a projection's curvature over the distance."""
+    h = math.radians(heading_deg)
+    dx, dy = x1 - x0, y1 - y0
+    along = dx * math.sin(h) + dy * math.cos(h)
+    cross = dx * math.cos(h) - dy * math.sin(h)
+    return along > 0 and abs(cross) <= 0.05 + 1e-3 * along
 
 
 # Consecutive photos more than this far apart in heading are not a front-overlap pair: the vehicle turned onto
@@ -797,20 +816,66 @@ def _measure_area(area_info: Any, payload: PayloadInfo, photos: Sequence[Photo],
         result["front_min"] = min(fronts) if fronts else None
         result["side_min"] = min(sides) if sides else None
     result["outside_m"] = outside_length_m(sim.xy, geom)
-    result["over_gaps_m"] = _over_gaps_m(sim.xy, geom)
+    zones = _zones(area_info.area, proj)
+    result["over_gaps_m"], result["over_gaps_camera_m"] = _over_zones_m(sim, zones)
+    result["photos_in_zones"] = _photos_in(zones, photos)
     return result
 
 
-def _over_gaps_m(path_xy: np.ndarray, geom: Any) -> float:
-    """Metres of the flown path over the area's holes (its source holes and the exclusion zones inside it)."""
+def _zones(area: Any, proj: Any) -> Any:
+    """The area's holes and exclusion zones as drawn (`Area.excluded`: an exclusion that touches, crosses or
+    splits the boundary is no hole of the surveyed geometry) in projection `proj`. An Area built without that
+    record (by hand) has only its geometry's holes."""
     import shapely
-    from shapely.geometry import LineString, Polygon
+    from shapely.geometry import Polygon
 
-    polys = list(geom.geoms) if geom.geom_type == "MultiPolygon" else [geom]
-    holes = [Polygon(r) for p in polys for r in p.interiors]
-    if not holes or len(path_xy) < 2:
-        return 0.0
-    return float(LineString(path_xy).intersection(shapely.union_all(holes)).length)
+    from missions.geo import leaf_parts
+
+    zones = getattr(area, "excluded", None)
+    if zones is None:
+        holes = [Polygon(r) for p in leaf_parts(area.geometry, "Polygon") for r in p.interiors]
+        zones = shapely.union_all(holes) if holes else Polygon()
+    if zones.is_empty or area.projection == proj:
+        return zones
+
+    def move(xy: np.ndarray) -> np.ndarray:
+        lat, lon = area.projection.to_latlon(xy[:, 0], xy[:, 1])
+        return np.column_stack(proj.to_xy(lat, lon))
+
+    return shapely.transform(zones, move)
+
+
+def _over_zones_m(sim: Simulation, zones: Any) -> tuple[float, float]:
+    """Metres of the flown path inside `zones`, and how many of them with the camera on. Inside means deeper than
+    route.ZONE_EDGE_TOL_M: a path along a zone's edge (a detour inside the area) is beside it."""
+    import shapely
+    from missions.route import ZONE_EDGE_TOL_M
+
+    xy = sim.xy
+    if zones.is_empty or len(xy) < 2:
+        return 0.0, 0.0
+    core = zones.buffer(-ZONE_EDGE_TOL_M, join_style="mitre")
+    shapely.prepare(core)
+    segs = shapely.linestrings(np.stack([xy[:-1], xy[1:]], axis=1))
+    inside = np.zeros(len(segs))
+    hit = shapely.intersects(core, segs)
+    if hit.any():
+        inside[hit] = shapely.length(shapely.intersection(segs[hit], core))
+    on = np.zeros(len(segs), bool)
+    for s0, s1 in sim.camera_on:
+        on[s0:s1] = True
+    return float(inside.sum()), float(inside[on].sum())
+
+
+def _photos_in(zones: Any, photos: Sequence[Photo]) -> int:
+    """Photos centred inside `zones` (deeper than the edge tolerance, as for the path)."""
+    import shapely
+    from missions.route import ZONE_EDGE_TOL_M
+
+    if zones.is_empty or not photos:
+        return 0
+    core = zones.buffer(-ZONE_EDGE_TOL_M, join_style="mitre")
+    return int(shapely.contains_xy(core, [p.x for p in photos], [p.y for p in photos]).sum())
 
 
 def _r(v: float | None, nd: int = 4) -> float | None:
@@ -843,6 +908,8 @@ def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | N
             row["photos"][pname] = m["photos"]
             row["outside_m"] = _r(m["outside_m"], 1)
             row["over_gaps_m"] = _r(m["over_gaps_m"], 1)
+            row["over_gaps_camera_m"] = _r(m["over_gaps_camera_m"], 1)
+            row.setdefault("photos_in_zones", {})[pname] = m["photos_in_zones"]
             cov_acc.setdefault(pname, []).append((m["coverage"], a.area.area_m2))
             acc = ov_acc.setdefault(pname, {"front": [], "side": []})
             if m["front_min"] is not None:
@@ -863,10 +930,7 @@ def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | N
                                  "message": f"{where}: minimum side overlap {100 * m['side_min']:.1f} % "
                                             f"< requested {100 * a.side_overlap:.0f} %"})
         if row.get("over_gaps_m", 0) > 1.0:
-            warnings.append({"code": "path_over_exclusion",
-                             "message": f"step {a.step} ({a.kind}): the flown path crosses the area's holes or "
-                                        f"exclusion zones for {row['over_gaps_m']:.0f} m (transits, take-off or "
-                                        "return are not routed around them); check that overflight is allowed"})
+            warnings.append({"code": "path_over_exclusion", "message": _over_zones_text(a, row)})
         area_rows.append(row)
     coverage = {n: _r(sum(c * A for c, A in v) / sum(A for _, A in v), 5) if sum(A for _, A in v) > 0 else 0.0
                 for n, v in cov_acc.items()}
@@ -947,6 +1011,20 @@ def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | N
         "warnings": warnings,
         "errors": errors,
     }
+
+
+def _over_zones_text(a: Any, row: dict) -> str:
+    """The path_over_exclusion message: how much, and on what — camera-on legs or the flight between them."""
+    total, cam = row["over_gaps_m"], row.get("over_gaps_camera_m") or 0.0
+    shots = ", ".join(f"{n} {k}" for n, k in (row.get("photos_in_zones") or {}).items() if k)
+    parts = []
+    if cam > 0.05:
+        parts.append(f"{cam:.1f} m on camera-on legs" + (f" (photos centred inside: {shots})" if shots else ""))
+    if total - cam > 0.05:
+        parts.append(f"{total - cam:.1f} m with the camera off: turnarounds, connections, transits, take-off or "
+                     "return")
+    return (f"step {a.step} ({a.kind}): the flown path runs {total:.0f} m inside the area's holes or exclusion "
+            f"zones — {'; '.join(parts)}. Check that overflight is allowed")
 
 
 def _compiler_warning(text: str) -> dict:

@@ -13,6 +13,13 @@
    the polygon part (visibility graph over its vertices); those connections drop the turnaround stubs,
    which would leave the area. Parts too complex for the graph (> MAX_GRAPH_VERTICES) fall back to the
    straight line; the metres outside the area are measured by `coverage.outside_length_m` either way.
+5. `avoid` (the area's holes and exclusion zones as drawn): a turnaround stub is cut short where it would
+   enter one (and left out when less than MIN_STUB_M of it remains), and a connection that would still cross
+   one drops its stubs and, if the straight hop from exit to entry crosses too, goes around it: inside the
+   part when both legs are in one, else through free space around the zones (the same visibility graph over
+   the zones' vertices). Stubs only straighten the vehicle before the camera starts; the photos are where
+   the legs put them, so coverage is unchanged. What the zones' complexity or shape leaves crossing is
+   measured by the report (`path_over_exclusion`).
 """
 
 from __future__ import annotations
@@ -29,6 +36,16 @@ from missions.swaths import Leg
 MAX_GRAPH_VERTICES = 400
 MIN_GAP_M2 = 25.0
 _INSIDE_TOL_M = 0.05
+# A turnaround cut short by an exclusion to less than this (beyond the exit point, for the stub after a leg)
+# gives the vehicle no straight run, only one more waypoint: it is left out.
+MIN_STUB_M = 1.0
+# Stubs stop this far short of an exclusion and detours around one keep this far from it: the edge margin's
+# GNSS cross-track error (swaths.DEFAULT_EDGE_MARGIN_M), so that a vehicle slightly off its track stays out.
+_AVOID_CLEARANCE_M = 0.5
+# A connection whose length inside the exclusions (beyond what its own ends force) exceeds this crosses them.
+# Inside means deeper than this: a detour inside the area follows its boundary, which may be a zone's edge
+# (the report measures the path over the zones with the same tolerance).
+ZONE_EDGE_TOL_M = 0.05
 
 KIND_TURN_IN = "turnaround"
 KIND_ENTRY = "entry"
@@ -162,16 +179,21 @@ def order_legs(legs: Sequence[Leg], start_xy: tuple[float, float] | None = None,
 
 
 class _InsidePaths:
-    """Shortest paths inside one polygon (visibility graph over its vertices), built on first use."""
+    """Shortest paths inside one polygon (visibility graph over its vertices), built on first use.
+    `keep_out`: ground the paths stay off (the exclusion zones grown by their clearance), when taking it away
+    leaves the polygon in one piece; the gaps that call for a detour are the polygon's own either way."""
 
-    def __init__(self, poly: Any) -> None:
+    def __init__(self, poly: Any, keep_out: Any = None) -> None:
         import shapely
-        self.poly = poly
-        self.region = poly.buffer(_INSIDE_TOL_M, join_style="mitre")
-        shapely.prepare(self.region)
         # gaps = holes and notches: outside the area but inside its convex hull. A straight connection
         # through them is what QGC flies over houses (#5215); beyond the hull it is just a turn.
         gaps = poly.convex_hull.difference(poly).buffer(-_INSIDE_TOL_M)
+        if keep_out is not None and poly.intersects(keep_out):
+            walk = poly.difference(keep_out)
+            poly = walk if walk.geom_type == "Polygon" else poly
+        self.poly = poly
+        self.region = poly.buffer(_INSIDE_TOL_M, join_style="mitre")
+        shapely.prepare(self.region)
         # notches smaller than this are boundary noise (GIS exports, hand-drawn jitter), not worth a detour
         pieces = [g for g in getattr(gaps, "geoms", [gaps]) if not g.is_empty and g.area >= MIN_GAP_M2]
         for g in pieces:
@@ -280,13 +302,70 @@ class _InsidePaths:
         return pre + out[::-1] + post
 
 
+class _Avoid:
+    """The zones a route keeps out of: how far a stub may go, how much of a hop crosses them, and the shortest
+    way around them (visibility graph over free space: a box around everything less the zones)."""
+
+    def __init__(self, zones: Any, around: Any) -> None:
+        import shapely
+        self.zones = zones
+        shapely.prepare(zones)
+        # their interior: a hop along a zone's edge is beside it, not in it
+        self.core = zones.buffer(-ZONE_EDGE_TOL_M, join_style="mitre")
+        shapely.prepare(self.core)
+        self.around = around
+        # detours keep their clearance from the zones (a zone's edge is often the area's boundary)
+        self.keep_out = zones.buffer(_AVOID_CLEARANCE_M, join_style="mitre")
+        self._free: _InsidePaths | None | bool = False
+
+    def clear_length(self, p: tuple[float, float], d: tuple[float, float], length: float) -> float:
+        """How far from p along unit vector d (at most `length`) stays out of the zones, less the clearance."""
+        from shapely.geometry import LineString, Point
+        if length <= 0:
+            return 0.0
+        seg = LineString([p, (p[0] + d[0] * length, p[1] + d[1] * length)])
+        if not self.zones.intersects(seg):
+            return length
+        hit = Point(p).distance(seg.intersection(self.zones))
+        return max(0.0, hit - _AVOID_CLEARANCE_M)
+
+    def crossing_m(self, p: tuple[float, float], q: tuple[float, float]) -> float:
+        """Metres of the hop p→q inside the zones beyond what its ends force: an end that is itself inside (an
+        exit point a metre past the last photo) has to get out, and that much does not count."""
+        from shapely.geometry import LineString, Point
+        if math.dist(p, q) < 1e-9:
+            return 0.0
+        seg = LineString([p, q])
+        if not self.core.intersects(seg):
+            return 0.0
+        inside = seg.intersection(self.core).length
+        for e in (p, q):
+            P = Point(e)
+            if self.core.contains(P):
+                inside -= self.core.boundary.distance(P)
+        return max(0.0, inside)
+
+    def path(self, a: tuple[float, float], b: tuple[float, float]) -> list[tuple[float, float]] | None:
+        """Intermediate points of the shortest way a→b around the zones, None when there is none to offer."""
+        if self._free is False:
+            from shapely.geometry import box
+            x0, y0, x1, y1 = self.around.union(self.zones.envelope).bounds
+            free = box(x0 - 50.0, y0 - 50.0, x1 + 50.0, y1 + 50.0).difference(self.keep_out)
+            # a zone that encloses ground (a ring) splits free space: no single graph joins both sides
+            self._free = _InsidePaths(free) if free.geom_type == "Polygon" else None
+        if self._free is None:
+            return None
+        return self._free.path(a, b)  # type: ignore[union-attr]
+
+
 def build_route(legs: Sequence[Leg], geometry: Any, turnaround_m: float, exit_margin_m: float = 0.0,
                 start_xy: tuple[float, float] | None = None, order: list[tuple[int, bool]] | None = None,
-                hover_points: dict[int, list[tuple[float, float]]] | None = None) -> Route:
+                hover_points: dict[int, list[tuple[float, float]]] | None = None, avoid: Any = None) -> Route:
     """Waypoints for the legs in flying order (see module doc). `geometry` is the area (metres).
 
     `hover_points`: leg index -> photo positions in the leg's +v order; when given, each photo becomes
     a stop point (kind 'photo') and there are no turnaround stubs (the vehicle stops anyway).
+    `avoid`: holes and exclusion zones (shapely, metres) the stubs and connections keep out of (step 5).
     """
     from missions.swaths import frame
 
@@ -294,10 +373,11 @@ def build_route(legs: Sequence[Leg], geometry: Any, turnaround_m: float, exit_ma
         order = order_legs(legs, start_xy)
     parts = list(geometry.geoms) if geometry.geom_type == "MultiPolygon" else [geometry]
     paths: dict[int, _InsidePaths] = {}
+    zones = _Avoid(avoid, geometry) if avoid is not None and not avoid.is_empty else None
 
     def inside(part: int) -> _InsidePaths:
         if part not in paths:
-            paths[part] = _InsidePaths(parts[part])
+            paths[part] = _InsidePaths(parts[part], zones.keep_out if zones is not None else None)
         return paths[part]
 
     hover = hover_points is not None
@@ -309,6 +389,11 @@ def build_route(legs: Sequence[Leg], geometry: Any, turnaround_m: float, exit_ma
     revs: list[bool] = []
     prev_exit: tuple[float, float] | None = None
     prev_part = -1
+
+    def drop_last_stub(k: int) -> None:
+        if pts and pts[-1].kind == KIND_TURN_IN and pts[-1].leg == k - 1:
+            pts.pop()
+
     for li, rev in order:
         leg = legs[li]
         (ax, ay), (bx, by) = _ends(leg, rev)
@@ -316,18 +401,35 @@ def build_route(legs: Sequence[Leg], geometry: Any, turnaround_m: float, exit_ma
         dx, dy = (-d[0], -d[1]) if rev else (d[0], d[1])
         ex, ey = bx + dx * em, by + dy * em
         k = len(flown)
-        stubs = ta > 0
+        ta_in = ta
+        if zones is not None and ta > 0:
+            ta_in = zones.clear_length((ax, ay), (-dx, -dy), ta)
+            if ta_in < min(ta, MIN_STUB_M):
+                ta_in = 0.0
+        stubs = ta_in > 0
+        joined = False
         if prev_exit is not None and prev_part == leg.part:
             ip = inside(leg.part)
             if ip.crosses_gap(prev_exit, (ax, ay)):
                 via = ip.path(prev_exit, (ax, ay))
                 if via is not None:            # detour inside the area, without turnaround stubs
-                    if pts and pts[-1].kind == KIND_TURN_IN and pts[-1].leg == k - 1:
-                        pts.pop()
+                    drop_last_stub(k)
                     pts.extend(RoutePoint(x, y, KIND_VIA) for x, y in via)
                     stubs = False
+                    joined = True
+        if zones is not None and prev_exit is not None and not joined:
+            start = (ax - dx * ta_in, ay - dy * ta_in) if stubs else (ax, ay)
+            if zones.crossing_m((pts[-1].x, pts[-1].y), start) > ZONE_EDGE_TOL_M:
+                # the hop between the stubs crosses a zone: without them, or around it
+                drop_last_stub(k)
+                stubs = False
+                if zones.crossing_m(prev_exit, (ax, ay)) > ZONE_EDGE_TOL_M:
+                    via = inside(leg.part).path(prev_exit, (ax, ay)) if prev_part == leg.part else None
+                    if via is None:
+                        via = zones.path(prev_exit, (ax, ay))
+                    pts.extend(RoutePoint(x, y, KIND_VIA) for x, y in via or [])
         if stubs:
-            pts.append(RoutePoint(ax - dx * ta, ay - dy * ta, KIND_TURN_IN, k))
+            pts.append(RoutePoint(ax - dx * ta_in, ay - dy * ta_in, KIND_TURN_IN, k))
         entry = len(pts)
         if hover:
             hp = hover_points.get(li, [])  # type: ignore[union-attr]
@@ -338,8 +440,13 @@ def build_route(legs: Sequence[Leg], geometry: Any, turnaround_m: float, exit_ma
             pts.append(RoutePoint(ax, ay, KIND_ENTRY, k))
             pts.append(RoutePoint(ex, ey, KIND_EXIT, k))
         spans.append((entry, len(pts) - 1))
-        if ta > em:
-            pts.append(RoutePoint(bx + dx * ta, by + dy * ta, KIND_TURN_IN, k))
+        ta_out = ta
+        if zones is not None and ta > em:
+            ta_out = zones.clear_length((bx, by), (dx, dy), ta)
+            if ta_out < min(ta, em + MIN_STUB_M):
+                ta_out = 0.0
+        if ta_out > em:
+            pts.append(RoutePoint(bx + dx * ta_out, by + dy * ta_out, KIND_TURN_IN, k))
         flown.append(leg)
         revs.append(rev)
         prev_exit = (ex, ey) if not hover else (bx, by)

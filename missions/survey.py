@@ -246,6 +246,14 @@ def plan_survey(area: Area, footprint: Footprint, front_pct: float, side_pct: fl
                         hint=f"fly at most {trig / min_interval_s:.1f} m/s, lower the front overlap or fly higher")
     warnings: list[PlanWarning] = []
     geom = area.geometry
+    if area.dropped[0]:
+        from missions.area import MIN_PART_WIDTH_M
+        n, m2 = area.dropped
+        warnings.append(PlanWarning("area_sliver_dropped",
+                                    f"{n} piece{'s' if n > 1 else ''} of the area ({m2:.1f} m² in all) that the "
+                                    f"exclusion zones cut off {'are' if n > 1 else 'is'} nowhere {MIN_PART_WIDTH_M:g} m "
+                                    "wide and not surveyed (no GNSS track that narrow misses the exclusion); "
+                                    "if it matters, draw the exclusion to leave a wider strip"))
     # a photo adds about spacing x trigger distance of new ground
     check_photo_budget(geom.area / (spacing * trig) * (2 if refly_90 else 1), "survey", photos_left)
     if isinstance(angle_deg, str):
@@ -295,7 +303,7 @@ def plan_survey(area: Area, footprint: Footprint, front_pct: float, side_pct: fl
             t = (vs - l.v0) / l.length_m if l.length_m > 1e-9 else np.zeros(1)
             hover_points[i] = [(l.x0 + (l.x1 - l.x0) * f, l.y0 + (l.y1 - l.y0) * f) for f in t]
     route: Route = build_route(legs, geom, turnaround_m, exit_margin_m=min(exit_margin_m, 0.45 * trig),
-                               order=order, hover_points=hover_points)
+                               order=order, hover_points=hover_points, avoid=area.excluded)
     xy = route.xy
     lat, lon = _latlon(area, xy)
     wps = tuple(Waypoint(float(p.x), float(p.y), float(a), float(o), p.kind, p.leg)

@@ -136,3 +136,36 @@ def test_random_concave_areas_are_covered_at_any_overlap(poly, overlap, angle) -
     assert c.coverage >= 0.995
     assert leg_crossings(plan.legs, poly) == []
     assert_legs_on_the_photo_grid(plan)
+
+
+def _gps_track_corridor():
+    """A corridor along a GPS track: a point every 2 m, each up to 0.3 m off the straight line (the reviewer's
+    corridor-gps-track plan), so the lines turn by up to ~17° at every vertex."""
+    from missions.corridor import plan_corridor
+    from missions.geo import LocalProjection
+    rng = np.random.default_rng(1)
+    xy = np.column_stack([rng.uniform(-0.3, 0.3, 200), 2.0 * np.arange(200)])
+    lat, lon = LocalProjection(50.10, 14.50).to_latlon(xy[:, 0], xy[:, 1])
+    return plan_corridor(np.column_stack([lat, lon]).tolist(), 60.0, WIRIS_60M, 80, 60, turnaround_m=10,
+                         speed_mps=5)
+
+
+def test_side_overlap_of_a_corridor_along_a_noisy_track_is_the_flown_one() -> None:
+    # its offset lines are `spacing` apart everywhere: 60 % side overlap, which the measure read as 14 % when it
+    # compared only parallel straight runs (each a photo or two long here)
+    plan = _gps_track_corridor()
+    assert len(plan.lines_xy) >= 2
+    # the photos sit on the lines' zigzag (±0.3 m), so a photo's distance to the next line's photos is the
+    # spacing give or take about twice that
+    v = min_side_overlap(plan.photos, WIRIS_60M)
+    assert 0.60 - 0.6 / WIRIS_60M.across_m <= v <= 0.605
+
+
+def test_side_overlap_of_a_bent_corridor_still_sees_a_line_flown_too_far_out() -> None:
+    plan = _gps_track_corridor()
+    lines = sorted({p.span for p in plan.photos}, key=lambda k: np.mean([p.x for p in plan.photos if p.span == k]))
+    out = lines[-1]           # the easternmost line, moved half a spacing further east
+    moved = [PhotoPoint(p.x + 0.5 * plan.spacing_m if p.span == out else p.x, p.y, p.heading_deg, p.span)
+             for p in plan.photos]
+    want = 1.0 - 1.5 * plan.spacing_m / WIRIS_60M.across_m
+    assert min_side_overlap(moved, WIRIS_60M) == pytest.approx(want, abs=0.01)

@@ -265,3 +265,35 @@ def test_flying_over_a_hole_is_reported():
     clean = report(handmade(size_m=160.0))
     assert clean["areas"][0]["over_gaps_m"] == 0.0
     assert not any(w["code"] == "path_over_exclusion" for w in clean["warnings"])
+
+
+def _compile_yaml(tmp_path, survey: dict):
+    from missions.compile import compile_plan
+    from missions.plan import parse_plan
+    doc = {"version": 1, "name": "t", "vehicle": {"firmware": "ardupilot", "frame": "copter", "speed_mps": 4.5},
+           "home": {"lat": 50.0995, "lon": 14.5, "alt_amsl_m": 250},
+           "payloads": {"thermal": {"camera": "wiris-pro", "imager": "thermal", "lens_mm": 13, "component_id": 100}},
+           "mission": [{"takeoff": {"alt_m": 40}}, *({k: v} for k, v in survey.items()), {"rtl": {}}]}
+    path = tmp_path / "plan.yaml"
+    path.write_text(yaml.safe_dump(doc, sort_keys=False))
+    return compile_plan(parse_plan(path.read_text(), str(path), tmp_path))
+
+
+def test_hover_photos_of_two_lines_are_no_front_pair(tmp_path):
+    # An L-shaped field flown in hover mode (the reviewer's hover-L plan): at the inner corner the next line is
+    # reached through a detour that arrives with the old line's heading, beside the last stop. That pair was
+    # measured as front overlap: 30 %, the side overlap, against 50 % requested and flown.
+    L = [[50.1, 14.5], [50.0999999, 14.504193], [50.1010788, 14.504193], [50.1010788, 14.5016773],
+         [50.1022476, 14.5016773], [50.1022476, 14.5]]
+    c = _compile_yaml(tmp_path, {"survey": {"area": L, "payloads": ["thermal"], "altitude_m": 40,
+                                            "overlap": {"front": 50, "side": 30}, "angle_deg": "auto",
+                                            "trigger": "hover"}})
+    sim = simulate(c)
+    # every front pair (consecutive photos of one span) lies along its heading, one ahead of the other
+    for p, q in zip(sim.photos, sim.photos[1:]):
+        if p.span == q.span:
+            h = math.radians(p.heading_deg)
+            dx, dy = q.x - p.x, q.y - p.y
+            assert dx * math.sin(h) + dy * math.cos(h) > 0
+            assert abs(dx * math.cos(h) - dy * math.sin(h)) < 0.1
+    assert report(c, sim)["overlap"]["thermal"]["front_min"] >= 0.49

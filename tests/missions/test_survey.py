@@ -175,6 +175,20 @@ def test_corridor_front_overlap_on_a_straight_line() -> None:
     assert c.min_front_overlap >= 0.79
 
 
+def test_corridor_with_a_straight_middle_point_keeps_full_length_lines() -> None:
+    # Three points on one meridian: in the local projection the middle one is ~1 mm off the straight line,
+    # which GEOS's offset curve cuts into two halves; each line must still run the whole corridor.
+    line = [[50.100, 14.500], [50.103, 14.500], [50.106, 14.500]]
+    plan = plan_corridor(line, 60.0, FP, 80, 60, turnaround_m=10, speed_mps=6)
+    two = plan_corridor([line[0], line[-1]], 60.0, FP, 80, 60, turnaround_m=10, speed_mps=6)
+    lengths = [float(np.hypot(*np.diff(np.asarray(l), axis=0).T).sum()) for l in plan.lines_xy]
+    assert len(lengths) == len(two.lines_xy) >= 2
+    assert lengths == pytest.approx([float(np.hypot(*np.diff(np.asarray(l), axis=0).T).sum())
+                                     for l in two.lines_xy], abs=0.01)
+    c = measure(plan.area.geometry, plan.photos, FP)
+    assert c.coverage >= 0.995
+
+
 @pytest.mark.parametrize("line,width,match", [
     ([[50.11, 14.50]], 60, "at least 2"), ([[50.11, 14.50], [50.11, 14.50]], 60, "no length"),
     ([[50.11, 14.50], [50.12, 14.52]], 0, "width"),
