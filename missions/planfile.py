@@ -105,6 +105,7 @@ def xy_hint(frame: int) -> str:
 SIZE_HINT = "a 2000-item .plan is about 1 MB, a full 65535-item one up to 45 MB: is this the right file?"
 READ_HINT = "check the path and that you may read the file"
 FLOAT32_HINT = "params 1-4 and altitude travel as float32 (at most ±3.4e38); null means unset"
+FLOAT32_METRES_HINT = "radii and altitudes travel as float32 (at most ±3.4e38): write the value in metres"
 
 
 # -- writing ---------------------------------------------------------------------------------------
@@ -432,6 +433,14 @@ def _f(d: Decimal | None) -> float:
     return math.nan if d is None else float(d)
 
 
+def _float32(r: _Reader, d: Decimal | None, path: str, hint: str = FLOAT32_METRES_HINT) -> Decimal | None:
+    """`d` unchanged if MISSION_ITEM_INT's float32 can carry it: a larger number would stop an upload
+    half-way (on ArduPilot after MISSION_COUNT has cut the vehicle's list), so it is refused here."""
+    if d is not None and abs(float(d)) > FLOAT32_MAX:
+        raise r.err(path, f"{d} is beyond the float32 range MISSION_ITEM_INT carries", hint)
+    return d
+
+
 def _parse_json(text: str | bytes, name: str) -> Any:
     if isinstance(text, bytes):
         if len(text) > MAX_PLAN_BYTES:
@@ -470,9 +479,7 @@ def _simple(r: _Reader, raw: Any, path: str, mission_type: int) -> MissionItem:
                     "write true or false without quotes")
     p = [r.number(v, f"{path}.params[{k}]", null_ok=True) for k, v in enumerate(params)]
     for k in (0, 1, 2, 3, 6):
-        if p[k] is not None and abs(float(p[k])) > FLOAT32_MAX:
-            raise r.err(f"{path}.params[{k}]", f"{p[k]} is beyond the float32 range MISSION_ITEM_INT carries",
-                        FLOAT32_HINT)
+        _float32(r, p[k], f"{path}.params[{k}]", FLOAT32_HINT)
     return MissionItem(command=command, frame=frame, param1=_f(p[0]), param2=_f(p[1]), param3=_f(p[2]),
                        param4=_f(p[3]), x=r.fixed(params[4], f"{path}.params[4]", frame),
                        y=r.fixed(params[5], f"{path}.params[5]", frame), z=_f(p[6]), autocontinue=int(auto),
@@ -531,7 +538,9 @@ def _mission(r: _Reader, mission: dict[str, Any]) -> tuple[list[MissionItem], Ho
             raise r.err("mission.plannedHomePosition", "expected [lat, lon, altitude AMSL]",
                         "write it as [latitude, longitude, altitude AMSL], e.g. [47.3977507, 8.5456075, 488]")
         x, y = r.latlon(raw_home, "mission.plannedHomePosition")
-        alt = r.number(raw_home[2], "mission.plannedHomePosition[2]", null_ok=True)
+        # ArduPilot's item 0 on upload: its altitude travels as float32 too
+        alt = _float32(r, r.number(raw_home[2], "mission.plannedHomePosition[2]", null_ok=True),
+                       "mission.plannedHomePosition[2]")
         home = (x / 1e7, y / 1e7, 0.0 if alt is None else float(alt))
     return items, home
 
@@ -564,7 +573,8 @@ def _fence(r: _Reader, fence: dict[str, Any]) -> list[MissionItem]:
         inclusion = r.key(c, "inclusion", path)
         circle = r.obj(r.key(c, "circle", path), f"{path}.circle")
         x, y = r.latlon(r.key(circle, "center", f"{path}.circle"), f"{path}.circle.center")
-        radius = r.number(r.key(circle, "radius", f"{path}.circle"), f"{path}.circle.radius")
+        radius = _float32(r, r.number(r.key(circle, "radius", f"{path}.circle"), f"{path}.circle.radius"),
+                          f"{path}.circle.radius")
         if not isinstance(inclusion, bool) or radius is None or radius <= 0:
             raise r.err(path, "a fence circle needs \"inclusion\": true/false and a positive radius",
                         'e.g. {"circle": {"center": [47.1, 8.1], "radius": 50}, "inclusion": true} (radius in m)')
@@ -574,7 +584,7 @@ def _fence(r: _Reader, fence: dict[str, Any]) -> list[MissionItem]:
     if isinstance(ret, list) and len(ret) == 3:
         x, y = r.latlon(ret, "geoFence.breachReturn")
         if (x, y) != (0, 0):
-            alt = r.number(ret[2], "geoFence.breachReturn[2]", null_ok=True)
+            alt = _float32(r, r.number(ret[2], "geoFence.breachReturn[2]", null_ok=True), "geoFence.breachReturn[2]")
             out.append(MissionItem(command=CMD_FENCE_RETURN_POINT, frame=FRAME_GLOBAL_RELATIVE_ALT, x=x, y=y,
                                    z=0.0 if alt is None else float(alt), mission_type=MISSION_TYPE_FENCE))
     return out
@@ -593,7 +603,7 @@ def _rally(r: _Reader, rally: dict[str, Any]) -> list[MissionItem]:
             raise r.err(path, "expected [lat, lon, altitude]",
                         "write the point as [latitude, longitude, altitude], e.g. [47.3977507, 8.5456075, 30]")
         x, y = r.latlon(p, path)
-        alt = r.number(p[2], f"{path}[2]")
+        alt = _float32(r, r.number(p[2], f"{path}[2]"), f"{path}[2]")
         out.append(MissionItem(command=CMD_RALLY_POINT, frame=FRAME_GLOBAL_RELATIVE_ALT, x=x, y=y, z=float(alt),
                                mission_type=MISSION_TYPE_RALLY))
     return out

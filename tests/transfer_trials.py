@@ -5,8 +5,10 @@ and bench/bench_upload.py).
 
 Each trial builds its own vehicle_sim, link emulator and ground-station Link (fresh sockets, so no
 packet of one trial can reach another), draws loss / duplication / reordering levels, a vehicle
-flavour and a small random mission from random.Random(seed), runs MissionClient.upload_verified
-and then compares what the vehicle really stores with what was sent. "Silent corruption" is the
+flavour and a small random mission from random.Random(seed) - half the vehicles giving items back
+as their firmware does (vehicle_sim stores_like_firmware), so the read-back is judged as the
+firmware keeps items - runs MissionClient.upload_verified and then compares what the vehicle
+really stores with what was sent. "Silent corruption" is the
 one outcome that must never happen: upload_verified reporting success while the vehicle holds
 something else.
 """
@@ -64,9 +66,11 @@ def run_trial(seed: int) -> Outcome:
     flavour = rng.choice(["ardupilot", "px4"])
     nack_rate = 0.1 if flavour == "ardupilot" and rng.random() < 0.5 else 0.0
     items = random_mission(rng)
+    like_firmware = rng.random() < 0.5
     profile = LinkProfile(latency_s=rng.choice([0.001, 0.003, 0.006]), loss=loss, duplicate=dup, reorder=reorder,
                           reorder_delay_s=0.01)
-    with VehicleSim(flavour=flavour, seed=seed, nack_rate=nack_rate, rerequest_s=0.1, heartbeat_s=0.1) as sim, \
+    with VehicleSim(flavour=flavour, seed=seed, nack_rate=nack_rate, rerequest_s=0.1, heartbeat_s=0.1,
+                    stores_like_firmware=like_firmware) as sim, \
             LinkEmulator(sim.port, profile=profile, seed=seed) as emu, \
             Link(f"udpout:127.0.0.1:{emu.port}", heartbeat_s=0.1) as link:
         client = MissionClient(link, 1, 1, timeouts=TRIAL_TIMEOUTS)

@@ -3,7 +3,7 @@
     client = MissionClient(link, target_system=1, target_component=1)
     result = client.upload(items, mission_type=MISSION_TYPE_MISSION, progress=lambda done, total: ...)
     items, result = client.download(mission_type=MISSION_TYPE_MISSION)
-    result = client.upload_verified(items)          # upload + read-back, field by field
+    result = client.upload_verified(items)          # upload + read-back, as the firmware keeps it
 
 Files (what `wiris mission upload/download` call): load_for_upload(path, type) reads a .plan,
 a WPL 110 file or a capture plan (compiled with missions.compile); upload_file(link, path, ...)
@@ -32,17 +32,27 @@ Timing (all in `Timeouts`; the defaults are the spec's or tighter):
     keep trying"). So a MISSION_ACK with an error is noted, not fatal: the upload fails with that
     error only if no further request arrives within `nack_grace_s`.
   * A final MISSION_ACK ACCEPTED counts only after the vehicle has requested the last item, so a
-    stale or duplicated ack from an earlier transfer cannot end this one early.
+    stale or duplicated ack from an earlier transfer cannot end this one early. An error ack after
+    the last item went out (ArduPilot's ERROR once it has finished, its INVALID_SEQUENCE while it
+    defers the ACCEPTED to compute its mission id, or a late answer to a duplicate) is only a hint:
+    the ACCEPTED still gets the spec's ack timeout before the upload is called unconfirmed.
+  * A failed ArduPilot upload says the vehicle's mission (or rally list) is now partly overwritten:
+    ArduPilot cuts it at MISSION_COUNT and replaces it item by item.
+  * Download: DENIED (ArduPilot busy receiving an upload) is asked again until the retries run
+    out; UNSUPPORTED to the list request raises ListUnsupported (the firmware has no such list).
 
-Verification (`upload_verified`): download after upload and compare every item with
-MissionItem.same_on_wire; also compare ArduPilot's opaque_id from the upload's MISSION_ACK with the
-download's MISSION_COUNT when both carry one. Any difference raises LinkError naming the first
-differing item and field. ArduPilot replaces mission item 0 with its home position, so for an
-ArduPilot vehicle (from its HEARTBEAT) item 0 of a MISSION (not fence/rally) is compared by command only.
+Verification (`upload_verified`): download after upload and compare each item as the vehicle's
+firmware keeps it (compare_items with readback_rule: ArduPilot and PX4 drop params a command does
+not use, round altitudes, report other frames; the command, coordinates and every kept value must
+match); also compare ArduPilot's opaque_id from the upload's MISSION_ACK with the download's
+MISSION_COUNT when both carry one. Any difference raises LinkError naming the first differing item
+and field. ArduPilot replaces mission item 0 with its home position, so for an ArduPilot vehicle
+(from its HEARTBEAT) item 0 of a MISSION (not fence/rally) is compared by command only.
 """
 
 from __future__ import annotations
 
+import contextlib
 import math
 import struct
 import threading
@@ -113,10 +123,16 @@ class TransferResult:
     resent: int = 0             # messages we sent again (lost items, counts, requests)
     nacks_tolerated: int = 0    # error MISSION_ACKs followed by further requests
     notes: tuple[str, ...] = ()
+    mavlink1: bool = False      # download: the vehicle answered in MAVLink 1 framing
 
 
 class UploadUnconfirmed(LinkError):
     """Every item was requested and sent, but no ACCEPTED ack arrived: only a read-back can tell."""
+
+
+class ListUnsupported(LinkError):
+    """The vehicle answered MAV_MISSION_UNSUPPORTED to a list request: it has no such list (ArduPilot built
+    without fences or rally points, GCS_Common.cpp handle_mission_request_list). Not a failed download."""
 
 
 class RttEstimator:
@@ -180,6 +196,27 @@ def opaque_id_of(msg) -> int:
     return struct.unpack_from("<I", payload, off)[0]
 
 
+_FLOAT32_MAX = 3.4028234663852886e38
+
+
+def _check_encodable(items: Sequence[MissionItem], where: str) -> None:
+    """LinkError naming the first item whose fields MISSION_ITEM_INT cannot carry - before MISSION_COUNT,
+    which on ArduPilot already cuts the vehicle's mission to the new count."""
+    for i, it in enumerate(items):
+        for name in ("param1", "param2", "param3", "param4", "z"):
+            v = getattr(it, name)
+            if math.isfinite(v) and abs(v) > _FLOAT32_MAX:
+                raise LinkError(f"item {i} ({_describe(it)}) has {name} = {v:g}, beyond the float32 range "
+                                "MISSION_ITEM_INT carries", where=f"{where}, item {i}",
+                                hint="fix the value in the file (at most ±3.4e38); nothing was sent")
+        for name, lo, hi in (("x", -2**31, 2**31 - 1), ("y", -2**31, 2**31 - 1), ("command", 0, 65535),
+                             ("frame", 0, 255), ("autocontinue", 0, 255), ("current", 0, 255)):
+            v = getattr(it, name)
+            if not lo <= v <= hi:
+                raise LinkError(f"item {i} ({_describe(it)}) has {name} = {v}, outside {lo}..{hi}",
+                                where=f"{where}, item {i}", hint="fix the value in the file; nothing was sent")
+
+
 def item_from_msg(msg) -> MissionItem:
     return MissionItem(command=msg.command, frame=msg.frame, param1=msg.param1, param2=msg.param2,
                        param3=msg.param3, param4=msg.param4, x=msg.x, y=msg.y, z=msg.z,
@@ -221,10 +258,13 @@ class MissionClient:
             item.autocontinue, item.param1, item.param2, item.param3, item.param4, int(item.x), int(item.y),
             float(item.z), mission_type)
 
-    def is_ardupilot(self) -> bool:
-        hb = self.link.heartbeats().get((self.target_system, self.target_component)) or next(
+    def _heartbeat(self):
+        return self.link.heartbeats().get((self.target_system, self.target_component)) or next(
             (h for (s, _c), h in self.link.heartbeats().items() if s == self.target_system
              and h.autopilot != mavlink2.MAV_AUTOPILOT_INVALID), None)
+
+    def is_ardupilot(self) -> bool:
+        hb = self._heartbeat()
         return hb is not None and hb.autopilot == mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA
 
     # -- upload --------------------------------------------------------------------------------
@@ -238,6 +278,7 @@ class MissionClient:
         if len(items) > 65535:
             raise LinkError(f"{len(items)} items do not fit the protocol's 16-bit count", where=where,
                             hint="at most 65535 items, ArduPilot's home item 0 included: split the mission")
+        _check_encodable(items, where)
         return _Upload(self, list(items), mission_type, where, progress).run()
 
     # -- download ------------------------------------------------------------------------------
@@ -253,9 +294,13 @@ class MissionClient:
             wait = t.first_s
             count_msg = None
             fatal: int | None = None
+            busy = False
             # Error acks are judged like on upload: a transient one (ERROR, INVALID_SEQUENCE - often a
             # stale answer to a duplicated packet of the previous transfer) is ignored; any other
-            # ends the download when the wait it arrived in passes without an answer.
+            # ends the download when the wait it arrived in passes without an answer. DENIED is
+            # ArduPilot's "busy": it refuses list and item requests while an upload is being received,
+            # and until the deferred ACCEPTED of its last one is out (MissionItemProtocol.cpp) - asked
+            # again until the retries run out.
             for attempt in range(t.retries + 1):
                 self.link.send(self.link.mav.mission_request_list_encode(self.target_system, self.target_component,
                                                                          mission_type))
@@ -270,21 +315,35 @@ class MissionClient:
                         if attempt == 0:
                             self.rtt.sample(time.monotonic() - sent)
                         break
-                    if msg.get_type() == "MISSION_ACK" and msg.type in _FATAL_NACKS:
+                    if msg.get_type() != "MISSION_ACK":
+                        continue
+                    if msg.type == mavlink2.MAV_MISSION_DENIED:
+                        busy = True
+                    elif msg.type in _FATAL_NACKS:
                         fatal = msg.type
                 if count_msg is not None:
                     break
+                if fatal == mavlink2.MAV_MISSION_UNSUPPORTED:
+                    raise ListUnsupported(f"the vehicle has no {TYPE_NAMES.get(mission_type, mission_type)} list "
+                                          "(it answered MAV_MISSION_UNSUPPORTED to the list request)", where=where,
+                                          hint="nothing to download: this firmware was built without it")
                 if fatal is not None:
                     raise LinkError(f"the vehicle answered {mission_result_name(fatal)} to the list request",
                                     where=where, hint=_NACK_HINTS.get(fatal, _DOWNLOAD_NACK_HINT))
                 resent += 1
                 wait = min(wait * 2, t.ack_s)
+            if count_msg is None and busy:
+                raise LinkError(f"the vehicle answered MAV_MISSION_DENIED to all {t.retries + 1} list requests",
+                                where=where, hint="it is busy receiving an upload (another ground station?); "
+                                                  "retry when that has finished")
             if count_msg is None:
                 raise LinkError(f"no MISSION_COUNT after {t.retries + 1} list requests", where=where,
                                 hint="check the connection and the target system/component")
             count = count_msg.count
             opaque = opaque_id_of(count_msg)
             got: dict[int, MissionItem] = {}
+            fatal = None      # an error ack that came with (or before) the count was not about the items
+            last_answer: int | None = None
             # 2. the items, in order (PX4 refuses out-of-order requests)
             for seq in range(count):
                 tries = 0
@@ -305,8 +364,10 @@ class MissionClient:
                                 got[seq] = item_from_msg(msg)
                                 if tries == 0:
                                     self.rtt.sample(time.monotonic() - sent)
-                        elif msg.get_type() == "MISSION_ACK" and msg.type in _FATAL_NACKS:
-                            fatal = msg.type
+                        elif msg.get_type() == "MISSION_ACK":
+                            last_answer = msg.type
+                            if msg.type in _FATAL_NACKS and msg.type != mavlink2.MAV_MISSION_DENIED:
+                                fatal = msg.type
                     if seq in got:
                         break
                     if fatal is not None:
@@ -316,22 +377,26 @@ class MissionClient:
                     tries += 1
                     resent += 1
                     if tries > t.retries:
-                        raise LinkError(f"item {seq} of {count} never arrived after {t.retries + 1} requests",
+                        answer = "" if last_answer is None else f" (last answer: {mission_result_name(last_answer)})"
+                        raise LinkError(f"item {seq} of {count} never arrived after {t.retries + 1} requests{answer}",
                                         where=where, hint="the link is too lossy or was lost; retry the download")
                 if progress:
                     progress(seq + 1, count)
             self.link.send(self.link.mav.mission_ack_encode(self.target_system, self.target_component,
                                                             mavlink2.MAV_MISSION_ACCEPTED, mission_type))
         items = [got[i] for i in range(count)]
-        return items, TransferResult(mission_type, count, time.monotonic() - start, opaque, resent)
+        mavlink1 = (count_msg.get_msgbuf() or b"\xfd")[0] == mavlink2.PROTOCOL_MARKER_V1
+        return items, TransferResult(mission_type, count, time.monotonic() - start, opaque, resent, mavlink1=mavlink1)
 
     # -- upload + read-back --------------------------------------------------------------------
     def upload_verified(self, items: Sequence[MissionItem], *, mission_type: int = MISSION_TYPE_MISSION,
                         progress: Progress | None = None) -> TransferResult:
         """Upload, download again and compare; LinkError naming the first difference otherwise.
 
-        If the upload itself failed only at the final acknowledgement (every item was sent), the
-        read-back decides: a vehicle that holds exactly our items counts as success.
+        The comparison follows the firmware of the vehicle's HEARTBEAT (compare_items, readback_rule):
+        what ArduPilot or PX4 normally does to an item it stores is not a difference. If the upload
+        itself failed only at the final acknowledgement (every item was sent), the read-back decides:
+        a vehicle that holds our items counts as success.
         """
         note: tuple[str, ...] = ()
         try:
@@ -340,8 +405,14 @@ class MissionClient:
             up = TransferResult(mission_type, len(items), 0.0)
             note = ("the vehicle's final MISSION_ACK never arrived; the read-back below proves the upload",)
         got, down = self.download(mission_type=mission_type)
+        if self._heartbeat() is None:
+            # The vehicle's firmware decides how its read-back is judged (and whether item 0 is ArduPilot's
+            # home); without its HEARTBEAT every field is compared - a false alarm at worst.
+            with contextlib.suppress(LinkError):
+                self.link.wait_heartbeat(timeout=self.timeouts.ack_s, system=self.target_system)
         compare_items(items, got, where=self._where(mission_type),
-                      home_replaced=self.is_ardupilot() and mission_type == MISSION_TYPE_MISSION)
+                      home_replaced=self.is_ardupilot() and mission_type == MISSION_TYPE_MISSION,
+                      firmware=readback_firmware(self._heartbeat()))
         if up.opaque_id and down.opaque_id and up.opaque_id != down.opaque_id:
             raise LinkError(f"the vehicle's mission id changed between upload ({up.opaque_id:#010x}) and "
                             f"read-back ({down.opaque_id:#010x})", where=self._where(mission_type),
@@ -379,6 +450,7 @@ class _Upload:
         self.pushed: dict[int, int] = {}                 # unsolicited sends per seq
         self.requested_max = -1
         self.last_item: int | None = None                # the item we sent last
+        self.final_hint: int | None = None               # an error ack after the last item went out
         self.tries = 0
         self.count_wait = self.t.first_s
         self.deadline = 0.0
@@ -424,6 +496,7 @@ class _Upload:
                 self.requested_max = seq
                 self.last_progress = now
             self.tries = 0
+            self.final_hint = None
             srtt = self.c.rtt.srtt or 0.0
             if seq == self.last_item and now - self.sent_at.get(seq, 0.0) < 0.5 * srtt:
                 return  # a duplicated request: the answer is already on its way
@@ -451,11 +524,24 @@ class _Upload:
                 self.fatal_at = now
             return None
         last = self.last_item
+        if last == count - 1 and last == self.requested_max and msg.type in (mavlink2.MAV_MISSION_ERROR,
+                                                                            mavlink2.MAV_MISSION_INVALID_SEQUENCE):
+            # The vehicle asked for the last item and has it, or will ask again: an error now is a hint,
+            # never the end. Released ArduPilot answers any item with ERROR once it is no longer receiving
+            # (GCS_Common.cpp handle_mission_item: !prot->receiving) - its ACCEPTED was lost or is still on
+            # the way; a build that defers its ACCEPTED until the mission id is computed (>= 500 ms without a
+            # change, MissionItemProtocol.cpp transfer_is_complete/update_checksum) answers a repeated item
+            # with INVALID_SEQUENCE meanwhile; and an INVALID_SEQUENCE can be the late answer to a duplicated
+            # earlier item while the ACCEPTED is still coming. So stop resending and give the ACCEPTED the
+            # spec's ack timeout; a vehicle that lacks the item asks for it again (1 s on ArduPilot).
+            if self.final_hint is None:
+                self.final_hint = msg.type
+                self.tries = max(self.tries, self.t.retries)
+                self.deadline = max(self.deadline, now + self.t.ack_s)
+            return None
         if msg.type == mavlink2.MAV_MISSION_INVALID_SEQUENCE and last is not None and last == self.requested_max:
             # ArduPilot answers an item it no longer expects this way: it already has `last` and
             # its request for the next one was lost.
-            if last == count - 1 and last in self.retransmitted:
-                raise self.unconfirmed("the final MISSION_ACK was lost (the vehicle no longer expects items)")
             nxt = last + 1
             if nxt < count and self.pushed.get(nxt, 0) < 3 and (nxt not in self.sent_at or nxt in self.pushed):
                 # Push the next item rather than wait for the vehicle's re-request timer (1 s on
@@ -473,6 +559,9 @@ class _Upload:
                                 where=self.where, hint="check the connection, the target system/component, and "
                                                        "that the vehicle supports this mission type")
             if (self.count - 1) in self.sent_at:
+                if self.final_hint is not None:
+                    raise self.unconfirmed(f"no MISSION_ACK ACCEPTED came within {t.ack_s:g} s of the vehicle's "
+                                           f"{mission_result_name(self.final_hint)} to the repeated last item")
                 raise self.unconfirmed("the vehicle never acknowledged the upload")
             raise LinkError(f"the vehicle stopped requesting after item {self.last_item} of {self.count}"
                             + self._last_answer(), where=self.where,
@@ -486,7 +575,36 @@ class _Upload:
         else:
             # Fast retransmit: the vehicle's next request is overdue.
             self.send_item(self.last_item)
-            self.deadline = now + min(self.rto() * (2 ** self.tries), t.ack_s)
+            wait = min(self.rto() * (2 ** self.tries), t.ack_s)
+            if self.tries >= t.retries and self.last_item == self.count - 1:
+                # After the last try of the last item the vehicle gets the spec's whole ack timeout: an
+                # ArduPilot that defers its ACCEPTED (see on_ack) must not lose to our fast retransmits.
+                wait = t.ack_s
+            self.deadline = now + wait
+
+    def explain_partial(self, err: LinkError) -> None:
+        """Say what a failed upload left on an ArduPilot vehicle. ArduPilot cuts its mission and its rally
+        list to the new count when MISSION_COUNT arrives, then replaces them item by item
+        (MissionItemProtocol.cpp handle_mission_count -> truncate, handle_mission_item -> replace_item /
+        append_item): after a failure they hold a mix of old and new items. Its fence is written only when
+        complete (MissionItemProtocol_Fence.cpp complete), and PX4 switches to a new list only when complete
+        (mavlink_mission.cpp, update_active_mission): nothing to add for those."""
+        if self.mission_type == mavlink2.MAV_MISSION_TYPE_FENCE or not self.c.is_ardupilot():
+            return
+        if self.fatal_nack is not None and self.fatal_nack[1] < 0:
+            return  # MISSION_COUNT itself refused (DENIED, NO_SPACE): checked before the list is cut
+        kind = TYPE_NAMES.get(self.mission_type, str(self.mission_type))
+        if isinstance(err, UploadUnconfirmed):
+            err.hint = (f"{err.hint}; do not fly it before that: ArduPilot replaces its {kind} item by item, so an "
+                        "upload that did not complete leaves old and new items mixed")
+        elif self.last_item is None:
+            err.message += f"; if MISSION_COUNT reached the vehicle, ArduPilot has already cut its {kind} to " \
+                           f"{self.count} items"
+            err.hint = f"do not fly the vehicle's {kind} before an upload succeeds; {err.hint}"
+        else:
+            err.message += (f"; the vehicle's {kind} is now partly overwritten (ArduPilot cut it to {self.count} "
+                            "items at MISSION_COUNT and replaces them one by one: old and new items are mixed)")
+            err.hint = f"do not fly the vehicle's {kind} before an upload succeeds; {err.hint}"
 
     def _last_answer(self) -> str:
         return f" (last answer: {mission_result_name(self.last_nack)})" if self.last_nack is not None else ""
@@ -540,6 +658,10 @@ class _Upload:
                     if self.progress and progressed > reported:
                         reported = progressed
                         self.progress(progressed, self.count)
+            except LinkError as err:
+                with self.lock:
+                    self.explain_partial(err)
+                raise
             finally:
                 c.link.unsubscribe(sub)
 
@@ -559,24 +681,248 @@ def _same_field(a, b) -> bool:
     return a == b
 
 
+# -- read-back as each firmware gives it ---------------------------------------------------------------
+#
+# Neither autopilot echoes an item: each converts it into its own storage and converts that back on
+# download, so a field-by-field comparison fails every normal upload. A rule says, for one command, how the
+# firmware keeps p1, p2, p3, p4, x, y, z (one letter each) and the frame (the eighth letter); the read-back is
+# compared at that resolution, and a field the firmware does not keep is not compared. The command, the
+# mission type, the coordinates and every kept field are always compared, so a vehicle holding another
+# mission still fails verification. A command missing from a table is compared field by field (a false
+# alarm at worst, never a false success).
+#   -  not kept (comes back 0): not compared
+#   f  a float32 as sent (NaN equal to NaN)
+#   i  a whole number: C's float-to-integer cast truncates toward zero (NaN, which ArduPilot refuses in
+#      these slots, as 0)
+#   c  a byte: min(255, whole number) (ArduPlane packs two into one uint16)
+#   b  a flag: only whether the value is > 0
+#   s  a direction: only the sign (-1 when negative, +1 otherwise, NaN included)
+#   y  a heading in degrees kept in radians wrapped to [0, 2 pi) (PX4): equal modulo 360 to 0.001 degree
+#   e  an int32 as sent (latitude/longitude in degE7: exact)
+#   g  an int32 kept in a float32 (PX4 keeps a MISSION-frame item's x/y among its float params)
+#   h  an altitude in whole centimetres (ArduPilot's Location.alt, int32 cm): equal within 1 cm
+# frame:  L  a position: only the altitude reference is compared (absolute, above home, above terrain)
+#         E  as sent, a frame equal to its _INT twin
+#         -  not kept
+
+_C = mavlink2
+# The altitude reference of each position frame.
+ALT_REFERENCE = {
+    _C.MAV_FRAME_GLOBAL: "amsl", _C.MAV_FRAME_GLOBAL_INT: "amsl",
+    # ArduPilot reads a position in MAV_FRAME_MISSION as absolute (AP_Mission.cpp, mavlink_int_to_mission_cmd:
+    # case MAV_FRAME_MISSION -> relative_alt = 0); PX4 keeps a MISSION-frame item as params, never as a position.
+    _C.MAV_FRAME_MISSION: "amsl",
+    _C.MAV_FRAME_GLOBAL_RELATIVE_ALT: "home", _C.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT: "home",
+    _C.MAV_FRAME_GLOBAL_TERRAIN_ALT: "terrain", _C.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT: "terrain",
+}
+_INT_TWIN = {_C.MAV_FRAME_GLOBAL_INT: _C.MAV_FRAME_GLOBAL,
+             _C.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT: _C.MAV_FRAME_GLOBAL_RELATIVE_ALT,
+             _C.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT: _C.MAV_FRAME_GLOBAL_TERRAIN_ALT}
+
+# ArduCopter, Rover and Sub: libraries/AP_Mission/AP_Mission.cpp, mission_cmd_to_mavlink_int (what
+# mavlink_int_to_mission_cmd kept, with the Mission_Command field types of AP_Mission.h); x/y/z only for
+# stored_in_location() commands, every other command comes back in frame 0.
+_ARDUPILOT_MISSION = {
+    _C.MAV_CMD_NAV_WAYPOINT: "i---eehL",            # p1 delay s (uint16); acceptance/pass-by/yaw dropped
+    _C.MAV_CMD_NAV_LOITER_UNLIM: "--i-eehL",        # radius as uint16, its sign the direction
+    _C.MAV_CMD_NAV_LOITER_TURNS: "i-ibeehL",        # turns and radius in bytes of p1, xtrack flag
+    _C.MAV_CMD_NAV_LOITER_TIME: "i-sbeehL",         # seconds (uint16), direction only, xtrack flag
+    _C.MAV_CMD_NAV_RETURN_TO_LAUNCH: "--------",
+    _C.MAV_CMD_NAV_LAND: "i--seehL",                # abort altitude (uint16), p4 direction only
+    _C.MAV_CMD_NAV_TAKEOFF: "i---eehL",             # minimum pitch (uint16); yaw dropped
+    _C.MAV_CMD_NAV_CONTINUE_AND_CHANGE_ALT: "i---eehL",
+    _C.MAV_CMD_NAV_LOITER_TO_ALT: "-i-beehL",
+    _C.MAV_CMD_NAV_SPLINE_WAYPOINT: "i---eehL",
+    _C.MAV_CMD_NAV_GUIDED_ENABLE: "i---eehL",
+    _C.MAV_CMD_NAV_DELAY: "fiii----",               # seconds (float), UTC hour/min/sec (int8)
+    _C.MAV_CMD_NAV_VTOL_TAKEOFF: "----eehL",
+    _C.MAV_CMD_NAV_VTOL_LAND: "i---eehL",
+    _C.MAV_CMD_CONDITION_DELAY: "f-------",
+    _C.MAV_CMD_CONDITION_DISTANCE: "f-------",
+    _C.MAV_CMD_CONDITION_YAW: "ifii----",           # angle int16, rate float, direction int8, relative uint8
+    _C.MAV_CMD_DO_JUMP: "ii------",
+    _C.MAV_CMD_DO_CHANGE_SPEED: "iff-----",         # speed type uint8, speed and throttle float
+    _C.MAV_CMD_DO_SET_HOME: "i---eehL",
+    _C.MAV_CMD_DO_SET_RELAY: "ii------",
+    _C.MAV_CMD_DO_REPEAT_RELAY: "iif-----",
+    _C.MAV_CMD_DO_SET_SERVO: "ii------",
+    _C.MAV_CMD_DO_REPEAT_SERVO: "iiif----",
+    _C.MAV_CMD_DO_LAND_START: "----eehL",
+    _C.MAV_CMD_DO_GO_AROUND: "----eehL",
+    _C.MAV_CMD_DO_SET_ROI: "i---eehL",
+    _C.MAV_CMD_DO_SET_ROI_LOCATION: "i---eehL",     # p1 gimbal device id
+    _C.MAV_CMD_DO_SET_ROI_NONE: "i-------",
+    _C.MAV_CMD_DO_DIGICAM_CONFIGURE: "iiiieef-",    # mode, shutter, aperture, ISO, exposure, cmd id; cut-off s
+    _C.MAV_CMD_DO_DIGICAM_CONTROL: "iiiiee--",      # session, zoom pos/step, focus lock, shoot, cmd id
+    _C.MAV_CMD_DO_MOUNT_CONTROL: "fff-----",        # pitch, roll, yaw (z comes back as the mount mode)
+    _C.MAV_CMD_DO_SET_CAM_TRIGG_DIST: "f-i-----",   # metres (float), trigger once now (uint8)
+    _C.MAV_CMD_DO_FENCE_ENABLE: "i-------",
+    _C.MAV_CMD_DO_PARACHUTE: "i-------",
+    _C.MAV_CMD_DO_GRIPPER: "ii------",
+    _C.MAV_CMD_DO_GUIDED_LIMITS: "ifff----",
+    _C.MAV_CMD_DO_AUTOTUNE_ENABLE: "i-------",
+    _C.MAV_CMD_DO_VTOL_TRANSITION: "i-------",
+    _C.MAV_CMD_DO_SEND_SCRIPT_MESSAGE: "ifff----",  # id (uint16), three floats for the script
+    _C.MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW: "iiiie-i-",  # int8/int16 angles and rates, flags in x, gimbal in z
+    _C.MAV_CMD_IMAGE_START_CAPTURE: "ifii----",     # instance uint8, interval float, count and seq uint16
+    _C.MAV_CMD_IMAGE_STOP_CAPTURE: "i-------",
+    _C.MAV_CMD_SET_CAMERA_ZOOM: "if------",         # zoom type uint8, value float
+    _C.MAV_CMD_SET_CAMERA_FOCUS: "if------",
+    _C.MAV_CMD_SET_CAMERA_SOURCE: "iii-----",
+    _C.MAV_CMD_VIDEO_START_CAPTURE: "i-------",     # stream id
+    _C.MAV_CMD_VIDEO_STOP_CAPTURE: "i-------",
+}
+# ArduPlane (same function, the APM_BUILD_ArduPlane branch): a waypoint keeps acceptance radius and pass-by
+# distance, each clamped to a byte, instead of the delay.
+_ARDUPLANE_MISSION = {**_ARDUPILOT_MISSION, _C.MAV_CMD_NAV_WAYPOINT: "-cc-eehL"}
+# libraries/GCS_MAVLink/MissionItemProtocol_Fence.cpp (get_item_as_mission_item): vertex count (uint8) or
+# radius (float) in p1, x/y; z is sent as 0 and the frame is not kept.
+_ARDUPILOT_FENCE = {
+    _C.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION: "i---ee--",
+    _C.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_EXCLUSION: "i---ee--",
+    _C.MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION: "f---ee--",
+    _C.MAV_CMD_NAV_FENCE_CIRCLE_EXCLUSION: "f---ee--",
+    _C.MAV_CMD_NAV_FENCE_RETURN_POINT: "----ee--",
+}
+# libraries/GCS_MAVLink/MissionItemProtocol_Rally.cpp: RallyLocation keeps lat, lng and alt as int16 metres;
+# only MAV_FRAME_GLOBAL_RELATIVE_ALT(_INT) is accepted and it comes back as GLOBAL_RELATIVE_ALT.
+_ARDUPILOT_RALLY = {_C.MAV_CMD_NAV_RALLY_POINT: "----eeiL"}
+
+# PX4: src/modules/mavlink/mavlink_mission.cpp. parse_mavlink_mission_item keeps an item by its frame, not its
+# command: a MAV_FRAME_MISSION item as its seven float params (DO_JUMP's first two as integers), a position
+# item per command; format_mavlink_mission_item sends a position back in GLOBAL_INT / GLOBAL_RELATIVE_ALT_INT.
+_PX4_MISSION_FRAME = "ffffggfE"
+_PX4_MISSION_FRAME_BY_COMMAND = {_C.MAV_CMD_DO_JUMP: "iiffggfE"}
+_PX4_POSITION = {
+    _C.MAV_CMD_NAV_WAYPOINT: "ff-yeefL",            # hold time, acceptance radius, yaw; p3 dropped
+    _C.MAV_CMD_NAV_LOITER_UNLIM: "--fyeefL",
+    _C.MAV_CMD_NAV_LOITER_TIME: "fbfbeefL",         # force heading and xtrack as flags
+    _C.MAV_CMD_NAV_LAND: "-f-yeefL",                # precision land mode, yaw; abort altitude dropped
+    _C.MAV_CMD_NAV_TAKEOFF: "---yeefL",             # yaw only
+    _C.MAV_CMD_NAV_LOITER_TO_ALT: "bf-beefL",
+    _C.MAV_CMD_NAV_VTOL_TAKEOFF: "---yeefL",
+    _C.MAV_CMD_NAV_VTOL_LAND: "---yeefL",
+    _C.MAV_CMD_NAV_RALLY_POINT: "----eefL",
+    # Fence points live in mission_fence_point_s, which has no altitude reference: they come back in
+    # GLOBAL_INT whatever was sent (send_mission_item, MAV_MISSION_TYPE_FENCE).
+    _C.MAV_CMD_NAV_FENCE_RETURN_POINT: "----eef-",
+    _C.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION: "f---eef-",
+    _C.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_EXCLUSION: "f---eef-",
+    _C.MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION: "f---eef-",
+    _C.MAV_CMD_NAV_FENCE_CIRCLE_EXCLUSION: "f---eef-",
+}
+# The fallback for a command no table knows: every field as sent.
+_AS_SENT = "ffffeefE"
+
+_PLANE_TYPES = frozenset({_C.MAV_TYPE_FIXED_WING, _C.MAV_TYPE_VTOL_DUOROTOR, _C.MAV_TYPE_VTOL_QUADROTOR,
+                          _C.MAV_TYPE_VTOL_TILTROTOR, _C.MAV_TYPE_VTOL_RESERVED2, _C.MAV_TYPE_VTOL_RESERVED3,
+                          _C.MAV_TYPE_VTOL_RESERVED4, _C.MAV_TYPE_VTOL_RESERVED5})
+
+
+def readback_firmware(heartbeat) -> str | None:
+    """Which read-back rules apply to the autopilot of `heartbeat`: "ardupilot" (Copter, Rover, Sub),
+    "arduplane" (ArduPlane reports a fixed-wing or VTOL type), "px4", or None (compare every field)."""
+    if heartbeat is None:
+        return None
+    if heartbeat.autopilot == _C.MAV_AUTOPILOT_ARDUPILOTMEGA:
+        return "arduplane" if heartbeat.type in _PLANE_TYPES else "ardupilot"
+    if heartbeat.autopilot == _C.MAV_AUTOPILOT_PX4:
+        return "px4"
+    return None
+
+
+def readback_rule(firmware: str, item: MissionItem) -> str:
+    """The eight-letter rule (see above) by which `firmware` gives `item` back on download."""
+    kind = item.mission_type
+    if firmware == "px4":
+        if kind == _C.MAV_MISSION_TYPE_MISSION and item.frame == _C.MAV_FRAME_MISSION:
+            return _PX4_MISSION_FRAME_BY_COMMAND.get(item.command, _PX4_MISSION_FRAME)
+        return _PX4_POSITION.get(item.command, _AS_SENT)
+    table = {_C.MAV_MISSION_TYPE_FENCE: _ARDUPILOT_FENCE, _C.MAV_MISSION_TYPE_RALLY: _ARDUPILOT_RALLY}.get(
+        kind, _ARDUPLANE_MISSION if firmware == "arduplane" else _ARDUPILOT_MISSION)
+    return table.get(item.command, _AS_SENT)
+
+
+def _whole(v: float) -> int:
+    return 0 if not math.isfinite(v) else math.trunc(v)
+
+
+def _kept_equal(kind: str, a, b) -> bool:
+    """Whether sent value `a` and read-back `b` are the same value as the firmware keeps it (`kind`)."""
+    if kind == "-":
+        return True
+    if kind == "e":
+        return a == b
+    if kind == "g":
+        return _f32(float(a)) == _f32(float(b))
+    if kind == "i":
+        return _whole(a) == _whole(b)
+    if kind == "c":
+        return min(255, _whole(a)) == min(255, _whole(b))
+    if kind == "b":
+        return (a > 0) == (b > 0)
+    if kind == "s":
+        return (a < 0) == (b < 0)
+    if math.isnan(a) or math.isnan(b):
+        return math.isnan(a) and math.isnan(b)
+    if kind == "y":
+        return abs((a - b + 180.0) % 360.0 - 180.0) < 1e-3
+    if kind == "h":
+        # whole centimetres, converted in float32 each way: within 1 cm (and float32's relative error)
+        return abs(a - b) <= 0.01 + abs(a) * 2.0 ** -22
+    return _same_field(float(a), float(b))   # "f"
+
+
+def _frame_equal(kind: str, a: int, b: int) -> bool:
+    if kind == "-":
+        return True
+    if kind == "L" and a in ALT_REFERENCE and b in ALT_REFERENCE:
+        return ALT_REFERENCE[a] == ALT_REFERENCE[b]
+    return _INT_TWIN.get(a, a) == _INT_TWIN.get(b, b)
+
+
+def _difference(a: MissionItem, b: MissionItem, firmware: str | None) -> str | None:
+    """The name of the first field where read-back `b` differs from sent `a`; None when they agree."""
+    if firmware is None:
+        return next((n for n in _COMPARED if not _same_field(getattr(a, n), getattr(b, n))), None)
+    for name in ("command", "mission_type"):
+        if getattr(a, name) != getattr(b, name):
+            return name
+    rule = readback_rule(firmware, a)
+    if not _frame_equal(rule[7], a.frame, b.frame):
+        return "frame"
+    for kind, name in zip(rule, ("param1", "param2", "param3", "param4", "x", "y", "z")):
+        if not _kept_equal(kind, getattr(a, name), getattr(b, name)):
+            return name
+    # ArduPilot sends autocontinue = 1 for every item (MissionItemProtocol_Waypoints::get_item); PX4 keeps it.
+    if firmware == "px4" and bool(a.autocontinue) != bool(b.autocontinue):
+        return "autocontinue"
+    return None
+
+
 def compare_items(sent: Sequence[MissionItem], got: Sequence[MissionItem], *, where: str = "read-back",
-                  home_replaced: bool = False) -> None:
-    """Raise LinkError naming the first item and field where `got` differs from `sent` on the wire
-    (floats as float32, NaN equal to NaN - what MissionItem.same_on_wire compares)."""
+                  home_replaced: bool = False, firmware: str | None = None) -> None:
+    """Raise LinkError naming the first item and field where `got` differs from `sent`.
+
+    firmware None: every field as it travels (floats as float32, NaN equal to NaN - what
+    MissionItem.same_on_wire compares). firmware "ardupilot", "arduplane" or "px4": as that firmware keeps
+    the item (readback_rule), so its normal conversions are not differences but any change of command,
+    coordinates or a kept value still is."""
     if len(sent) != len(got):
         raise LinkError(f"the vehicle holds {len(got)} items, {len(sent)} were sent", where=where,
                         hint="upload again; if it repeats, the vehicle is dropping items")
     for i, (a, b) in enumerate(zip(sent, got)):
         if a.same_on_wire(b):
             continue
-        for name in _COMPARED:
-            if home_replaced and i == 0 and name != "command":
-                continue  # ArduPilot keeps its home position in item 0
+        if home_replaced and i == 0:
+            name = "command" if a.command != b.command else None  # ArduPilot keeps its home position in item 0
+        else:
+            name = _difference(a, b, firmware)
+        if name is not None:
             va, vb = getattr(a, name), getattr(b, name)
-            if not _same_field(va, vb):
-                raise LinkError(f"item {i} differs in {name}: sent {va!r}, vehicle holds {vb!r}",
-                                where=f"{where}, item {i}",
-                                hint="the vehicle changed or lost the item; do not fly this mission - upload again")
+            raise LinkError(f"item {i} differs in {name}: sent {va!r}, vehicle holds {vb!r}",
+                            where=f"{where}, item {i}",
+                            hint="the vehicle changed or lost the item; do not fly this mission - upload again")
 
 
 # -- files <-> vehicle (what `wiris mission upload/download` run) -------------------------------------
@@ -731,13 +1077,29 @@ def download_file(link: Link, out: str, *, target_system: int | None = None, tar
     notes: list[str] = []
     extra: dict[int, list[MissionItem]] = {}
     if suffix in PLAN_SUFFIXES:
+        # mission_type is a MAVLink 2 extension: a vehicle that answered our (MAVLink 2) list request in
+        # MAVLink 1 cannot carry a fence or rally list (ArduPilot answers UNSUPPORTED, GCS_Common.cpp
+        # mavlink2_requirement_met, in a MAVLink 1 ack without the mission_type that says which list). Its
+        # answer, not its HEARTBEAT: PX4 talks MAVLink 1 until it hears MAVLink 2.
+        mavlink1 = res.mavlink1
         for kind in (mavlink2.MAV_MISSION_TYPE_FENCE, mavlink2.MAV_MISSION_TYPE_RALLY):
-            try:
-                extra[kind], _ = client.download(mission_type=kind)
-            except LinkError as err:
+            name = TYPE_NAMES[kind]
+            if mavlink1:
                 extra[kind] = []
-                notes.append(f"{TYPE_NAMES[kind]} not downloaded: {err.message}")
-            lists[TYPE_NAMES[kind]] = len(extra[kind])
+                notes.append(f"{name} not downloaded: the vehicle talks MAVLink 1, which cannot carry fence or "
+                             "rally lists")
+            else:
+                try:
+                    extra[kind], _ = client.download(mission_type=kind)
+                except ListUnsupported as err:      # the vehicle has no such list: an empty one is the truth
+                    extra[kind] = []
+                    notes.append(f"{name} not downloaded: {err.message}")
+                except LinkError as err:
+                    # An empty list in the file would claim "no fence" for a vehicle that has one.
+                    raise LinkError(f"the {name} list could not be downloaded, so no file was written: "
+                                    f"{err.message}", where=err.where,
+                                    hint=f"{err.hint}; to save the mission alone, use -o FILE.waypoints") from None
+            lists[name] = len(extra[kind])
     try:  # what the vehicle holds may not fit the file form (an infinite float): say where it goes
         if suffix in PLAN_SUFFIXES:
             text = write_plan(items, home, firmware=int(hb.autopilot), vehicle=int(hb.type),

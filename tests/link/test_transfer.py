@@ -231,8 +231,8 @@ def test_download_refused_by_the_vehicle_says_what_to_do(refused, answer, text):
 
 
 def test_lost_final_ack_is_unconfirmed_and_verify_settles_it():
-    """ArduPilot answers a repeated last item with INVALID_SEQUENCE once it is done; if its
-    ACCEPTED ack was lost, upload says 'unconfirmed' and upload_verified proves it by read-back."""
+    """ArduPilot answers a repeated last item with MAV_MISSION_ERROR once it is done (GCS_Common.cpp); if
+    its ACCEPTED ack was lost, upload says 'unconfirmed' and upload_verified proves it by read-back."""
     state = {"drop": 1}
     with VehicleSim(flavour="ardupilot") as sim:
         original = sim._ack

@@ -225,3 +225,109 @@ def test_signed_vehicle_needs_the_key(tmp_path, plan_file):
         r = run("mission", "upload", str(plan_file), "--connect", url, "--signing-key", str(key), "--verify")
         assert r.exit_code == 0, r.output
         assert sim.link.stats["rejected_signature"] > 0
+
+
+class LossyFenceSim(VehicleSim):
+    """A vehicle whose answer to the request for fence item 2 never gets through the radio."""
+
+    def _handle(self, msg):
+        if msg.get_type() == "MISSION_REQUEST_INT" and msg.mission_type == MISSION_TYPE_FENCE and msg.seq == 2:
+            return
+        super()._handle(msg)
+
+
+class NoFenceSim(VehicleSim):
+    """ArduPilot built without fences: GCS_Common.cpp handle_mission_request_list answers UNSUPPORTED."""
+
+    def _handle(self, msg):
+        if msg.get_type() == "MISSION_REQUEST_LIST" and msg.mission_type == MISSION_TYPE_FENCE:
+            self._ack((msg.get_srcSystem(), msg.get_srcComponent()), 3, MISSION_TYPE_FENCE)  # UNSUPPORTED
+            return
+        super()._handle(msg)
+
+
+SQUARE = [MissionItem(command=5001, frame=0, param1=4.0, x=473977507 + 1000 * (i % 2), y=85456075 + 1000 * (i // 2),
+                      mission_type=MISSION_TYPE_FENCE) for i in range(4)]
+
+
+def test_download_fails_and_writes_nothing_when_a_list_fails(tmp_path):
+    out = tmp_path / "vehicle.plan"
+    with LossyFenceSim(flavour="px4") as sim:
+        sim.set_items(ITEMS)
+        sim.set_items(SQUARE, MISSION_TYPE_FENCE)
+        r = run("mission", "download", "--connect", f"udpout:127.0.0.1:{sim.port}", "-o", str(out))
+    assert r.exit_code == 1 and "Traceback" not in r.output, r.output
+    assert "fence on system 1: the fence list could not be downloaded, so no file was written: item 2 of 4" in r.output
+    assert "hint:" in r.output and "-o FILE.waypoints" in r.output
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_download_of_a_vehicle_without_a_fence_list_writes_an_empty_one(tmp_path):
+    out = tmp_path / "vehicle.plan"
+    with NoFenceSim(flavour="ardupilot") as sim:
+        sim.set_items([ITEMS[1].with_(frame=0, z=488.9), *ITEMS])
+        r = run("mission", "download", "--connect", f"udpout:127.0.0.1:{sim.port}", "-o", str(out))
+    assert r.exit_code == 0, r.output
+    assert "note: fence not downloaded: the vehicle has no fence list" in r.output
+    items, fence, rally, _home = load_plan(out)
+    compare_items(ITEMS, items)
+    assert fence == [] and rally == []
+
+
+def test_download_from_a_mavlink1_vehicle_skips_fence_and_rally(tmp_path):
+    out = tmp_path / "vehicle.plan"
+    with VehicleSim(flavour="ardupilot", mavlink1=True) as sim:
+        sim.set_items([ITEMS[1].with_(frame=0, z=488.9), *ITEMS])
+        sim.set_items(SQUARE, MISSION_TYPE_FENCE)
+        r = run("mission", "download", "--connect", f"udpout:127.0.0.1:{sim.port}", "-o", str(out), "--json")
+    assert r.exit_code == 0, r.output
+    summary = json.loads(r.output)
+    assert summary["items"] == {"mission": 4, "fence": 0, "rally": 0}
+    assert summary["notes"][0] == "fence not downloaded: the vehicle talks MAVLink 1, which cannot carry fence or " \
+                                  "rally lists"
+    compare_items(ITEMS, load_plan(out)[0])
+
+
+HUGE = {"fileType": "Plan", "version": 1, "groundStation": "QGroundControl",
+        "mission": {"version": 2, "firmwareType": 12, "vehicleType": 2, "cruiseSpeed": 15, "hoverSpeed": 5,
+                    "plannedHomePosition": [50.0, 14.0, 300],
+                    "items": [{"type": "SimpleItem", "command": 16, "frame": 3, "params": [0, 0, 0, None, 50.001,
+                                                                                           14.001, 40],
+                               "autoContinue": True, "doJumpId": 1}]},
+        "geoFence": {"version": 2, "polygons": [],
+                     "circles": [{"circle": {"center": [50.0, 14.0], "radius": 1e39}, "inclusion": True,
+                                  "version": 1}],
+                     "breachReturn": [50.0, 14.0, 1e39]},
+        "rallyPoints": {"version": 2, "points": [[50.0, 14.0, 1e39]]}}
+
+
+@pytest.mark.parametrize("kind,where", [("rally", "rallyPoints.points[0][2]"),
+                                        ("fence", "geoFence.circles[0].circle.radius")])
+def test_upload_of_a_number_beyond_float32_is_refused_before_connecting(tmp_path, kind, where):
+    doc = json.loads(json.dumps(HUGE))
+    if kind == "rally":   # the fence is read first: keep only the number under test
+        doc["geoFence"] = {"version": 2, "polygons": [], "circles": []}
+    f = tmp_path / "huge.plan"
+    f.write_text(json.dumps(doc))
+    with VehicleSim(flavour="px4") as sim:
+        r = run("mission", "upload", str(f), "--type", kind, "--connect", f"udpout:127.0.0.1:{sim.port}")
+        assert sim.stats["requests"] == 0 and sim.link.stats.get("received", 0) == 0
+    assert r.exit_code == 1 and f"{f}: {where}: 1E+39 is beyond the float32 range" in r.output, r.output
+    assert "hint: radii and altitudes travel as float32" in r.output
+
+
+@pytest.mark.parametrize("path,value", [("geoFence.breachReturn[2]", None), ("mission.plannedHomePosition[2]", 1e39),
+                                        ("geoFence.circles[0].circle.radius", None)])
+def test_plan_numbers_beyond_float32_are_located(path, value):
+    doc = json.loads(json.dumps(HUGE))
+    doc["rallyPoints"]["points"] = []
+    if path != "geoFence.circles[0].circle.radius":
+        doc["geoFence"]["circles"] = []
+    if value is not None:
+        doc["mission"]["plannedHomePosition"][2] = value
+    from missions.errors import PlanError
+    from missions.planfile import read_plan
+
+    with pytest.raises(PlanError) as err:
+        read_plan(json.dumps(doc), "x.plan")
+    assert err.value.where == f"x.plan: {path}" and "float32" in err.value.message and err.value.hint

@@ -74,7 +74,8 @@ def _progress(label: str, quiet: bool):
 @click.argument("file", type=click.Path(exists=True, dir_okay=False))
 @click.option("--type", "kind", type=click.Choice(TYPES), default="mission", show_default=True,
               help="which list to upload (fence and rally come from a .plan file)")
-@click.option("--verify", is_flag=True, help="download again after the upload and compare field by field")
+@click.option("--verify", is_flag=True,
+              help="download again after the upload and compare each item as the vehicle's firmware keeps it")
 @click.option("--part", type=click.IntRange(1), default=None,
               help="for a capture plan split at the vehicle's item limit: the part to upload")
 @click.option("--firmware", type=click.Choice(["ardupilot", "px4"]), default=None,
