@@ -34,6 +34,7 @@ from typing import Any, Sequence
 
 from missions.errors import PlanError
 from missions.firmware import FirmwareProfile
+from missions.geo import great_circle_m
 from missions.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem, deg_to_e7, mavlink
 from missions import lua as bridge
 from missions.setup import commands_for
@@ -46,7 +47,6 @@ BRIDGE_PAUSE_S = 1.0           # hold between Lua bridge batches so the 5-item s
 # NAV_LAND is steeper than FW_LND_ANG (default 5°; FeasibilityChecker::checkFixedWindLandApproach), and an
 # ArduPlane given no approach dives onto the point. 5° is a normal glide slope for small fixed-wings.
 MAX_GLIDE_DEG = 5.0
-EARTH_RADIUS_M = 6371008.8
 
 
 @dataclass(frozen=True)
@@ -334,7 +334,7 @@ class Emitter:
 
     def _check_glide(self, lat: float, lon: float, where: str | None) -> None:
         plat, plon, alt = self.s.last_pos
-        dist = _distance_m(plat, plon, lat, lon)
+        dist = great_circle_m(plat, plon, lat, lon)
         need = alt / math.tan(math.radians(MAX_GLIDE_DEG))
         if alt > 0 and dist < need:
             angle = 90.0 if dist <= 0 else math.degrees(math.atan2(alt, dist))
@@ -356,10 +356,3 @@ class Emitter:
             self._check_glide(lat, lon, where)
         cmd = mavlink.MAV_CMD_NAV_VTOL_LAND if self.frame == "vtol" else mavlink.MAV_CMD_NAV_LAND
         self._add(_nav(cmd, lat, lon, 0.0, comment="land"))
-
-
-def _distance_m(lat1: float, lon1: float, lat2: float, lon2: float) -> float:
-    """Great-circle distance (haversine): enough for a glide slope over a few kilometres."""
-    p1, p2 = math.radians(lat1), math.radians(lat2)
-    h = math.sin((p2 - p1) / 2) ** 2 + math.cos(p1) * math.cos(p2) * math.sin(math.radians(lon2 - lon1) / 2) ** 2
-    return 2 * EARTH_RADIUS_M * math.asin(min(1.0, math.sqrt(h)))

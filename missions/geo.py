@@ -28,6 +28,15 @@ MAX_ABS_LAT_DEG = 85.0
 # An aeqd plane is accurate to 1e-5 within 50 km of its centre; a single survey larger than this is
 # certainly a unit mistake (a projected CRS read as degrees) or should be split into several plans.
 MAX_EXTENT_M = 200_000.0
+EARTH_RADIUS_M = 6371008.8   # mean radius (IUGG)
+
+
+def great_circle_m(lat1: float, lon1: float, lat2: float, lon2: float) -> float:
+    """Distance in metres between two points in degrees (haversine on the mean sphere): what a glide slope
+    or a camera's own trigger spacing needs over a few kilometres, without a projection."""
+    p1, p2 = math.radians(lat1), math.radians(lat2)
+    h = math.sin((p2 - p1) / 2) ** 2 + math.cos(p1) * math.cos(p2) * math.sin(math.radians(lon2 - lon1) / 2) ** 2
+    return 2 * EARTH_RADIUS_M * math.asin(min(1.0, math.sqrt(h)))
 
 
 def leaf_parts(g: Any, geom_type: str) -> Iterator[Any]:

@@ -63,6 +63,7 @@ from dataclasses import dataclass
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from missions.items import MISSION_TYPE_MISSION, MissionItem
+from missions.planfile import FLOAT32_MAX
 from wiris_tools.errors import LinkError
 from wiris_tools.link import Link
 
@@ -196,16 +197,13 @@ def opaque_id_of(msg) -> int:
     return struct.unpack_from("<I", payload, off)[0]
 
 
-_FLOAT32_MAX = 3.4028234663852886e38
-
-
 def _check_encodable(items: Sequence[MissionItem], where: str) -> None:
     """LinkError naming the first item whose fields MISSION_ITEM_INT cannot carry - before MISSION_COUNT,
     which on ArduPilot already cuts the vehicle's mission to the new count."""
     for i, it in enumerate(items):
         for name in ("param1", "param2", "param3", "param4", "z"):
             v = getattr(it, name)
-            if math.isfinite(v) and abs(v) > _FLOAT32_MAX:
+            if math.isfinite(v) and abs(v) > FLOAT32_MAX:
                 raise LinkError(f"item {i} ({_describe(it)}) has {name} = {v:g}, beyond the float32 range "
                                 "MISSION_ITEM_INT carries", where=f"{where}, item {i}",
                                 hint="fix the value in the file (at most ±3.4e38); nothing was sent")

@@ -48,6 +48,8 @@ from typing import Any
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from cdf.catalogue import Camera, Setting
+from cdf.errors import CdfError
+from missions.geo import great_circle_m
 from wiris_tools.emulate import paramext
 
 Message = Any
@@ -56,7 +58,6 @@ HEARTBEAT_S = 1.0
 STATE_VALID_S = 5.0          # "override ... for 5 seconds since the last state message was received"
 DEFAULT_SYSTEM_ID = 255      # "defaults to 255 otherwise"
 ALL_SENSORS = 255            # DIGICAM_CONFIGURE extra_param: "Set to 255 for all"
-EARTH_RADIUS_M = 6371008.8
 MIN_TIMER_S = 1.0
 UINT64_MAX = 2**64 - 1
 MAVLINK2_MAGIC = b"\xfd"
@@ -143,7 +144,7 @@ class RedEdgeState:
                                                  int(hb.get("system_status", 0))))
             self._next_heartbeat = now + HEARTBEAT_S
         if self._auto_mode() == "timer" and now >= self._next_timer:
-            if self._high_enough():
+            if self._high_enough(self._height_m()):
                 self._auto_capture(now)
             self._next_timer = now + max(MIN_TIMER_S, self.values.get("timerPeriod", 2.0))
         return out
@@ -240,16 +241,16 @@ class RedEdgeState:
             return None
         return (self.pos[2] - self.ground_mm) / 1000.0
 
-    def _high_enough(self) -> bool:
-        """Whether the automatic capture modes are enabled: at most opAltTolerance below operatingAlt."""
-        height = self._height_m()
+    def _high_enough(self, height: float | None) -> bool:
+        """Whether the automatic capture modes are enabled at `height` (self._height_m()): at most
+        opAltTolerance below operatingAlt."""
         target = self.values.get("operatingAlt")
         return height is not None and target is not None and \
             height >= target - self.values.get("opAltTolerance", 0)
 
     def _overlap_check(self, now: float) -> None:
         height = self._height_m()
-        if not self._high_enough() or not self.sensor_mm or not self.focal_mm:
+        if not self._high_enough(height) or not self.sensor_mm or not self.focal_mm:
             return
         lat, lon = self.pos[0], self.pos[1]
         if self._last_auto_pos is None:
@@ -257,7 +258,8 @@ class RedEdgeState:
             return
         along_m = height * self.sensor_mm[1] / self.focal_mm
         spacing = along_m * (1.0 - self.values.get("overlapAlongTrk", 75.0) / 100.0)
-        if _distance_m(self._last_auto_pos, (lat, lon)) >= spacing:
+        last = self._last_auto_pos
+        if great_circle_m(last[0] / 1e7, last[1] / 1e7, lat / 1e7, lon / 1e7) >= spacing:
             self._auto_capture(now)
 
     def _auto_capture(self, now: float) -> None:
@@ -345,23 +347,14 @@ class RedEdgeState:
 
 
 def _allowed(s: Setting, value: float | int | None) -> bool:
-    if value is None or not math.isfinite(value):
-        return False
-    if s.options:
-        return value == int(value) and any(o.value == int(value) for o in s.options)
-    if s.min is not None and value < s.min:
-        return False
-    if s.max is not None and value > s.max:
+    """Whether the catalogue takes `value` for `s` (its options or range, whole numbers for integer types,
+    finite): the camera keeps its value otherwise."""
+    try:
+        s.check(value)
+    except CdfError:
         return False
     return True
 
 
 def _wrap180(deg: float) -> float:
     return (deg + 180.0) % 360.0 - 180.0
-
-
-def _distance_m(a: tuple[int, int], b: tuple[int, int]) -> float:
-    lat1, lon1 = math.radians(a[0] / 1e7), math.radians(a[1] / 1e7)
-    lat2, lon2 = math.radians(b[0] / 1e7), math.radians(b[1] / 1e7)
-    h = math.sin((lat2 - lat1) / 2) ** 2 + math.cos(lat1) * math.cos(lat2) * math.sin((lon2 - lon1) / 2) ** 2
-    return 2 * EARTH_RADIUS_M * math.asin(min(1.0, math.sqrt(h)))
