@@ -16,6 +16,7 @@ from click.testing import CliRunner
 from cdf.catalogue import catalogue
 from missions.compiled import SetupStep
 from missions.setup import dumps_setup
+from raw_peers import timed_call
 from wiris_tools.camera_client import CameraClient, load_setup, parse_setup
 from wiris_tools.cli import cli
 from wiris_tools.emulate.runner import start_emulator
@@ -819,27 +820,16 @@ def test_set_gives_up_on_a_camera_that_answers_in_progress_for_ever():
     cam.subscribe(pending.append, "PARAM_EXT_SET", to_me=True)
     reporter = threading.Thread(target=busy, daemon=True)
     reporter.start()
-    outcome: dict = {}
     try:
         with Link(f"udpout:127.0.0.1:{cam.local_port}", heartbeat_s=0.2) as link:
             client = CameraClient(link, timeout_s=0.1, retries=2)
-
-            def call():
-                try:
-                    outcome["value"] = client.set_param_ext("EMISSIVITY", 0.9, "float")
-                except LinkError as err:
-                    outcome["error"] = err
-
-            caller = threading.Thread(target=call, daemon=True)
-            started = time.monotonic()
-            caller.start()
-            caller.join(IN_PROGRESS_TIMEOUTS * 0.1 + 5)
-            waited = time.monotonic() - started
-            assert not caller.is_alive(), "still waiting on a camera that only answers IN_PROGRESS"
+            call = timed_call(lambda: client.set_param_ext("EMISSIVITY", 0.9, "float"),
+                              IN_PROGRESS_TIMEOUTS * 0.1 + 5)
+            assert call.finished, "still waiting on a camera that only answers IN_PROGRESS"
     finally:
         stop.set()
         reporter.join(2)
         cam.close()
-    err = outcome["error"]
+    err = call.error
     assert "PARAM_ACK_IN_PROGRESS" in err.message and err.where == "EMISSIVITY" and "--timeout" in err.hint
-    assert IN_PROGRESS_TIMEOUTS * 0.1 <= waited < IN_PROGRESS_TIMEOUTS * 0.1 + 3
+    assert IN_PROGRESS_TIMEOUTS * 0.1 <= call.waited < IN_PROGRESS_TIMEOUTS * 0.1 + 3

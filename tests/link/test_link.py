@@ -6,11 +6,11 @@ from __future__ import annotations
 import math
 import socket
 import threading
-import time
 
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from raw_peers import timed_call
 from wiris_tools.errors import LinkError
 from wiris_tools.link import Link, command_name
 from wiris_tools.signing import key_from_text, load_signing_key
@@ -123,27 +123,17 @@ def test_a_target_that_reports_progress_for_ever_is_given_up_on(links):
     a.subscribe(lambda msg: asked.set(), "COMMAND_LONG", to_me=True)
     reporter = threading.Thread(target=busy, daemon=True)
     reporter.start()
-    outcome: dict = {}
-
-    def call():
-        try:
-            outcome["ack"] = b.command_long(1, 100, mavlink2.MAV_CMD_STORAGE_FORMAT, [1, 1], timeout=0.1, retries=1,
-                                            progress=outcome.setdefault("progress", []).append)
-        except LinkError as err:
-            outcome["error"] = err
-
-    caller = threading.Thread(target=call, daemon=True)
-    started = time.monotonic()
-    caller.start()
-    caller.join(IN_PROGRESS_TIMEOUTS * 0.1 + 5)
-    waited = time.monotonic() - started
+    progress: list[int] = []
+    call = timed_call(lambda: b.command_long(1, 100, mavlink2.MAV_CMD_STORAGE_FORMAT, [1, 1], timeout=0.1,
+                                             retries=1, progress=progress.append),
+                      IN_PROGRESS_TIMEOUTS * 0.1 + 5)
     stop.set()
     reporter.join(2)
-    assert not caller.is_alive(), "still waiting on a target that only reports progress"
-    err = outcome["error"]
+    assert call.finished, "still waiting on a target that only reports progress"
+    err = call.error
     assert "MAV_CMD_STORAGE_FORMAT" in str(err) and "IN_PROGRESS" in err.message and err.hint
-    assert IN_PROGRESS_TIMEOUTS * 0.1 <= waited < IN_PROGRESS_TIMEOUTS * 0.1 + 3
-    assert outcome["progress"][:1] == [50]
+    assert IN_PROGRESS_TIMEOUTS * 0.1 <= call.waited < IN_PROGRESS_TIMEOUTS * 0.1 + 3
+    assert progress[:1] == [50]
 
 
 def test_retries_increment_confirmation_then_fail_naming_command(links):

@@ -11,6 +11,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from missions.items import (FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MISSION_TYPE_FENCE, MISSION_TYPE_MISSION,
                             MISSION_TYPE_RALLY, MissionItem)
+from raw_peers import scripted_vehicle
 from wiris_tools.errors import LinkError
 from wiris_tools.link import Link
 from wiris_tools.transfer import MissionClient, Timeouts, UploadUnconfirmed, compare_items
@@ -149,14 +150,6 @@ def test_empty_or_oversized_upload_is_refused():
         with pytest.raises(LinkError, match="65536 items do not fit the protocol's 16-bit count") as err:
             MissionClient(link).upload(waypoints(1) * 65536)
         assert err.value.where == "mission on system 1" and "split the mission" in err.value.hint
-
-
-def scripted_vehicle(script, types=("MISSION_COUNT", "MISSION_ITEM_INT")):
-    """A raw vehicle on a Link: `script(link, msg)` answers each mission message of `types`."""
-    veh = Link("udpin:127.0.0.1:0", system=1, component=1, mav_type=mavlink2.MAV_TYPE_QUADROTOR,
-               autopilot=mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA, heartbeat_s=0.2)
-    veh.subscribe(lambda m: script(veh, m), list(types), to_me=True)
-    return veh
 
 
 def test_stale_accepted_ack_does_not_end_an_upload():

@@ -19,6 +19,7 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from missions.items import MISSION_TYPE_FENCE, MISSION_TYPE_MISSION, MissionItem
+from raw_peers import scripted_vehicle
 from wiris_tools.errors import LinkError
 from wiris_tools.link import Link
 from wiris_tools.transfer import MissionClient, Timeouts, UploadUnconfirmed, compare_items, home_item
@@ -333,13 +334,6 @@ def test_a_deferred_accepted_is_waited_for_and_a_busy_vehicle_asked_again():
         worker.join()
     assert sim.stats["nacks"] > nacks and done and len(got) == len(WAYPOINTS)
     assert all(a.same_on_wire(b) for a, b in zip(reversed(WAYPOINTS), got))
-
-
-def scripted_vehicle(script, types):
-    veh = Link("udpin:127.0.0.1:0", system=1, component=1, mav_type=C.MAV_TYPE_QUADROTOR,
-               autopilot=C.MAV_AUTOPILOT_ARDUPILOTMEGA, heartbeat_s=0.2)
-    veh.subscribe(lambda m: script(veh, m), list(types), to_me=True)
-    return veh
 
 
 def test_list_request_denied_while_busy_is_asked_again():

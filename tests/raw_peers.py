@@ -1,0 +1,53 @@
+"""Hand-scripted MAVLink peers and a bounded call in a thread, for the link tests.
+
+    veh = raw_peers.scripted_vehicle(script, ("MISSION_COUNT", "MISSION_ITEM_INT"))  # script(veh, msg) answers
+    call = raw_peers.timed_call(lambda: link.command_long(...), limit_s=6)          # never blocks the test
+    call.finished, call.waited, call.value, call.error
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from wiris_tools.errors import LinkError
+from wiris_tools.link import Link
+
+
+def scripted_vehicle(script, types=("MISSION_COUNT", "MISSION_ITEM_INT")) -> Link:
+    """A raw vehicle on a Link (ArduPilot quadrotor, system 1): `script(link, msg)` answers each message of
+    `types` addressed to it."""
+    veh = Link("udpin:127.0.0.1:0", system=1, component=1, mav_type=mavlink2.MAV_TYPE_QUADROTOR,
+               autopilot=mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA, heartbeat_s=0.2)
+    veh.subscribe(lambda m: script(veh, m), list(types), to_me=True)
+    return veh
+
+
+@dataclass
+class TimedCall:
+    finished: bool          # False: still running after limit_s (a wait that is not bounded)
+    waited: float           # seconds from start until it returned (or the limit)
+    value: Any = None
+    error: LinkError | None = None
+
+
+def timed_call(fn: Callable[[], Any], limit_s: float) -> TimedCall:
+    """Run `fn` in a daemon thread for at most `limit_s`: its value or LinkError, and how long it took."""
+    outcome: dict = {}
+
+    def call() -> None:
+        try:
+            outcome["value"] = fn()
+        except LinkError as err:
+            outcome["error"] = err
+
+    caller = threading.Thread(target=call, daemon=True)
+    started = time.monotonic()
+    caller.start()
+    caller.join(limit_s)
+    waited = time.monotonic() - started
+    return TimedCall(not caller.is_alive(), waited, outcome.get("value"), outcome.get("error"))
