@@ -13,7 +13,7 @@ from __future__ import annotations
 import functools
 import re
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, Callable, NamedTuple
 
 XSD_PATH = Path(__file__).resolve().parents[1] / "schema" / "mavlinkcamera.xsd"
 
@@ -235,12 +235,14 @@ def _attributes_conform(values: tuple[str | None, ...]) -> bool:
     return ptype is None or all(v is None or _lexical_ok(v, ptype) for v in (default, lo, hi, step))
 
 
-def schema_hits(root, structure_ok: bool | None = None, attributes: list[tuple] | None = None) -> list[Hit]:
+def schema_hits(root, structure_ok: bool | None = None, attributes: list[tuple] | None = None, *,
+                as_written: Callable[[], Any] | None = None) -> list[Hit]:
     """XSD findings for a document whose root is <mavlinkcamera> (other roots: CDF101, semantic.py).
-    `structure_ok`, `attributes`: see conforms_fast."""
+    `structure_ok`, `attributes`: see conforms_fast. `as_written`: when `root` was parsed without its
+    blank text (engine._hits), a function giving the tree as written, which xmlschema judges."""
     if root.tag != "mavlinkcamera" or conforms_fast(root, structure_ok, attributes):
         return []
-    return xmlschema_hits(root)
+    return xmlschema_hits(root if as_written is None else as_written())
 
 
 def xmlschema_hits(root) -> list[Hit]:

@@ -656,9 +656,19 @@ def scan_tree(root, data: bytes | None = None) -> TreeScan:
     `data`: the bytes `root` was parsed from, if at hand (the proof's shortcut). tests/cdf/
     test_validate_speed.py holds proof and walk to the same answers, and the walk's structure verdict to
     the XPath statement in schema.py."""
+    return prove_tree(root, data) or walk_tree(root)
+
+
+def prove_tree(root, data: bytes | None = None) -> TreeScan | None:
+    """scan_tree's answer when libxml2's proof settles the document, else None."""
     pairs = vocabulary.unknown_attributes(root, data)
-    if pairs is not None:
-        return TreeScan(tuple(_unknown_attribute_hits(root, pairs)), True, proved=True)
+    if pairs is None:
+        return None
+    return TreeScan(tuple(_unknown_attribute_hits(root, pairs)), True, proved=True)
+
+
+def walk_tree(root) -> TreeScan:
+    """scan_tree's answer from the Python walk alone."""
     hits = list(_vocabulary_walk(root, structure := []))
     return TreeScan(tuple(hits), not structure)
 
