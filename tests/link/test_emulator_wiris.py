@@ -131,8 +131,15 @@ def test_commands_the_manual_does_not_list_are_unsupported(pro, gcs):
     for cmd in (m.MAV_CMD_SET_CAMERA_FOCUS, m.MAV_CMD_COMPONENT_ARM_DISARM, m.MAV_CMD_USER_4):
         assert m.enums["MAV_CMD"][cmd].name not in listed
         assert ack_of(pro.handle(gcs.cmd(cmd, 1), 0), cmd) == UNSUPPORTED
+    ci = gcs(gcs.mav.command_int_encode(1, 100, 0, m.MAV_CMD_SET_CAMERA_FOCUS, 0, 0, 1, 0, 0, 0, 0, 0, 0))
+    assert ack_of(pro.handle(ci, 0), m.MAV_CMD_SET_CAMERA_FOCUS) == UNSUPPORTED
+
+
+def test_command_int_for_a_listed_command_says_command_long_only(pro, gcs):
+    # §6.3 lists COMMAND_LONGs; common.xml's MAV_RESULT_COMMAND_LONG_ONLY tells the sender how to resend
     ci = gcs(gcs.mav.command_int_encode(1, 100, 0, m.MAV_CMD_REQUEST_CAMERA_INFORMATION, 0, 0, 1, 0, 0, 0, 0, 0, 0))
-    assert ack_of(pro.handle(ci, 0), m.MAV_CMD_REQUEST_CAMERA_INFORMATION) == UNSUPPORTED
+    assert ack_of(pro.handle(ci, 0), m.MAV_CMD_REQUEST_CAMERA_INFORMATION) == m.MAV_RESULT_COMMAND_LONG_ONLY
+    assert not [x for x in pro.handle(ci, 0) if x.get_type() == "CAMERA_INFORMATION"]
 
 
 def test_set_camera_mode_offsets_and_keep(pro, gcs):

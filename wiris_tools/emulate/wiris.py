@@ -220,8 +220,10 @@ class WirisState:
         if mtype == "COMMAND_LONG":
             return self._command(msg, now)
         if mtype == "COMMAND_INT":
-            # §6.3: the camera's commands are COMMAND_LONG; answer rather than leave the sender retrying
-            return [self._ack(msg, mavlink2.MAV_RESULT_UNSUPPORTED)]
+            # §6.3: the camera's commands are COMMAND_LONG; answer rather than leave the sender retrying,
+            # with common.xml's result that names the way to send one the camera knows
+            known = msg.command in self._cmd_names
+            return [self._ack(msg, mavlink2.MAV_RESULT_COMMAND_LONG_ONLY if known else mavlink2.MAV_RESULT_UNSUPPORTED)]
         if mtype in PARAM_EXT_MESSAGES:
             return self._param_ext(msg, mtype)
         if mtype == "FILE_TRANSFER_PROTOCOL" and self.ftp is not None:
