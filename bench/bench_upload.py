@@ -48,7 +48,8 @@ import mission_peers  # noqa: E402
 from missions.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem  # noqa: E402
 from missions.planfile import write_plan  # noqa: E402
 from wiris_tools.linkemu import LinkEmulator, LinkProfile  # noqa: E402
-from wiris_tools.transfer import compare_items, home_item  # noqa: E402
+from wiris_tools.readback import compare_items  # noqa: E402
+from wiris_tools.transfer import home_item  # noqa: E402
 from wiris_tools.vehicle_sim import VehicleSim  # noqa: E402
 
 BAUD = 57600

@@ -32,7 +32,7 @@ CRC32 of the item fields), MISSION_COUNT on download carries it too; MISSION_CLE
 COMMAND_LONG gets MAV_RESULT_UNSUPPORTED (ground stations probe capabilities). With
 `stores_like_firmware=True` a download gives each item back as that firmware does (params it
 does not keep as 0, whole numbers, centimetre altitudes, its frames, PX4's yaw through radians;
-firmware_readback, from transfer.readback_rule); otherwise exactly as it was sent.
+firmware_readback, from readback.readback_rule); otherwise exactly as it was sent.
 
     with VehicleSim("udpin:127.0.0.1:0", flavour="px4") as sim:
         url = f"udpout:127.0.0.1:{sim.port}"        # point a ground station at it
@@ -54,7 +54,8 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from missions.items import MissionItem
 from wiris_tools.link import Link
-from wiris_tools.transfer import ALT_REFERENCE, item_from_msg, readback_rule, with_opaque_id
+from wiris_tools.readback import ALT_REFERENCE, readback_rule
+from wiris_tools.transfer import item_from_msg, with_opaque_id
 
 
 @dataclass(frozen=True)
@@ -99,7 +100,7 @@ def _px4_yaw(deg: float) -> float:
 
 
 def _kept(kind: str, v):
-    """What the firmware sends back of value `v` kept as `kind` (the letters of transfer.readback_rule)."""
+    """What the firmware sends back of value `v` kept as `kind` (the letters of readback.readback_rule)."""
     if kind == "-":
         return 0 if isinstance(v, int) else 0.0
     if kind == "e":

@@ -14,7 +14,8 @@ from missions.items import (FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MISSION_TY
 from raw_peers import scripted_vehicle
 from wiris_tools.errors import LinkError
 from wiris_tools.link import Link
-from wiris_tools.transfer import MissionClient, Timeouts, UploadUnconfirmed, compare_items
+from wiris_tools.readback import compare_items
+from wiris_tools.transfer import MissionClient, Timeouts, UploadUnconfirmed
 from wiris_tools.vehicle_sim import VehicleSim
 
 FAST = Timeouts(ack_s=0.4, item_s=0.1, retries=3, nack_grace_s=0.8, first_s=0.2)

@@ -15,7 +15,7 @@ from missions.items import MISSION_TYPE_FENCE, MissionItem
 from missions.planfile import load_plan, write_plan
 from missions.wpl import load_wpl, write_wpl
 from wiris_tools.cli import cli
-from wiris_tools.transfer import compare_items
+from wiris_tools.readback import compare_items
 from wiris_tools.vehicle_sim import VehicleSim
 
 ROOT = Path(__file__).resolve().parents[2]

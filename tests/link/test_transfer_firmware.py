@@ -22,7 +22,8 @@ from missions.items import MISSION_TYPE_FENCE, MISSION_TYPE_MISSION, MissionItem
 from raw_peers import scripted_vehicle
 from wiris_tools.errors import LinkError
 from wiris_tools.link import Link
-from wiris_tools.transfer import MissionClient, Timeouts, UploadUnconfirmed, compare_items, home_item
+from wiris_tools.readback import compare_items
+from wiris_tools.transfer import MissionClient, Timeouts, UploadUnconfirmed, home_item
 
 FAST = Timeouts(ack_s=0.4, item_s=0.1, retries=3, nack_grace_s=0.8, first_s=0.2)
 C = mavlink2
