@@ -208,17 +208,19 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
             except PlanError as e:
                 raise _relocate(e, here) from None
             hold = max(HOVER_HOLD_S, info.min_interval_s or 0.0)
-            track = Track(points=tuple(TrackPoint(w.lat, w.lon, w.kind) for w in geo.waypoints),
+            track = Track(points=tuple(TrackPoint(w.lat, w.lon, w.kind, w.yaw_deg) for w in geo.waypoints),
                           spans=tuple((s.start_index, s.stop_index) for s in geo.camera_spans),
                           altitude_m=alt, trigger=step.trigger, trigger_distance_m=geo.trigger_distance_m,
                           interval_s=(geo.trigger_distance_m / speed), hold_s=hold,
                           autopilot_triggers=any(cameras[n].protocol != "rededge-serial" for n in step.payloads))
+            first = em.item_count
             em.track(track, where=plan.step_where(step, "trigger"))
             for w in geo.warnings:
                 warnings.append(f"{w.code}: {kind} at {here}: {w.message}")
             areas.append(AreaInfo(step=step.index, kind=kind, payloads=step.payloads, area=area, altitude_m=alt,
                                   front_overlap=step.front_pct / 100.0, side_overlap=step.side_pct / 100.0,
-                                  trigger=step.trigger, trigger_distance_m=geo.trigger_distance_m))
+                                  trigger=step.trigger, trigger_distance_m=geo.trigger_distance_m,
+                                  items=(first, em.item_count)))
             intent.append(geo)
         elif isinstance(step, WaypointStep):
             _check_reach(plan.home, step.lat, step.lon, "waypoint", here)

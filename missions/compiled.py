@@ -53,6 +53,10 @@ class AreaInfo:
     side_overlap: float
     trigger: str                    # "distance" | "interval" | "hover"
     trigger_distance_m: float | None = None
+    # The items this step emitted: [first, end) indices into Compiled.items (the whole mission, not a part).
+    # The report measures the step's overlaps, photo count and path against them; None (an AreaInfo built by
+    # hand, without a mission) measures every photo and the whole path near the area.
+    items: tuple[int, int] | None = None
 
 
 @dataclass(frozen=True)

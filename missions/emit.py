@@ -16,7 +16,8 @@ AP_Camera::set_trigger_distance() — so the compiler refuses two WIRIS on one d
   + DO_TRIGGER_CONTROL(1) at the entry, DO_TRIGGER_CONTROL(0) at the exit (PX4 camera_trigger, reference §3.2);
 - hover: a waypoint with a hold and one IMAGE_START_CAPTURE(total 1) — on ArduPilot param1 is the AP_Camera
   instance (0 = all, n = CAMn), on PX4 the target component (common.xml 7..255; PX4 ≥ PR #23115; PX4 turns
-  a single shot into DO_DIGICAM_CONTROL for every camera, reference §3.2).
+  a single shot into DO_DIGICAM_CONTROL for every camera, reference §3.2). On PX4 the waypoint's yaw (param4)
+  is its line's heading; ArduPilot drops it, and faces the line because the route arrives along it.
 - A RedEdge is never triggered by the mission: it takes COMMAND_LONG neither for 203 nor 2000 (reference
   §0.4); it captures itself in overlap mode (missions.setup) from the GPS the autopilot streams to it.
 
@@ -54,6 +55,7 @@ class TrackPoint:
     lat: float
     lon: float
     kind: str                  # turnaround | entry | exit | via | photo
+    yaw_deg: float | None = None   # a hover photo's heading from true north (its line's), where the firmware takes it
 
 
 @dataclass(frozen=True)
@@ -149,6 +151,11 @@ class Emitter:
     def result(self) -> Emitted:
         return Emitted(tuple(self.s.items), self.s.lua, tuple(self.s.warnings))
 
+    @property
+    def item_count(self) -> int:
+        """Items emitted so far: a step's items are [count before it, count after it)."""
+        return len(self.s.items)
+
     # ------------------------------------------------------------------------------------------ steps
     def takeoff(self, alt_m: float) -> None:
         lat, lon = self.home
@@ -169,6 +176,13 @@ class Emitter:
         ground speed (Plane::do_change_speed sets MIN_GNDSPD, which stays after the mission, RTL included) and
         keeps its cruise airspeed: the plan's speed has to be its airspeed there."""
         return self.profile.name == "ardupilot" and self.frame in ("plane", "vtol")
+
+    @property
+    def keeps_waypoint_yaw(self) -> bool:
+        """NAV_WAYPOINT's param4 (yaw) is flown: PX4 keeps it (mavlink_mission.cpp -> mission_item.yaw; a finite
+        yaw is the heading setpoint, over MPC_YAW_MODE). ArduPilot's AP_Mission stores only a waypoint's hold time
+        and drops the yaw at upload; there the route's turnaround stubs set a hover photo's heading."""
+        return self.profile.name == "px4"
 
     def set_speed(self) -> None:
         # param1 SPEED_TYPE_GROUNDSPEED: the plan's speed is over ground (photo spacing depends on it), except
@@ -194,8 +208,10 @@ class Emitter:
         stops = {b for _, b in t.spans}
         for i, p in enumerate(t.points):
             if t.trigger == "hover" and p.kind == "photo":
-                self._add(_nav(mavlink.MAV_CMD_NAV_WAYPOINT, p.lat, p.lon, t.altitude_m, p1=t.hold_s,
-                               comment=f"hover {t.hold_s:g} s and shoot"))
+                yaw = p.yaw_deg if p.yaw_deg is not None and self.keeps_waypoint_yaw else NAN
+                self._add(_nav(mavlink.MAV_CMD_NAV_WAYPOINT, p.lat, p.lon, t.altitude_m, p1=t.hold_s, p4=yaw,
+                               comment=f"hover {t.hold_s:g} s and shoot"
+                                       + ("" if math.isnan(yaw) else f" facing {yaw:.1f}°")))
                 self._add(self._capture(None, where))
                 continue
             self._add(_nav(mavlink.MAV_CMD_NAV_WAYPOINT, p.lat, p.lon, t.altitude_m, comment=p.kind))

@@ -28,8 +28,9 @@ How the items are flown (the model, stated so it can be checked):
   id, 1..6 = camera instance n (the n-th non-RedEdge payload, as the compiler numbers them). A RedEdge that
   the setup puts in its own overlap mode shoots by itself (see `self_triggering`).
 * Footprint: nadir, centred on the photo position, at the photo's altitude, rotated to the vehicle's heading
-  — the direction of travel (ArduPilot's WP_YAW_BEHAVIOR default and PX4's MPC_YAW_MODE default) or the yaw of
-  a NAV_WAYPOINT's param4 when it sets one (a hover photo keeps the heading the vehicle arrived with).
+  — the direction of travel (ArduPilot's WP_YAW_BEHAVIOR default and PX4's MPC_YAW_MODE default) or, on PX4,
+  the yaw of a NAV_WAYPOINT's param4 when it sets one (ArduPilot's AP_Mission does not store it). A hover photo
+  keeps the heading the vehicle arrived with: from the waypoint before, or the waypoint's own yaw on PX4.
 * Flight time: every segment is flown with a trapezoidal speed profile (acceleration ACCEL_MPS2, cruise
   speed from the plan or the last DO_CHANGE_SPEED). A multirotor slows at a corner to speed·cos(turn) (it
   stops at turns of 90° and more, at holds and where the path turns vertical); a plane keeps its speed.
@@ -39,8 +40,12 @@ How the items are flown (the model, stated so it can be checked):
   cruise speed + hold times, no acceleration, no climbs); Mission Planner shows distance / (0.8·speed).
   Our model is longer than QGC's on every survey with turns — that is the point of it.
 * Measuring: per survey/corridor step and payload with `missions.coverage`, in one metric plane (the first
-  area's projection, so photos on a line stay exactly collinear): the photos whose footprint can reach the
-  area, grouped by altitude (one footprint size per group; coverage is the union over all groups). Front
+  area's projection, so photos on a line stay exactly collinear). Coverage takes every photo whose footprint can
+  reach the area, whichever step took it, grouped by altitude (one footprint size per group; coverage is the
+  union over all groups). The rest is the step's own, so that a neighbouring step does not blur it: its overlaps,
+  photo count and metres outside the area take the photos taken and the path flown while the mission executes
+  the step's items (`AreaInfo.items`; the vehicle executes a NAV item while it flies towards it and holds at it,
+  so the approach to the step's first waypoint is the step's). Front
   overlap pairs consecutive photos of one camera-on stretch; a turn of more than TURN_SPLIT_DEG starts a new
   stretch (a turnaround is not a front pair; a corridor's gentle bend is, and its lower overlap is real).
   Coverage below COVERAGE_TARGET and overlaps more than OVERLAP_SLACK below the request are warnings, not
@@ -49,6 +54,8 @@ How the items are flown (the model, stated so it can be checked):
   (`Area.excluded`, so an exclusion across the boundary counts too), deeper than route.ZONE_EDGE_TOL_M (a
   path along a zone's edge is beside it), split into metres with the camera on (distance or interval
   triggering) and off, with the photos centred inside; more than a metre is the path_over_exclusion warning.
+  Unlike the figures above these stay the whole flight's: an exclusion is ground not to fly over or photograph
+  (the plan schema's words), and another step flying over it is as real as this one.
 """
 
 from __future__ import annotations
@@ -101,7 +108,7 @@ class Vertex:
     item: int                 # index into compiled.items of the NAV item that put it there; -1 for home
     hold_s: float = 0.0
     stop: bool = False        # the vehicle comes to rest here (hold, start, end, vertical turn)
-    yaw_deg: float | None = None
+    yaw_deg: float | None = None    # commanded heading: degrees from true north in the walk, in the plane after it
     speed_mps: float = 0.0    # cruise speed of the segment that ends here
 
 
@@ -119,6 +126,9 @@ class Photo(NamedTuple):
     span: int                 # photos of one camera-on stretch share it (front overlap pairs)
     cause: int                # index into compiled.items of the command that took it; -1: the camera's own mode
     time_s: float
+    # index into compiled.items of the NAV item the vehicle was executing when it took the photo: the one it flew
+    # towards, or held at for a photo taken standing (the step whose items hold it took the photo)
+    item: int
 
 
 @dataclass(frozen=True)
@@ -326,7 +336,9 @@ def simulate(compiled: Compiled) -> Simulation:
                     hold = max(0.0, it.param1)
                 elif cmd == C.MAV_CMD_NAV_LOITER_TIME:
                     hold = max(0.0, it.param1)
-                yaw = it.param4 if cmd == C.MAV_CMD_NAV_WAYPOINT and math.isfinite(it.param4) and copter else None
+                # PX4 flies a waypoint's yaw (param4) as the heading to hold; ArduPilot does not even store it
+                yaw = it.param4 if cmd == C.MAV_CMD_NAV_WAYPOINT and math.isfinite(it.param4) and copter and not ap \
+                    else None
                 add(x, y, alt, i, hold=hold, yaw=yaw)
             elif cmd == C.MAV_CMD_NAV_RETURN_TO_LAUNCH:
                 rtl_alt = max(c.alt_m, RTL_ALT_M)
@@ -431,7 +443,7 @@ def simulate(compiled: Compiled) -> Simulation:
     if terrain_items:
         w.notes.append(("terrain_frame", f"{len(terrain_items)} items use the terrain frame: heights are taken "
                                          "as above ground; footprints assume the autopilot follows terrain"))
-    verts = _mark_stops(w.verts, copter)
+    verts = _yaws_in_plane(_mark_stops(w.verts, copter), proj)
     times = _timeline(verts, copter)
     photos = _photos(compiled, verts, times, w, proj, trig_payloads)
     xy = np.array([(v.x, v.y) for v in verts], dtype=float)
@@ -449,6 +461,26 @@ def simulate(compiled: Compiled) -> Simulation:
         flight_time_qgc_s=float(qgc), vertex_times_s=tuple(times.tolist()), trigger_intervals=tuple(intervals),
         notes=tuple(w.notes), ends_on_ground=on_ground,
         camera_on=tuple((s[0], s[1]) for s in w.dist_spans) + tuple((s[0], s[1]) for s in w.time_spans))
+
+
+def _yaws_in_plane(verts: list[Vertex], proj: Any) -> list[Vertex]:
+    """Commanded yaws (degrees from true north) as headings in the simulation's plane, whose north turns away
+    from true north away from its centre."""
+    from pyproj import Geod
+
+    ks = [k for k, v in enumerate(verts) if v.yaw_deg is not None]
+    if not ks:
+        return verts
+    xy = np.array([(verts[k].x, verts[k].y) for k in ks])
+    lat, lon = proj.to_latlon(xy[:, 0], xy[:, 1])
+    # 100 m along the yaw: far enough that the projection's rounding (~1e-6 m) turns no heading
+    lon2, lat2, _ = Geod(ellps="WGS84").fwd(lon, lat, [verts[k].yaw_deg for k in ks], np.full(len(ks), 100.0))
+    x2, y2 = proj.to_xy(lat2, lon2)
+    out = list(verts)
+    for j, k in enumerate(ks):
+        v = verts[k]
+        out[k] = Vertex(v.x, v.y, v.alt_m, v.item, v.hold_s, v.stop, _heading(x2[j] - v.x, y2[j] - v.y), v.speed_mps)
+    return out
 
 
 def _mark_stops(verts: list[Vertex], copter: bool) -> list[Vertex]:
@@ -541,7 +573,8 @@ def _photos(compiled: Compiled, verts: Sequence[Vertex], times: np.ndarray, w: _
     xy = np.array([(v.x, v.y) for v in verts], dtype=float).reshape(-1, 2)
     alts = np.array([v.alt_m for v in verts], dtype=float)
     holds = np.array([v.hold_s for v in verts], dtype=float)
-    raw: list[tuple[float, float, float, float, tuple[str, ...], int, int, float]] = []  # x y alt hd payloads span item t
+    # x y alt heading payloads span cause time item (see Photo)
+    raw: list[tuple[float, float, float, float, tuple[str, ...], int, int, float, int]] = []
     span_id = 0
     # distance triggering
     for s0, s1, d, at_start, at_stop, src in w.dist_spans:
@@ -557,8 +590,11 @@ def _photos(compiled: Compiled, verts: Sequence[Vertex], times: np.ndarray, w: _
         depart = times[k] + holds[k]
         tt = np.where(k >= len(times) - 1, times[-1], depart + f * (times[k1] - depart)).tolist()
         for j, p in enumerate(pts):
-            hd = _vertex_heading(verts, seg_idx[j], p.heading_deg) if s0 == s1 else p.heading_deg
-            raw.append((p.x, p.y, alt[j], hd, trig_payloads, span_id, src, tt[j]))
+            if s0 == s1:      # on and off at one vertex: the photos are taken there
+                hd, nav = _vertex_heading(verts, seg_idx[j], p.heading_deg), verts[s0].item
+            else:
+                hd, nav = p.heading_deg, verts[int(k1[j])].item
+            raw.append((p.x, p.y, alt[j], hd, trig_payloads, span_id, src, tt[j], nav))
         span_id += 1
     # interval triggering: photos at start + k·interval along the timeline
     for s0, s1, iv, pl, count, src in w.time_spans:
@@ -569,8 +605,8 @@ def _photos(compiled: Compiled, verts: Sequence[Vertex], times: np.ndarray, w: _
             tk = t0 + k * iv
             if tk > t_end + 1e-9 or (count > 0 and k >= count) or k > 10_000_000:
                 break
-            x, y, alt, hd = _position_at(times, verts, tk, s0, s1)
-            raw.append((x, y, alt, hd, pl, span_id, src, tk))
+            x, y, alt, hd, nav = _position_at(times, verts, tk, s0, s1)
+            raw.append((x, y, alt, hd, pl, span_id, src, tk, nav))
             k += 1
         span_id += 1
     # single photos: hover captures share a span while they go on along one line with one heading. The heading
@@ -584,7 +620,7 @@ def _photos(compiled: Compiled, verts: Sequence[Vertex], times: np.ndarray, w: _
                 or not _ahead_on_line(last[0], last[1], last[2], v.x, v.y):
             span_id += 1
         last = (v.x, v.y, hd)
-        raw.append((v.x, v.y, v.alt_m, hd, pl, span_id, src, float(times[vi])))
+        raw.append((v.x, v.y, v.alt_m, hd, pl, span_id, src, float(times[vi]), v.item))
     # payloads that trigger themselves (RedEdge overlap mode): distance triggering wherever the altitude fits
     for name, (op_alt, tol, front_pct) in self_triggering(compiled).items():
         pay = compiled.payload(name)
@@ -605,7 +641,7 @@ def _photos(compiled: Compiled, verts: Sequence[Vertex], times: np.ndarray, w: _
                 for p, sk, f in zip(pts, seg_idx, frac):
                     alt = alts[sk] + f * (alts[min(sk + 1, len(alts) - 1)] - alts[sk])
                     raw.append((p.x, p.y, float(alt), p.heading_deg, (name,), span_id, -1,
-                                _time_at(times, verts, sk, f)))
+                                _time_at(times, verts, sk, f), verts[min(sk + 1, len(verts) - 1)].item))
                 span_id += 1
                 k = j
             else:
@@ -615,7 +651,7 @@ def _photos(compiled: Compiled, verts: Sequence[Vertex], times: np.ndarray, w: _
     raw = _split_at_turns(raw)
     arr = np.array([(r[0], r[1]) for r in raw])
     lat, lon = proj.to_latlon(arr[:, 0], arr[:, 1])
-    return [Photo(r[0], r[1], float(la), float(lo), r[2], r[3], r[4], r[5], r[6], r[7])
+    return [Photo(r[0], r[1], float(la), float(lo), r[2], r[3], r[4], r[5], r[6], r[7], r[8])
             for r, la, lo in zip(raw, lat.tolist(), lon.tolist())]
 
 
@@ -715,18 +751,20 @@ def _time_at(times: np.ndarray, verts: Sequence[Vertex], k: int, f: float) -> fl
     return float(start + f * (times[k + 1] - start))
 
 
-def _position_at(times: np.ndarray, verts: Sequence[Vertex], t: float, s0: int, s1: int) -> tuple[float, float, float, float]:
-    """Where the vehicle is at time t (linear in time within a segment: good enough for photo spacing)."""
+def _position_at(times: np.ndarray, verts: Sequence[Vertex], t: float, s0: int,
+                 s1: int) -> tuple[float, float, float, float, int]:
+    """Where the vehicle is at time t (linear in time within a segment: good enough for photo spacing): x, y,
+    altitude, heading and the NAV item it is executing (the one it holds at or flies towards)."""
     k = int(np.searchsorted(times, t, side="right") - 1)
     k = min(max(k, s0), max(s1, s0))
     v = verts[k]
     depart = times[k] + v.hold_s
     if k >= len(verts) - 1 or t <= depart:
-        return v.x, v.y, v.alt_m, _vertex_heading(verts, k, None)
+        return v.x, v.y, v.alt_m, _vertex_heading(verts, k, None), v.item
     q = verts[k + 1]
     f = min(1.0, (t - depart) / max(times[k + 1] - depart, 1e-9))
     hd = _heading(q.x - v.x, q.y - v.y) if math.hypot(q.x - v.x, q.y - v.y) > 1e-6 else _vertex_heading(verts, k, None)
-    return v.x + f * (q.x - v.x), v.y + f * (q.y - v.y), v.alt_m + f * (q.alt_m - v.alt_m), hd
+    return v.x + f * (q.x - v.x), v.y + f * (q.y - v.y), v.alt_m + f * (q.alt_m - v.alt_m), hd, q.item
 
 
 def _trigger_intervals(compiled: Compiled, w: _Walk, verts: Sequence[Vertex],
@@ -764,11 +802,18 @@ def footprint_ring(photo: Photo, payload: PayloadInfo) -> list[tuple[float, floa
     return [(float(p[0]), float(p[1])) for p in pts]
 
 
-def _measure_area(area_info: Any, payload: PayloadInfo, photos: Sequence[Photo], sim: Simulation) -> dict:
-    """Coverage and overlaps of one payload's photos over one area, in the area's own projection."""
+def _measure_area(area_info: Any, payload: PayloadInfo, photos: Sequence[Photo], sim: Simulation,
+                  path: np.ndarray | None = None) -> dict:
+    """Coverage and overlaps of one payload's photos over one area, in the area's own projection.
+
+    Coverage counts every photo whose footprint can reach the area: a neighbouring step's photo covers ground
+    too. The overlaps and the photo count take the photos the step took (`area_info.items`), the metres outside
+    the area the path segments it flew (`path`, a mask over the simulation's segments, `_step_paths`): another
+    step's photos and path are measured against its own area. Without a range (an AreaInfo built by hand) the
+    photos near the area and the whole path stand in for them. The zones are checked against the whole flight:
+    an exclusion is ground not to fly over or photograph, whichever step does it."""
     import shapely
-    from missions.coverage import coverage_fraction, footprint_polygons, min_front_overlap, min_side_overlap, \
-        outside_length_m
+    from missions.coverage import coverage_fraction, footprint_polygons, min_front_overlap, min_side_overlap
     from missions.footprint import Footprint
     from missions.triggers import PhotoPoint
 
@@ -779,47 +824,72 @@ def _measure_area(area_info: Any, payload: PayloadInfo, photos: Sequence[Photo],
         x = np.array([p.x for p in photos])
         y = np.array([p.y for p in photos])
         alts = np.array([max(p.alt_m, 0.0) for p in photos])
-        # photos whose footprint can reach the area (others belong to another step)
+        # photos whose footprint can reach the area (others cover other ground)
         reach = max(payload.footprint_m(1.0)) * alts        # footprints scale with altitude
-        near = shapely.dwithin(shapely.points(x, y), geom, reach)
-        idx = np.nonzero(near)[0]
+        near = np.nonzero(shapely.dwithin(shapely.points(x, y), geom, reach))[0]
     else:
-        idx = np.zeros(0, int)
-    result["photos"] = int(len(idx))
-    if len(idx):
-        # group by altitude (one Footprint per group); photos keep their mission order within a group
+        x = y = alts = np.zeros(0)
+        near = np.zeros(0, int)
+    if area_info.items is not None:
+        first, end = area_info.items
+        own = np.array([k for k, p in enumerate(photos) if first <= p.item < end], dtype=int)
+    else:
+        own = near
+
+    def by_altitude(idx: np.ndarray) -> dict[float, list[int]]:
+        """One Footprint per altitude; photos keep their mission order within a group."""
         groups: dict[float, list[int]] = {}
         for k in idx.tolist():
-            groups.setdefault(round(float(alts[k]), 2), []).append(k)
-        polys = []
-        fronts, sides = [], []
-        for alt, ks in groups.items():
-            if alt <= 0:
-                continue
-            fp = Footprint(*payload.footprint_m(alt))
-            pts = [PhotoPoint(float(x[k]), float(y[k]), photos[k].heading_deg, photos[k].span) for k in ks]
-            if len(groups) == 1:
-                covered, frac = coverage_fraction(geom, pts, fp)
-                result["coverage"] = frac
-            else:
-                xy = np.column_stack([x[ks], y[ks]])
-                polys.append(footprint_polygons(xy, np.radians([photos[k].heading_deg for k in ks]), fp))
-            f = min_front_overlap(pts, fp)
-            s = min_side_overlap(pts, fp)
-            if f is not None:
-                fronts.append(f)
-            if s is not None:
-                sides.append(s)
-        if polys:
-            union = shapely.union_all(np.concatenate(polys))
-            result["coverage"] = float(shapely.intersection(geom, union).area / geom.area) if geom.area > 0 else 0.0
-        result["front_min"] = min(fronts) if fronts else None
-        result["side_min"] = min(sides) if sides else None
-    result["outside_m"] = outside_length_m(sim.xy, geom)
+            if alts[k] > 0:
+                groups.setdefault(round(float(alts[k]), 2), []).append(k)
+        return groups
+
+    def points(ks: list[int]) -> list[PhotoPoint]:
+        return [PhotoPoint(float(x[k]), float(y[k]), photos[k].heading_deg, photos[k].span) for k in ks]
+
+    groups = by_altitude(near)
+    if len(groups) == 1:
+        (alt, ks), = groups.items()
+        result["coverage"] = coverage_fraction(geom, points(ks), Footprint(*payload.footprint_m(alt)))[1]
+    elif groups and geom.area > 0:
+        polys = [footprint_polygons(np.column_stack([x[ks], y[ks]]), np.radians([photos[k].heading_deg for k in ks]),
+                                    Footprint(*payload.footprint_m(alt))) for alt, ks in groups.items()]
+        union = shapely.union_all(np.concatenate(polys))
+        result["coverage"] = float(shapely.intersection(geom, union).area / geom.area)
+    fronts, sides = [], []
+    for alt, ks in by_altitude(own).items():
+        fp = Footprint(*payload.footprint_m(alt))
+        fronts.append(min_front_overlap(points(ks), fp))
+        sides.append(min_side_overlap(points(ks), fp))
+    result["front_min"] = min((f for f in fronts if f is not None), default=None)
+    result["side_min"] = min((s for s in sides if s is not None), default=None)
+    result["photos"] = int(len(own))
+    result["outside_m"] = _outside_m(sim.xy, path, geom)
     zones = _zones(area_info.area, proj)
     result["over_gaps_m"], result["over_gaps_camera_m"] = _over_zones_m(sim, zones)
     result["photos_in_zones"] = _photos_in(zones, photos)
     return result
+
+
+def _step_paths(compiled: Compiled, sim: Simulation) -> list[np.ndarray | None]:
+    """Per area step, the path segments it flew (a mask over the simulation's segments; None: unknown, a
+    hand-built AreaInfo). Segment k (vertex k to k + 1) is flown executing the NAV item of vertex k + 1, so a step's
+    path is what it flies towards its own waypoints, the approach to its first one included."""
+    seg_item = np.array([v.item for v in sim.vertices[1:]], dtype=int)
+    return [None if a.items is None else (seg_item >= a.items[0]) & (seg_item < a.items[1]) for a in compiled.areas]
+
+
+def _outside_m(xy: np.ndarray, path: np.ndarray | None, geom: Any) -> float:
+    """Metres of the path segments `path` selects (None: all) outside `geom`, one polyline per run of them."""
+    from missions.coverage import outside_length_m
+
+    if path is None:
+        return outside_length_m(xy, geom)
+    k = np.flatnonzero(path)
+    if not len(k):
+        return 0.0
+    cut = np.flatnonzero(np.diff(k) > 1)
+    return sum(outside_length_m(xy[a:b + 2], geom) for a, b in zip(np.r_[k[0], k[cut + 1]], np.r_[k[cut], k[-1]]))
 
 
 def _zones(area: Any, proj: Any) -> Any:
@@ -895,14 +965,14 @@ def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | N
     area_rows = []
     cov_acc: dict[str, list[tuple[float, float]]] = {}
     ov_acc: dict[str, dict[str, list[float]]] = {}
-    for a in compiled.areas:
+    for a, path in zip(compiled.areas, _step_paths(compiled, sim)):
         row: dict[str, Any] = {"step": a.step, "kind": a.kind, "area_m2": _r(a.area.area_m2, 1),
                                "altitude_m": _r(a.altitude_m, 2), "trigger": a.trigger,
                                "requested": {"front": a.front_overlap, "side": a.side_overlap},
                                "coverage": {}, "overlap": {}, "photos": {}}
         for pname in a.payloads:
             pay = compiled.payload(pname)
-            m = _measure_area(a, pay, photos_of.get(pname, []), sim)
+            m = _measure_area(a, pay, photos_of.get(pname, []), sim, path)
             row["coverage"][pname] = _r(m["coverage"], 5)
             row["overlap"][pname] = {"front_min": _r(m["front_min"]), "side_min": _r(m["side_min"])}
             row["photos"][pname] = m["photos"]

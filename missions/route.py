@@ -360,11 +360,10 @@ class _Avoid:
 
 def build_route(legs: Sequence[Leg], geometry: Any, turnaround_m: float, exit_margin_m: float = 0.0,
                 start_xy: tuple[float, float] | None = None, order: list[tuple[int, bool]] | None = None,
-                hover_points: dict[int, list[tuple[float, float]]] | None = None, avoid: Any = None) -> Route:
+                avoid: Any = None) -> Route:
     """Waypoints for the legs in flying order (see module doc). `geometry` is the area (metres).
+    (Hover surveys fly this route with photo stops in place of each leg's entry and exit: survey._hover_route.)
 
-    `hover_points`: leg index -> photo positions in the leg's +v order; when given, each photo becomes
-    a stop point (kind 'photo') and there are no turnaround stubs (the vehicle stops anyway).
     `avoid`: holes and exclusion zones (shapely, metres) the stubs and connections keep out of (step 5).
     """
     from missions.swaths import frame
@@ -380,9 +379,8 @@ def build_route(legs: Sequence[Leg], geometry: Any, turnaround_m: float, exit_ma
             paths[part] = _InsidePaths(parts[part], zones.keep_out if zones is not None else None)
         return paths[part]
 
-    hover = hover_points is not None
-    ta = 0.0 if hover else max(0.0, turnaround_m)
-    em = 0.0 if hover else max(0.0, exit_margin_m)
+    ta = max(0.0, turnaround_m)
+    em = max(0.0, exit_margin_m)
     pts: list[RoutePoint] = []
     spans: list[tuple[int, int]] = []
     flown: list[Leg] = []
@@ -431,14 +429,8 @@ def build_route(legs: Sequence[Leg], geometry: Any, turnaround_m: float, exit_ma
         if stubs:
             pts.append(RoutePoint(ax - dx * ta_in, ay - dy * ta_in, KIND_TURN_IN, k))
         entry = len(pts)
-        if hover:
-            hp = hover_points.get(li, [])  # type: ignore[union-attr]
-            seq = hp[::-1] if rev else hp
-            for x, y in (seq or [(ax, ay)]):
-                pts.append(RoutePoint(x, y, KIND_PHOTO, k))
-        else:
-            pts.append(RoutePoint(ax, ay, KIND_ENTRY, k))
-            pts.append(RoutePoint(ex, ey, KIND_EXIT, k))
+        pts.append(RoutePoint(ax, ay, KIND_ENTRY, k))
+        pts.append(RoutePoint(ex, ey, KIND_EXIT, k))
         spans.append((entry, len(pts) - 1))
         ta_out = ta
         if zones is not None and ta > em:
@@ -449,6 +441,6 @@ def build_route(legs: Sequence[Leg], geometry: Any, turnaround_m: float, exit_ma
             pts.append(RoutePoint(bx + dx * ta_out, by + dy * ta_out, KIND_TURN_IN, k))
         flown.append(leg)
         revs.append(rev)
-        prev_exit = (ex, ey) if not hover else (bx, by)
+        prev_exit = (ex, ey)
         prev_part = leg.part
     return Route(tuple(pts), tuple(flown), tuple(revs), tuple(spans))

@@ -12,7 +12,8 @@
   waypoints       ordered `Waypoint`s (x/y metres in area.projection, lat/lon degrees, kind, leg):
                   kind "turnaround" (stub before/after a leg), "entry" (camera starts here),
                   "exit" (camera stops here), "via" (connection kept inside the area), "photo" (hover mode:
-                  stop, shoot, go on).
+                  stop, shoot, go on; the route is the one distance triggering flies, turnaround stubs included,
+                  with the photo stops in place of each leg's entry and exit; `yaw_deg` is the line's heading).
   camera_spans    `TriggerSpan(start_index, stop_index, distance_m, shoot_at_start=True, shoot_at_stop=False)`
                   per leg, indices into waypoints: emit DO_SET_CAM_TRIGG_DIST(distance, 0, 1) after the entry
                   waypoint and DO_SET_CAM_TRIGG_DIST(0, 0, 0) after the exit waypoint. The exit lies
@@ -47,7 +48,7 @@ import numpy as np
 from missions.area import Area
 from missions.errors import PlanError
 from missions.footprint import Footprint, transect_spacing_m, trigger_distance_m
-from missions.route import KIND_PHOTO, Route, build_route, order_legs
+from missions.route import KIND_PHOTO, Route, RoutePoint, build_route, order_legs
 from missions.swaths import Leg, SwathSet, candidate_angles, generate_swaths, normalise_angle
 from missions.triggers import PhotoPoint, TriggerSpan, simulate_distance_trigger
 
@@ -87,6 +88,7 @@ class Waypoint:
     lon: float
     kind: str
     leg: int = -1
+    yaw_deg: float | None = None     # a photo stop's heading (its line's), degrees from true north
 
 
 @dataclass(frozen=True)
@@ -294,23 +296,68 @@ def plan_survey(area: Area, footprint: Footprint, front_pct: float, side_pct: fl
                                     f"({footprint.across_m:.1f} × {footprint.along_m:.1f} m); a single waypoint "
                                     "with one photo may serve better"))
 
-    hover_points = None
+    # Hover lines are flown on the route distance triggering flies (turnaround stubs, connections kept out of
+    # holes and exclusions), stopping at the photos instead of running the camera along the leg: see _hover_route.
+    # A hover stop is held, so no exit margin against an early waypoint acceptance.
+    margin = 0.0 if hover else min(exit_margin_m, 0.45 * trig)
+    route: Route = build_route(legs, geom, turnaround_m, exit_margin_m=margin, order=order, avoid=area.excluded)
     if hover:
-        hover_points = {}
-        for i, l in enumerate(legs):
-            n = int(round(l.length_m / trig)) if trig > 0 else 0
-            vs = l.v0 + trig * np.arange(n + 1) if l.length_m > 1e-9 else np.array([l.v0])
-            t = (vs - l.v0) / l.length_m if l.length_m > 1e-9 else np.zeros(1)
-            hover_points[i] = [(l.x0 + (l.x1 - l.x0) * f, l.y0 + (l.y1 - l.y0) * f) for f in t]
-    route: Route = build_route(legs, geom, turnaround_m, exit_margin_m=min(exit_margin_m, 0.45 * trig),
-                               order=order, hover_points=hover_points, avoid=area.excluded)
+        route = _hover_route(route, trig)
     xy = route.xy
     lat, lon = _latlon(area, xy)
-    wps = tuple(Waypoint(float(p.x), float(p.y), float(a), float(o), p.kind, p.leg)
-                for p, a, o in zip(route.points, lat, lon))
+    yaw = _photo_yaws(area, route) if hover else {}
+    wps = tuple(Waypoint(float(p.x), float(p.y), float(a), float(o), p.kind, p.leg, yaw.get(k))
+                for k, (p, a, o) in enumerate(zip(route.points, lat, lon)))
     spans = () if hover else tuple(TriggerSpan(a, b, trig, True, False) for a, b in route.spans)
     return SurveyPlan(wps, spans, hover, trig, spacing, angle, route.legs, tuple(warnings), area, route,
                       sum(sw.lines for sw in passes), float(speed_mps))
+
+
+def _hover_route(route: Route, trig: float) -> Route:
+    """The hover route: each leg's entry and exit replaced by its photo stops, one every trigger distance from the
+    leg start (legs are whole trigger steps long, so the last one is on the leg end), in flying order.
+
+    The turnaround stub before a line is what points the camera along it. A copter flying its mission faces the
+    waypoint it flies to (ArduCopter's WP_YAW_BEHAVIOR and PX4's MPC_YAW_MODE defaults) and keeps that heading
+    while it hovers, so a line reached straight from the previous one has its first photo taken across the line:
+    on a field one photo long the footprint, longer across than along, then lay turned and coverage fell short
+    (96 % on the 7 m strip of tests/missions/test_report.py). Arriving from the stub it faces along the line
+    (PX4 also takes the line's heading from the waypoint itself, `Waypoint.yaw_deg`). Where the route has no stub
+    (turnaround_m 0, a detour inside the area, an exclusion in the way) the report measures the turned photo. The
+    stub after a line is kept: the route checks each hop to the next line against the holes and exclusions from
+    it."""
+    stops: dict[int, list[RoutePoint]] = {}
+    for k, (entry, _exit) in enumerate(route.spans):
+        l, rev = route.legs[k], route.reversed_legs[k]
+        n = int(round(l.length_m / trig)) if trig > 0 and l.length_m > 1e-9 else 0
+        f = trig * np.arange(n + 1) / l.length_m if n else np.zeros(1)
+        pts = [RoutePoint(l.x0 + (l.x1 - l.x0) * t, l.y0 + (l.y1 - l.y0) * t, KIND_PHOTO, k) for t in f.tolist()]
+        stops[entry] = pts[::-1] if rev else pts
+    ends = {b for _a, b in route.spans}
+    points: list[RoutePoint] = []
+    for i, p in enumerate(route.points):
+        if i in stops:
+            points.extend(stops[i])
+        elif i not in ends:
+            points.append(p)
+    return Route(tuple(points), route.legs, route.reversed_legs, ())
+
+
+def _photo_yaws(area: Area, route: Route) -> dict[int, float]:
+    """Route point index -> heading of its line at each photo stop, in degrees from true north (what a vehicle's
+    yaw is): the plane's north turns away from true north away from its centre."""
+    from pyproj import Geod
+
+    ks = [k for k, p in enumerate(route.points) if p.kind == KIND_PHOTO]
+    if not ks:
+        return {}
+    h = np.radians([_leg_heading(route, route.points[k].leg) for k in ks])
+    xy = np.array([(route.points[k].x, route.points[k].y) for k in ks])
+    lat, lon = _latlon(area, xy)
+    # a point 100 m along the line: far enough that the projection's rounding (~1e-6 m) turns no heading
+    lat2, lon2 = _latlon(area, xy + 100.0 * np.column_stack([np.sin(h), np.cos(h)]))
+    az = Geod(ellps="WGS84").inv(lon, lat, lon2, lat2)[0]
+    return {k: float(a) % 360.0 for k, a in zip(ks, np.asarray(az).tolist())}
 
 
 def _leg_heading(route: Route, k: int) -> float:

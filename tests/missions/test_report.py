@@ -267,10 +267,10 @@ def test_flying_over_a_hole_is_reported():
     assert not any(w["code"] == "path_over_exclusion" for w in clean["warnings"])
 
 
-def _compile_yaml(tmp_path, survey: dict):
+def _compile_yaml(tmp_path, survey: dict, firmware: str = "ardupilot"):
     from missions.compile import compile_plan
     from missions.plan import parse_plan
-    doc = {"version": 1, "name": "t", "vehicle": {"firmware": "ardupilot", "frame": "copter", "speed_mps": 4.5},
+    doc = {"version": 1, "name": "t", "vehicle": {"firmware": firmware, "frame": "copter", "speed_mps": 4.5},
            "home": {"lat": 50.0995, "lon": 14.5, "alt_amsl_m": 250},
            "payloads": {"thermal": {"camera": "wiris-pro", "imager": "thermal", "lens_mm": 13, "component_id": 100}},
            "mission": [{"takeoff": {"alt_m": 40}}, *({k: v} for k, v in survey.items()), {"rtl": {}}]}
@@ -297,3 +297,61 @@ def test_hover_photos_of_two_lines_are_no_front_pair(tmp_path):
             assert dx * math.sin(h) + dy * math.cos(h) > 0
             assert abs(dx * math.cos(h) - dy * math.sin(h)) < 0.1
     assert report(c, sim)["overlap"]["thermal"]["front_min"] >= 0.49
+
+
+# A strip 7 m wide (east-west) and 55 m long, flown in hover mode with east-west lines: each line is shorter than a
+# footprint is long and holds one photo.
+STRIP = {"survey": {"area": [[50.1, 14.5], [50.1, 14.5001], [50.1005, 14.5001], [50.1005, 14.5]],
+                    "payloads": ["thermal"], "altitude_m": 40, "overlap": {"front": 30, "side": 60},
+                    "angle_deg": 90, "trigger": "hover"}}
+
+
+def _off_line_deg(heading: float, line: float = 90.0) -> float:
+    """Angle between a heading and a line's direction, either way along it (a footprint turned by 180° is the same)."""
+    return abs((heading - line + 90.0) % 180.0 - 90.0)
+
+
+@pytest.mark.parametrize("firmware", ["ardupilot", "px4"])
+def test_a_one_photo_hover_line_is_shot_along_the_line(tmp_path, firmware):
+    # Reached straight from the previous line, the vehicle faced across the line at its only photo (both autopilots
+    # face the waypoint they fly to and keep that heading while hovering): the footprints, longer across than along,
+    # stood turned and covered 96 %. The route now arrives along each line; PX4 also gets the line's heading as the
+    # waypoint's yaw.
+    from pyproj import Geod
+
+    c = _compile_yaml(tmp_path, STRIP, firmware)
+    sim = simulate(c)
+    assert len(sim.photos) >= 2 and len({round(p.y, 1) for p in sim.photos}) == len(sim.photos)   # one per line
+    assert report(c, sim)["areas"][0]["coverage"]["thermal"] == 1.0
+    assert all(_off_line_deg(p.heading_deg) < 0.01 for p in sim.photos)
+    # in the mission: the vehicle comes to each photo from a position on its line, metres before it
+    geod = Geod(ellps="WGS84")
+    navs = [it for it in c.items if it.frame != mavlink.MAV_FRAME_MISSION]
+    shots = [k for k, it in enumerate(navs) if it.command == mavlink.MAV_CMD_NAV_WAYPOINT and it.param1 > 0]
+    assert len(shots) == len(sim.photos)
+    for k in shots:
+        before, at = navs[k - 1], navs[k]
+        bearing, _back, dist = geod.inv(before.lon, before.lat, at.lon, at.lat)
+        assert dist > 2.0 and _off_line_deg(bearing) < 0.05
+        if firmware == "px4":
+            assert _off_line_deg(at.param4) < 0.01
+        else:
+            assert math.isnan(at.param4)
+
+
+@pytest.mark.parametrize("firmware,flown", [("ardupilot", False), ("px4", True)])
+def test_a_waypoints_yaw_is_flown_on_px4_only(tmp_path, firmware, flown):
+    # the same mission with every hover waypoint told to face north: PX4 turns the camera across the lines (and the
+    # report says so), ArduPilot's AP_Mission drops the yaw at upload and the photos stay along the lines
+    from dataclasses import replace
+
+    c = _compile_yaml(tmp_path, STRIP, firmware)
+    north = tuple(it.with_(param4=0.0) if it.command == mavlink.MAV_CMD_NAV_WAYPOINT and it.param1 > 0 else it
+                  for it in c.items)
+    sim = simulate(replace(c, items=north, parts=(north,)))
+    off = [_off_line_deg(p.heading_deg) for p in sim.photos]
+    assert off
+    if flown:
+        assert all(a > 89.9 for a in off)
+    else:
+        assert all(a < 0.01 for a in off)

@@ -99,7 +99,17 @@ def test_hover_mode_turns_photos_into_stops() -> None:
     stops = [w for w in plan.waypoints if w.kind == "photo"]
     assert plan.hover and plan.camera_spans == ()
     assert len(stops) == len(plan.photos) > 0
-    assert not [w for w in plan.waypoints if w.kind == "turnaround"]
+    # each line is entered from its turnaround stub, along the line, so the vehicle faces along it at its first
+    # photo (both autopilots face the waypoint they fly to); every stop carries its line's heading as yaw
+    wps = plan.waypoints
+    firsts = [k for k, w in enumerate(wps) if w.kind == "photo" and wps[k - 1].kind != "photo"]
+    assert len(firsts) == len(plan.legs)
+    for k in firsts:
+        a, b = wps[k - 1], wps[k]
+        assert a.kind == "turnaround" and math.hypot(b.x - a.x, b.y - a.y) == pytest.approx(10.0)
+        heading = math.degrees(math.atan2(b.x - a.x, b.y - a.y)) % 360.0
+        assert (heading - b.yaw_deg + 180.0) % 360.0 - 180.0 == pytest.approx(0.0, abs=0.05)
+    assert all(abs((w.yaw_deg - p.heading_deg + 180.0) % 360.0 - 180.0) < 0.05 for w, p in zip(stops, plan.photos))
     c = measure(area.geometry, plan.photos, FP)
     assert c.coverage >= 0.995
 
