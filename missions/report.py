@@ -33,7 +33,8 @@ How the items are flown (the model, stated so it can be checked):
   keeps the heading the vehicle arrived with: from the waypoint before, or the waypoint's own yaw on PX4.
 * Flight time: every segment is flown with a trapezoidal speed profile (acceleration ACCEL_MPS2, cruise
   speed from the plan or the last DO_CHANGE_SPEED). A multirotor slows at a corner to speed·cos(turn) (it
-  stops at turns of 90° and more, at holds and where the path turns vertical); a plane keeps its speed.
+  stops at turns of 90° and more, at holds and where the path turns vertical); a plane keeps its speed, and
+  so does a VTOL between its vertical take-off and landing (it flies the mission fixed-wing).
   Climbs and descents are limited to CLIMB_MPS / DESCENT_MPS, the last LAND_FINAL_M of a landing to
   LAND_MPS. Holds (NAV_WAYPOINT param1 on multirotors, LOITER_TIME, NAV_DELAY) add their time.
   For comparison `flight_time_qgc_s` is QGroundControl's statistic (MissionController: horizontal distance /
@@ -286,7 +287,10 @@ def simulate(compiled: Compiled) -> Simulation:
     home_lat, home_lon, home_amsl = compiled.home
     hx, hy = proj.point_to_xy(home_lat, home_lon)
     items = compiled.items
-    copter = compiled.frame in ("copter", "vtol")
+    # A VTOL takes off and lands vertically but flies its mission fixed-wing (hover triggering is refused
+    # for it): between take-off and landing it keeps its speed through turns and ignores holds, like a plane.
+    copter = compiled.frame == "copter"
+    vertical = compiled.frame in ("copter", "vtol")
     ap = compiled.firmware == "ardupilot"
     w = _Walk()
     w.verts.append(Vertex(hx, hy, 0.0, -1, stop=True))
@@ -328,7 +332,7 @@ def simulate(compiled: Compiled) -> Simulation:
             if cmd in NAV_TAKEOFF:
                 on_ground = False
                 add(c.x, c.y, alt, i, stop=True, spd=CLIMB_MPS)
-                if not here and not ap and math.hypot(x - c.x, y - c.y) > 1.0 and not copter:
+                if not here and not ap and math.hypot(x - c.x, y - c.y) > 1.0 and not vertical:
                     add(x, y, alt, i)
             elif cmd in NAV_POSITION:
                 hold = 0.0

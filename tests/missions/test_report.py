@@ -232,6 +232,33 @@ def test_flight_time_of_one_leg_follows_the_stated_model():
     assert not any(w["code"] == "no_landing" for w in rep["warnings"])
 
 
+@pytest.mark.parametrize("frame", ["copter", "vtol"])
+def test_a_vtol_keeps_its_speed_through_turns(frame):
+    # a VTOL flies the mission fixed-wing: a right-angle corner costs a copter a stop (braking and accelerating
+    # again: v/a more than at constant speed, as for the start and end of the flight), a VTOL nothing; both take
+    # off and land vertically
+    from missions.geo import LocalProjection
+    from missions.items import FRAME_GLOBAL_RELATIVE_ALT, MissionItem, deg_to_e7
+    from missions.report import ACCEL_MPS2, CLIMB_MPS, DESCENT_MPS, LAND_FINAL_M, LAND_MPS
+    home = (50.0, 14.0, 300.0)
+    proj = LocalProjection(home[0], home[1])
+    takeoff, land = ((mavlink.MAV_CMD_NAV_TAKEOFF, mavlink.MAV_CMD_NAV_LAND) if frame == "copter" else
+                     (mavlink.MAV_CMD_NAV_VTOL_TAKEOFF, mavlink.MAV_CMD_NAV_VTOL_LAND))
+    items = [MissionItem(takeoff, FRAME_GLOBAL_RELATIVE_ALT, z=30.0)]
+    for x, y in ((0.0, 600.0), (600.0, 600.0)):
+        lat, lon = proj.point_to_latlon(x, y)
+        items.append(MissionItem(mavlink.MAV_CMD_NAV_WAYPOINT, FRAME_GLOBAL_RELATIVE_ALT, x=deg_to_e7(lat),
+                                 y=deg_to_e7(lon), z=30.0))
+    items.append(MissionItem(land, FRAME_GLOBAL_RELATIVE_ALT))
+    items = tuple(items)
+    c = Compiled("corner", "px4", frame, home, 15.0, items, (items,), 500, (THERMAL,), (), ())
+    v, a = 15.0, ACCEL_MPS2 if frame == "copter" else 2 * ACCEL_MPS2
+    corner = v / a if frame == "copter" else 0.0
+    expected = (30 / CLIMB_MPS + 1200 / v + v / a + corner
+                + (30 - LAND_FINAL_M) / DESCENT_MPS + LAND_FINAL_M / LAND_MPS)
+    assert report(c)["flight_time_s"] == pytest.approx(expected, rel=0.005)
+
+
 @pytest.fixture(scope="module")
 def small_full():
     c = handmade(size_m=120.0)
