@@ -55,6 +55,10 @@ def _same_field(a, b) -> bool:
 #   e  an int32 as sent (latitude/longitude in degE7: exact)
 #   g  an int32 kept in a float32 (PX4 keeps a MISSION-frame item's x/y among its float params)
 #   h  an altitude in whole centimetres (ArduPilot's Location.alt, int32 cm): equal within 1 cm
+#   t  ArduPilot's loiter turns (low byte of p1): below one turn in 1/256ths, else whole turns to 255
+#   r  ArduPilot's loiter radius (high byte of p1): whole metres to 255, beyond in tens of metres to
+#      2550, the sign kept
+#   k  ArduPilot's Float16_t (half precision; its set() rounds half away from zero)
 # frame:  L  a position: only the altitude reference is compared (absolute, above home, above terrain)
 #         E  as sent, a frame equal to its _INT twin
 #         -  not kept
@@ -75,14 +79,22 @@ _INT_TWIN = {_C.MAV_FRAME_GLOBAL_INT: _C.MAV_FRAME_GLOBAL,
 
 # ArduCopter, Rover and Sub: libraries/AP_Mission/AP_Mission.cpp, mission_cmd_to_mavlink_int (what
 # mavlink_int_to_mission_cmd kept, with the Mission_Command field types of AP_Mission.h); x/y/z only for
-# stored_in_location() commands, every other command comes back in frame 0.
+# stored_in_location() commands, every other command comes back in frame 0. Checked entry by entry against
+# ArduPilot/ardupilot a877ec7c (4.4-era; AP_Mission.h types from 019546d9) and, for what came after it
+# (IMAGE_START_CAPTURE's instance, IMAGE_STOP_CAPTURE, SET_CAMERA_SOURCE, DO_SET_ROI_LOCATION/NONE,
+# fractional loiter turns), CarbonixUAV/cxpilot-core f8a8cd3 and blitzy-public-samples/ardupilot-blitzy
+# 4b5c0ce, whose two functions read the same for every command here. a877ec7c keeps no IMAGE_START_CAPTURE
+# instance ("image_start_capture.interval_s = packet.param2" first): a 4.4 vehicle gives p1 back as 0.
 _ARDUPILOT_MISSION = {
     _C.MAV_CMD_NAV_WAYPOINT: "i---eehL",            # p1 delay s (uint16); acceptance/pass-by/yaw dropped
     _C.MAV_CMD_NAV_LOITER_UNLIM: "--i-eehL",        # radius as uint16, its sign the direction
-    _C.MAV_CMD_NAV_LOITER_TURNS: "i-ibeehL",        # turns and radius in bytes of p1, xtrack flag
+    # "param1_stored *= 256.0" when 0 < turns < 1 (type_specific_bits 1<<1; read back "/= 256.0"), else
+    # "cmd.p1 = MIN(255, param1_stored)"; radius "radius_m = abs_radius" up to 255, else "MIN(255, abs_radius
+    # * 0.1)" with type_specific_bits 1<<0 (read back "*= 10"), negated when loiter_ccw; xtrack flag
+    _C.MAV_CMD_NAV_LOITER_TURNS: "t-rbeehL",
     _C.MAV_CMD_NAV_LOITER_TIME: "i-sbeehL",         # seconds (uint16), direction only, xtrack flag
     _C.MAV_CMD_NAV_RETURN_TO_LAUNCH: "--------",
-    _C.MAV_CMD_NAV_LAND: "i--seehL",                # abort altitude (uint16), p4 direction only
+    _C.MAV_CMD_NAV_LAND: "i--seehL",                # abort altitude (uint16), p4 direction only (is_negative)
     _C.MAV_CMD_NAV_TAKEOFF: "i---eehL",             # minimum pitch (uint16); yaw dropped
     _C.MAV_CMD_NAV_CONTINUE_AND_CHANGE_ALT: "i---eehL",
     _C.MAV_CMD_NAV_LOITER_TO_ALT: "-i-beehL",
@@ -93,7 +105,8 @@ _ARDUPILOT_MISSION = {
     _C.MAV_CMD_NAV_VTOL_LAND: "i---eehL",
     _C.MAV_CMD_CONDITION_DELAY: "f-------",
     _C.MAV_CMD_CONDITION_DISTANCE: "f-------",
-    _C.MAV_CMD_CONDITION_YAW: "ifii----",           # angle int16, rate float, direction int8, relative uint8
+    # Yaw_Command: "float angle_deg; float turn_rate_dps; int8_t direction; uint8_t relative_angle"
+    _C.MAV_CMD_CONDITION_YAW: "ffii----",
     _C.MAV_CMD_DO_JUMP: "ii------",
     _C.MAV_CMD_DO_CHANGE_SPEED: "iff-----",         # speed type uint8, speed and throttle float
     _C.MAV_CMD_DO_SET_HOME: "i---eehL",
@@ -117,6 +130,9 @@ _ARDUPILOT_MISSION = {
     _C.MAV_CMD_DO_AUTOTUNE_ENABLE: "i-------",
     _C.MAV_CMD_DO_VTOL_TRANSITION: "i-------",
     _C.MAV_CMD_DO_SEND_SCRIPT_MESSAGE: "ifff----",  # id (uint16), three floats for the script
+    # nav_script_time_Command: "uint8_t command; uint8_t timeout_s; Float16_t arg1; Float16_t arg2; int16_t arg3;
+    # int16_t arg4" ("arg1.set(packet.param3)", "arg3 = int16_t(packet.x)"; x/y exact within int16); z not kept
+    _C.MAV_CMD_NAV_SCRIPT_TIME: "iikkee--",
     _C.MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW: "iiiie-i-",  # int8/int16 angles and rates, flags in x, gimbal in z
     _C.MAV_CMD_IMAGE_START_CAPTURE: "ifii----",     # instance uint8, interval float, count and seq uint16
     _C.MAV_CMD_IMAGE_STOP_CAPTURE: "i-------",
@@ -129,8 +145,8 @@ _ARDUPILOT_MISSION = {
 # ArduPlane (same function, the APM_BUILD_ArduPlane branch): a waypoint keeps acceptance radius and pass-by
 # distance, each clamped to a byte, instead of the delay.
 _ARDUPLANE_MISSION = {**_ARDUPILOT_MISSION, _C.MAV_CMD_NAV_WAYPOINT: "-cc-eehL"}
-# libraries/GCS_MAVLink/MissionItemProtocol_Fence.cpp (get_item_as_mission_item): vertex count (uint8) or
-# radius (float) in p1, x/y; z is sent as 0 and the frame is not kept.
+# libraries/GCS_MAVLink/MissionItemProtocol_Fence.cpp (get_item_as_mission_item, 92e0e660): vertex count
+# (uint8) or radius (float; AC_PolyFence_loader "read_float") in p1, x/y; z is sent as 0, the frame not kept.
 _ARDUPILOT_FENCE = {
     _C.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION: "i---ee--",
     _C.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_EXCLUSION: "i---ee--",
@@ -138,8 +154,9 @@ _ARDUPILOT_FENCE = {
     _C.MAV_CMD_NAV_FENCE_CIRCLE_EXCLUSION: "f---ee--",
     _C.MAV_CMD_NAV_FENCE_RETURN_POINT: "----ee--",
 }
-# libraries/GCS_MAVLink/MissionItemProtocol_Rally.cpp: RallyLocation keeps lat, lng and alt as int16 metres;
-# only MAV_FRAME_GLOBAL_RELATIVE_ALT(_INT) is accepted and it comes back as GLOBAL_RELATIVE_ALT.
+# libraries/GCS_MAVLink/MissionItemProtocol_Rally.cpp (4e393e20): RallyLocation keeps lat, lng and alt as int16
+# metres ("ret.alt = cmd.z"); only MAV_FRAME_GLOBAL_RELATIVE_ALT(_INT) is accepted, it comes back as
+# GLOBAL_RELATIVE_ALT.
 _ARDUPILOT_RALLY = {_C.MAV_CMD_NAV_RALLY_POINT: "----eeiL"}
 
 # PX4: src/modules/mavlink/mavlink_mission.cpp. parse_mavlink_mission_item keeps an item by its frame, not its
@@ -201,6 +218,48 @@ def _whole(v: float) -> int:
     return 0 if not math.isfinite(v) else math.trunc(v)
 
 
+def ap_loiter_turns(v: float) -> float:
+    """LOITER_TURNS param1 as ArduPilot gives it back (AP_Mission.cpp: mavlink_int_to_mission_cmd stores
+    "param1_stored *= 256.0" for 0 < turns < 1, else "cmd.p1 = MIN(255, param1_stored)" in the low byte of
+    the uint16 p1; mission_cmd_to_mavlink_int sends "LOWBYTE(cmd.p1)", "/= 256.0" for the fraction). A
+    negative count (meaningless) is taken as 0, what the saturating float-to-unsigned cast of ARM gives."""
+    v = _f32(v)
+    if not math.isfinite(v):
+        return 0.0
+    if 0.0 < v < 1.0:
+        return math.trunc(v * 256.0) / 256.0
+    return float(max(0, min(255, math.trunc(v))))
+
+
+def ap_loiter_radius(v: float) -> float:
+    """LOITER_TURNS param3 as ArduPilot gives it back (mavlink_int_to_mission_cmd: "radius_m = abs_radius"
+    when abs_radius <= 255, else "MIN(255, abs_radius * 0.1)" and type_specific_bits 1<<0, into the high
+    byte of p1, "loiter_ccw = (packet.param3 < 0)"; mission_cmd_to_mavlink_int: "HIGHBYTE(cmd.p1)", negated
+    when loiter_ccw, "*= 10" with the bit)."""
+    v = _f32(v)
+    if not math.isfinite(v):
+        return 0.0
+    a = abs(v)
+    n = math.trunc(a) if a <= 255 else min(255, math.trunc(a * 0.1)) * 10
+    return -float(n) if v < 0 else float(n)
+
+
+def ap_float16(v: float) -> float:
+    """`v` through ArduPilot's Float16_t (AP_Common/float16.cpp: set() masks the float32 with 0xFFFFF000,
+    scales by 2^-112, "in.u -= round_mask" - adding half a step, so ties round away from zero - and shifts
+    by 13, saturating to infinity; get() is the exact widening)."""
+    u = struct.unpack("<I", struct.pack("<f", _f32(v)))[0]
+    sign = u & 0x80000000
+    u ^= sign
+    if u >= 0x7F800000:
+        h = 0x7FFF if u > 0x7F800000 else 0x7C00
+    else:
+        scaled = struct.unpack("<f", struct.pack("<I", u & 0xFFFFF000))[0] * 2.0 ** -112
+        u = (struct.unpack("<I", struct.pack("<f", scaled))[0] + 0x1000) & 0xFFFFFFFF
+        h = min(u, 31 << 23) >> 13
+    return struct.unpack("<e", struct.pack("<H", h | (sign >> 16)))[0]
+
+
 def _kept_equal(kind: str, a, b) -> bool:
     """Whether sent value `a` and read-back `b` are the same value as the firmware keeps it (`kind`)."""
     if kind == "-":
@@ -217,6 +276,12 @@ def _kept_equal(kind: str, a, b) -> bool:
         return (a > 0) == (b > 0)
     if kind == "s":
         return (a < 0) == (b < 0)
+    if kind == "t":
+        return ap_loiter_turns(a) == ap_loiter_turns(b)
+    if kind == "r":
+        return ap_loiter_radius(a) == ap_loiter_radius(b)
+    if kind == "k":
+        return _same_field(ap_float16(a), ap_float16(b))
     if math.isnan(a) or math.isnan(b):
         return math.isnan(a) and math.isnan(b)
     if kind == "y":

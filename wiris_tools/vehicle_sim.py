@@ -54,7 +54,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from missions.items import MissionItem
 from wiris_tools.link import Link
-from wiris_tools.readback import ALT_REFERENCE, readback_rule
+from wiris_tools.readback import ALT_REFERENCE, ap_float16, ap_loiter_radius, ap_loiter_turns, readback_rule
 from wiris_tools.transfer import item_from_msg, with_opaque_id
 
 
@@ -116,6 +116,12 @@ def _kept(kind: str, v):
         return -1.0 if v < 0 else 1.0
     if kind == "y":
         return _px4_yaw(v)
+    if kind == "t":
+        return ap_loiter_turns(v)
+    if kind == "r":
+        return ap_loiter_radius(v)
+    if kind == "k":
+        return ap_float16(v)
     if kind == "h":   # ArduPilot: Location.alt = z * 100.0f (int32 cm), sent back as alt * 0.01f
         return _f32(math.trunc(_f32(_f32(v) * 100.0)) * _f32(0.01))
     return _f32(v)

@@ -182,7 +182,28 @@ def test_verify_fails_when_the_vehicle_holds_fewer_items():
      MissionItem(5003, 5, param1=150.0, x=1, y=2, mission_type=MISSION_TYPE_FENCE), None),
     ("ardupilot", MissionItem(5100, 3, x=1, y=2, z=30.7, mission_type=2),
      MissionItem(5100, 3, x=1, y=2, z=30.0, autocontinue=0, mission_type=2), None),
+    # LOITER_TURNS: "MIN(255, param1_stored)" turns; a radius over 255 m kept in tens of metres
+    ("ardupilot", MissionItem(C.MAV_CMD_NAV_LOITER_TURNS, 3, param1=300.0, param3=-305.0, param4=1.0, x=1, y=2),
+     MissionItem(C.MAV_CMD_NAV_LOITER_TURNS, 3, param1=255.0, param3=-300.0, param4=1.0, x=1, y=2), None),
+    # ... and below one turn in 1/256ths ("param1_stored *= 256.0")
+    ("ardupilot", MissionItem(C.MAV_CMD_NAV_LOITER_TURNS, 3, param1=0.3, param3=40.6, x=1, y=2),
+     MissionItem(C.MAV_CMD_NAV_LOITER_TURNS, 3, param1=76 / 256, param3=40.0, x=1, y=2), None),
+    # NAV_SCRIPT_TIME: arg1/arg2 in Float16_t (a tie rounds away from zero), arg3/arg4 int16 in x/y
+    ("ardupilot", MissionItem(C.MAV_CMD_NAV_SCRIPT_TIME, 2, param1=3.0, param2=20.0, param3=0.1, param4=-1234.5, x=7,
+                              y=-3, z=5.0),
+     MissionItem(C.MAV_CMD_NAV_SCRIPT_TIME, 0, param1=3.0, param2=20.0, param3=0.0999755859375, param4=-1235.0, x=7,
+                 y=-3), None),
+    ("ardupilot", MissionItem(C.MAV_CMD_CONDITION_YAW, 2, param1=45.5, param2=10.0, param3=1.0),
+     MissionItem(C.MAV_CMD_CONDITION_YAW, 0, param1=45.5, param2=10.0, param3=1.0), None),
     # different
+    ("ardupilot", MissionItem(C.MAV_CMD_CONDITION_YAW, 2, param1=45.5, param2=10.0, param3=1.0),
+     MissionItem(C.MAV_CMD_CONDITION_YAW, 0, param1=45.0, param2=10.0, param3=1.0), "param1"),  # float angle_deg
+    ("ardupilot", MissionItem(C.MAV_CMD_NAV_LOITER_TURNS, 3, param1=0.5, param3=40.0, x=1, y=2),
+     MissionItem(C.MAV_CMD_NAV_LOITER_TURNS, 3, param1=0.25, param3=40.0, x=1, y=2), "param1"),
+    ("ardupilot", MissionItem(C.MAV_CMD_NAV_LOITER_TURNS, 3, param1=2.0, param3=2600.0, x=1, y=2),
+     MissionItem(C.MAV_CMD_NAV_LOITER_TURNS, 3, param1=2.0, param3=2540.0, x=1, y=2), "param3"),
+    ("ardupilot", MissionItem(C.MAV_CMD_NAV_SCRIPT_TIME, 2, param1=3.0, param4=-1234.5),
+     MissionItem(C.MAV_CMD_NAV_SCRIPT_TIME, 0, param1=3.0, param4=-1234.0), "param4"),
     ("ardupilot", MissionItem(16, 3, param1=2.0, x=1, y=2, z=40.0), MissionItem(16, 3, param1=3.0, x=1, y=2, z=40.0),
      "param1"),
     ("ardupilot", MissionItem(16, 3, x=1, y=2, z=40.0), MissionItem(16, 3, x=1, y=2, z=40.02), "z"),
@@ -207,6 +228,35 @@ def test_compare_items_as_the_firmware_keeps_them(firmware, sent, got, field):
     with pytest.raises(LinkError) as err:
         compare_items([sent], [got], firmware=firmware)
     assert f"item 0 differs in {field}" in err.value.message and err.value.hint
+
+
+def test_vehicle_sim_gives_ardupilot_loiter_turns_and_script_time_back_like_the_firmware():
+    """vehicle_sim's ArduPilot read-back of the fields kept in their own formats, worked out by hand from
+    AP_Mission.cpp (mavlink_int_to_mission_cmd / mission_cmd_to_mavlink_int) and AP_Common/float16.cpp."""
+    from wiris_tools.vehicle_sim import VehicleSim, firmware_readback
+
+    cases = [
+        (MissionItem(C.MAV_CMD_NAV_LOITER_TURNS, 3, param1=0.3, param3=-2600.0, param4=1.0, x=1, y=2, z=50.0),
+         dict(param1=76 / 256, param3=-2550.0, param4=1.0)),     # 1/256ths; MIN(255, 260) tens of metres
+        (MissionItem(C.MAV_CMD_NAV_LOITER_TURNS, 3, param1=3.9, param3=255.9, x=1, y=2, z=50.0),
+         dict(param1=3.0, param3=250.0, param4=0.0)),            # 255.9 is not "abs_radius <= 255": tens
+        (MissionItem(C.MAV_CMD_NAV_SCRIPT_TIME, 2, param1=3.0, param2=20.0, param3=0.1, param4=-1234.5, x=7, y=-3,
+                     z=5.0),
+         dict(param3=0.0999755859375, param4=-1235.0, x=7, y=-3, z=0.0, frame=0)),
+        (MissionItem(C.MAV_CMD_CONDITION_YAW, 2, param1=45.5, param2=10.0, param3=-1.0, param4=1.0),
+         dict(param1=45.5, frame=0)),
+    ]
+    for sent, kept in cases:
+        got = firmware_readback(sent, "ardupilot")
+        for name, value in kept.items():
+            assert getattr(got, name) == value, (sent, name, getattr(got, name))
+        assert isinstance(got.x, int) and isinstance(got.y, int)    # MISSION_ITEM_INT's x/y
+        compare_items([sent], [got], firmware="ardupilot")
+    items = [home_item((47.3977507, 8.5456075, 488.9)), *(sent for sent, _ in cases)]
+    with VehicleSim(flavour="ardupilot", stores_like_firmware=True, heartbeat_s=0.2) as sim, \
+            Link(f"udpout:127.0.0.1:{sim.port}") as link:
+        link.wait_heartbeat(timeout=3, system=1)
+        assert "verified" in MissionClient(link, timeouts=FAST).upload_verified(items).notes
 
 
 def same_values(a: MissionItem, b: MissionItem) -> bool:
