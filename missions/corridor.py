@@ -11,6 +11,15 @@ offset; each line is extended at its far end so its length is a whole number of 
 last photo sits on or beyond the corridor's end). Lines are flown alternately, each with turnaround stubs
 along its end tangents and distance triggering over its whole length.
 
+A closed line (its last point within 1 cm of its first: a ring road, a fence around a site) is a loop: the
+corridor is a ring with no ends, and each line is a closed offset ring of the centre line (the boundary of the
+centre polygon buffered out or in by the offset), started level with the first point and flown once round and
+on along itself to a whole number of trigger distances, so its last photo sits on or beyond its first. GEOS's
+offset curve of a closed line is no such ring: it leaves out the join at the closing vertex on the outer side
+of the turn there (a 300 m square loop starting at a corner left a wedge of its outer corner unphotographed:
+99.89 % coverage), and where the closing vertex is nearly straight it drops stretches of the inner lines (the
+same loop started mid-edge 1–5 cm off the straight line lost 145 m of its two inner lines: 97.2 %).
+
 Returns a `CorridorPlan` with the same fields the compiler reads from a `SurveyPlan` (waypoints,
 camera_spans, photos, hover=False, stats, warnings) plus `area` and `lines_xy`.
 """
@@ -80,6 +89,54 @@ def _offset_line(centre: Any, g: Any) -> np.ndarray | None:
     return np.vstack(out)
 
 
+def _ring_offsets(ring: np.ndarray, o: float, start: np.ndarray) -> list[np.ndarray]:
+    """Offset lines of a closed centre line `ring` at signed offset o (left of the direction of travel positive,
+    as offset_curve): the boundary rings of the centre polygon buffered by o, outward or inward, with round joins
+    (round on the outer side of every turn, trimmed on the inner side, as offset_curve). Each runs the centre
+    line's way round, closed, and starts at its point nearest `start` (where an open line's offset would start).
+    One ring as a rule; an inward offset that pinches off gives one per piece, an outward one that closes a bay
+    narrower than the offset also the bay's ring, and none when the loop is too small for the offset."""
+    from shapely.geometry import LineString, Point, Polygon
+    from shapely.geometry.polygon import orient
+    from shapely.ops import substring
+
+    poly = Polygon(ring)
+    ccw = poly.exterior.is_ccw
+    inside = (o > 0) == ccw                     # left of a counter-clockwise loop is its inside
+    g = poly.buffer(-abs(o) if inside else abs(o), quad_segs=4, join_style="round")
+    sign = 1.0 if ccw else -1.0
+    rings = []
+    for part in getattr(g, "geoms", [g]):
+        if part.geom_type != "Polygon" or part.is_empty:
+            continue
+        part = orient(part, sign)               # exterior the loop's way round, a bay's ring too
+        rings += [r for r in [part.exterior, *part.interiors] if r.length > 1e-6]
+    out = []
+    for r in sorted(rings, key=lambda r: r.distance(Point(start))):
+        line = LineString(r.coords)
+        s0 = float(line.project(Point(start)))
+        if s0 <= 1e-9 or s0 >= line.length - 1e-9:
+            xy = np.asarray(line.coords, dtype=float)
+        else:
+            a = np.asarray(substring(line, s0, line.length).coords, dtype=float)
+            b = np.asarray(substring(line, 0.0, s0).coords, dtype=float)
+            xy = np.vstack([a, b[1:]])
+            xy[-1] = xy[0]
+        out.append(xy)
+    return out
+
+
+def _extend_along(xy: np.ndarray, extra: float) -> np.ndarray:
+    """A closed line flown on past its start along itself for `extra` metres (less than its length)."""
+    if extra <= 1e-9:
+        return xy
+    seg = np.hypot(*np.diff(xy, axis=0).T)
+    cum = np.concatenate([[0.0], np.cumsum(seg)])
+    k = min(max(int(np.searchsorted(cum, extra, side="left")), 1), len(xy) - 1)   # first vertex at/after it
+    f = (extra - cum[k - 1]) / max(seg[k - 1], 1e-12)
+    return np.vstack([xy, xy[1:k], xy[k - 1] + f * (xy[k] - xy[k - 1])])
+
+
 def _extend_end(xy: np.ndarray, extra: float) -> np.ndarray:
     if extra <= 1e-9:
         return xy
@@ -118,6 +175,9 @@ def plan_corridor(line: Sequence[Sequence[float]], width_m: float, footprint: Fo
     if len(xy) < 2:
         raise PlanError("the corridor line has no length (all points coincide)", where=where,
                         hint="give its start and end as different points (points under 1 cm apart count as one)")
+    closed = len(xy) >= 4 and float(np.hypot(*(xy[-1] - xy[0]))) <= 0.01     # a loop (see the module docstring)
+    if closed:
+        xy[-1] = xy[0]
     from missions.geo import MAX_EXTENT_M  # the limit areas have: the local projection's accuracy
 
     size = float(max(np.ptp(xy[:, 0]), np.ptp(xy[:, 1])))
@@ -135,15 +195,20 @@ def plan_corridor(line: Sequence[Sequence[float]], width_m: float, footprint: Fo
     offsets = line_offsets(width_m, footprint.across_m, spacing, DEFAULT_EDGE_MARGIN_M) - width_m / 2.0
     check_photo_budget(centre.length * len(offsets) / trig, "corridor", photos_left)
     lines: list[np.ndarray] = []
+    left = np.array([-(xy[1] - xy[0])[1], (xy[1] - xy[0])[0]]) / np.hypot(*(xy[1] - xy[0]))
     for o in offsets:
-        g = centre if abs(o) < 1e-9 else centre.offset_curve(float(o), quad_segs=4, join_style="round")
-        lxy = _offset_line(centre, g)
-        if lxy is None:
-            continue
-        lxy = np.asarray(LineString(lxy).simplify(0.25).coords, dtype=float)
-        L = float(np.hypot(*np.diff(lxy, axis=0).T).sum())
-        lxy = _extend_end(lxy, math.ceil(L / trig - 1e-9) * trig - L)
-        lines.append(lxy)
+        if closed:
+            # each ring starts level with the first point: where an open line's offset would start
+            pieces = [xy] if abs(o) < 1e-9 else _ring_offsets(xy, float(o), xy[0] + float(o) * left)
+        else:
+            g = centre if abs(o) < 1e-9 else centre.offset_curve(float(o), quad_segs=4, join_style="round")
+            lxy = _offset_line(centre, g)
+            pieces = [] if lxy is None else [lxy]
+        for lxy in pieces:
+            lxy = np.asarray(LineString(lxy).simplify(0.25).coords, dtype=float)
+            L = float(np.hypot(*np.diff(lxy, axis=0).T).sum())
+            extra = math.ceil(L / trig - 1e-9) * trig - L
+            lines.append(_extend_along(lxy, extra) if closed else _extend_end(lxy, extra))
     if not lines:
         raise PlanError("the corridor produced no flight lines", where=where,
                         hint="straighten the line or narrow width_m; if neither helps, please report it with "
