@@ -655,7 +655,8 @@ def scan_tree(root, data: bytes | None = None) -> TreeScan:
     (vocabulary.unknown_attributes) when it settles the document, else one Python walk serving both.
     `data`: the bytes `root` was parsed from, if at hand (the proof's shortcut). tests/cdf/
     test_validate_speed.py holds proof and walk to the same answers, and the walk's structure verdict to
-    the XPath statement in schema.py."""
+    the XPath statement in schema.py. (engine._hits takes the two steps apart: before the walk it parses the
+    document again with its blank text.)"""
     return prove_tree(root, data) or walk_tree(root)
 
 
