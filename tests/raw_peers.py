@@ -3,6 +3,7 @@
     veh = raw_peers.scripted_vehicle(script, ("MISSION_COUNT", "MISSION_ITEM_INT"))  # script(veh, msg) answers
     call = raw_peers.timed_call(lambda: link.command_long(...), limit_s=6)          # never blocks the test
     call.finished, call.waited, call.value, call.error
+    left = raw_peers.lose_accepted_acks(sim)   # a VehicleSim's next ACCEPTED is lost; left["n"] = 1 re-arms
 """
 
 from __future__ import annotations
@@ -51,3 +52,19 @@ def timed_call(fn: Callable[[], Any], limit_s: float) -> TimedCall:
     caller.join(limit_s)
     waited = time.monotonic() - started
     return TimedCall(not caller.is_alive(), waited, outcome.get("value"), outcome.get("error"))
+
+
+def lose_accepted_acks(sim, count: int = 1) -> dict:
+    """Make VehicleSim `sim` lose its next `count` final MISSION_ACK ACCEPTED, as a radio would. Returns the
+    counter ({"n": left to lose}): set it again to lose more."""
+    left = {"n": count}
+    send = sim._ack
+
+    def ack(to, result, kind, opaque=0):
+        if result == mavlink2.MAV_MISSION_ACCEPTED and left["n"] > 0:
+            left["n"] -= 1
+            return
+        send(to, result, kind, opaque)
+
+    sim._ack = ack
+    return left

@@ -11,7 +11,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from missions.items import (FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MISSION_TYPE_FENCE, MISSION_TYPE_MISSION,
                             MISSION_TYPE_RALLY, MissionItem)
-from raw_peers import scripted_vehicle
+from raw_peers import lose_accepted_acks, scripted_vehicle
 from wiris_tools.errors import LinkError
 from wiris_tools.link import Link
 from wiris_tools.readback import compare_items
@@ -227,22 +227,13 @@ def test_download_refused_by_the_vehicle_says_what_to_do(refused, answer, text):
 def test_lost_final_ack_is_unconfirmed_and_verify_settles_it():
     """ArduPilot answers a repeated last item with MAV_MISSION_ERROR once it is done (GCS_Common.cpp); if
     its ACCEPTED ack was lost, upload says 'unconfirmed' and upload_verified proves it by read-back."""
-    state = {"drop": 1}
     with VehicleSim(flavour="ardupilot") as sim:
-        original = sim._ack
-
-        def drop_one_accept(to, result, kind, opaque=0):
-            if result == mavlink2.MAV_MISSION_ACCEPTED and state["drop"] > 0:
-                state["drop"] -= 1
-                return
-            original(to, result, kind, opaque)
-
-        sim._ack = drop_one_accept
+        lost = lose_accepted_acks(sim)
         with Link(f"udpout:127.0.0.1:{sim.port}") as link:
             client = MissionClient(link, timeouts=FAST)
             with pytest.raises(UploadUnconfirmed):
                 client.upload(waypoints(5))
-            state["drop"] = 1
+            lost["n"] = 1
             result = client.upload_verified(waypoints(5))
             assert "verified" in result.notes and any("final MISSION_ACK" in n for n in result.notes)
 

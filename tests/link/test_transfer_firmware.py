@@ -19,7 +19,7 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from missions.items import MISSION_TYPE_FENCE, MISSION_TYPE_MISSION, MissionItem
-from raw_peers import scripted_vehicle
+from raw_peers import lose_accepted_acks, scripted_vehicle
 from wiris_tools.errors import LinkError
 from wiris_tools.link import Link
 from wiris_tools.readback import compare_items
@@ -332,17 +332,8 @@ def test_a_late_invalid_sequence_before_the_accepted_is_not_a_failure():
 def test_ardupilot_answers_error_after_completion_and_a_lost_accepted_is_unconfirmed():
     from wiris_tools.vehicle_sim import VehicleSim
 
-    drop = {"accepted": 1}
     with VehicleSim(flavour="ardupilot", heartbeat_s=0.2) as sim:
-        send_ack = sim._ack
-
-        def lossy_ack(to, result, kind, opaque=0):
-            if result == C.MAV_MISSION_ACCEPTED and drop["accepted"] > 0:
-                drop["accepted"] -= 1
-                return
-            send_ack(to, result, kind, opaque)
-
-        sim._ack = lossy_ack
+        lose_accepted_acks(sim)
         with Link(f"udpout:127.0.0.1:{sim.port}") as link, \
                 link.inbox("MISSION_ACK", to_me=True) as acks:
             # an RTO floor well above a loaded machine's scheduling delays: no spurious resends of earlier
