@@ -37,14 +37,19 @@ CORPUS = Path(__file__).resolve().parents[3] / "shared" / "corpus" / "cdf"
 FILES = sorted(CORPUS.rglob("*.xml")) + sorted(CORPUS.rglob("*.xml.xz"))
 
 
-def _both(data: bytes, name: str, profile: str, monkeypatch):
-    fast = validate_bytes(data, name, profile)
+def _report(data: bytes, name: str, profile: str, monkeypatch, **engine_attrs):
+    """validate_bytes with these attributes of cdf.validation.engine replaced for the call."""
     with monkeypatch.context() as m:
-        # no fast path: xmlschema on every document
-        m.setattr(engine, "schema_hits", lambda root, *_known, as_written=None: schema.xmlschema_hits(
-            root if as_written is None else as_written()))
-        slow = validate_bytes(data, name, profile)
-    return fast, slow
+        for attr, value in engine_attrs.items():
+            m.setattr(engine, attr, value)
+        return validate_bytes(data, name, profile)
+
+
+def _both(data: bytes, name: str, profile: str, monkeypatch):
+    # the slow side has no fast path: xmlschema on every document
+    return (_report(data, name, profile, monkeypatch),
+            _report(data, name, profile, monkeypatch, schema_hits=lambda root, *_known, as_written=None:
+                    schema.xmlschema_hits(root if as_written is None else as_written())))
 
 
 def test_corpus_is_present():
@@ -273,14 +278,9 @@ def test_vocabulary_proof_settles_most_of_the_corpus_like_the_walk():
 def _lean_and_as_written(data: bytes, profile: str, monkeypatch, lean=None):
     """The report as validate_bytes gives it, and with every document parsed as written (blank text
     kept). `lean`: force engine._lean's answer for the first (None: its own)."""
-    with monkeypatch.context() as m:
-        if lean is not None:
-            m.setattr(engine, "_lean", lambda _data: lean)
-        got = validate_bytes(data, "m.xml", profile)
-    with monkeypatch.context() as m:
-        m.setattr(engine, "_lean", lambda _data: False)
-        written = validate_bytes(data, "m.xml", profile)
-    return got, written
+    forced = {} if lean is None else {"_lean": lambda _data: lean}
+    return (_report(data, "m.xml", profile, monkeypatch, **forced),
+            _report(data, "m.xml", profile, monkeypatch, _lean=lambda _data: False))
 
 
 @pytest.mark.parametrize("path", FILES, ids=lambda p: p.name)
