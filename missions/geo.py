@@ -122,6 +122,29 @@ class LocalProjection:
         lon, lat = self._inv.transform(np.asarray(xs, dtype=float), np.asarray(ys, dtype=float))  # type: ignore[attr-defined]
         return np.asarray(lat, dtype=float), np.asarray(normalise_lon(np.asarray(lon, dtype=float)))
 
+    # Headings are measured along 100 m: far enough that the projection's rounding (~1e-6 m) turns none.
+    def true_azimuths(self, xs: Sequence[float] | np.ndarray, ys: Sequence[float] | np.ndarray,
+                      headings_deg: Sequence[float] | np.ndarray) -> np.ndarray:
+        """Headings in this plane (degrees clockwise from its y axis) at (xs, ys) as azimuths from true north,
+        what a vehicle's yaw is: the plane's north turns away from true north away from its centre."""
+        from pyproj import Geod
+
+        x, y, h = (np.asarray(v, dtype=float) for v in (xs, ys, np.radians(headings_deg)))
+        lat, lon = self.to_latlon(x, y)
+        lat2, lon2 = self.to_latlon(x + 100.0 * np.sin(h), y + 100.0 * np.cos(h))
+        return np.asarray(Geod(ellps="WGS84").inv(lon, lat, lon2, lat2)[0], dtype=float) % 360.0
+
+    def plane_headings(self, xs: Sequence[float] | np.ndarray, ys: Sequence[float] | np.ndarray,
+                       azimuths_deg: Sequence[float] | np.ndarray) -> np.ndarray:
+        """Azimuths from true north at (xs, ys) as headings in this plane: the inverse of true_azimuths."""
+        from pyproj import Geod
+
+        x, y = np.asarray(xs, dtype=float), np.asarray(ys, dtype=float)
+        lat, lon = self.to_latlon(x, y)
+        lon2, lat2, _ = Geod(ellps="WGS84").fwd(lon, lat, np.asarray(azimuths_deg, dtype=float), np.full(len(x), 100.0))
+        x2, y2 = self.to_xy(lat2, lon2)
+        return np.degrees(np.arctan2(x2 - x, y2 - y)) % 360.0
+
     def point_to_xy(self, lat: float, lon: float) -> tuple[float, float]:
         x, y = self.to_xy([lat], [lon])
         return float(x[0]), float(y[0])

@@ -468,22 +468,15 @@ def simulate(compiled: Compiled) -> Simulation:
 
 
 def _yaws_in_plane(verts: list[Vertex], proj: Any) -> list[Vertex]:
-    """Commanded yaws (degrees from true north) as headings in the simulation's plane, whose north turns away
-    from true north away from its centre."""
-    from pyproj import Geod
-
+    """Commanded yaws (degrees from true north) as headings in the simulation's plane."""
     ks = [k for k, v in enumerate(verts) if v.yaw_deg is not None]
     if not ks:
         return verts
-    xy = np.array([(verts[k].x, verts[k].y) for k in ks])
-    lat, lon = proj.to_latlon(xy[:, 0], xy[:, 1])
-    # 100 m along the yaw: far enough that the projection's rounding (~1e-6 m) turns no heading
-    lon2, lat2, _ = Geod(ellps="WGS84").fwd(lon, lat, [verts[k].yaw_deg for k in ks], np.full(len(ks), 100.0))
-    x2, y2 = proj.to_xy(lat2, lon2)
+    hd = proj.plane_headings([verts[k].x for k in ks], [verts[k].y for k in ks], [verts[k].yaw_deg for k in ks])
     out = list(verts)
-    for j, k in enumerate(ks):
+    for k, h in zip(ks, hd.tolist()):
         v = verts[k]
-        out[k] = Vertex(v.x, v.y, v.alt_m, v.item, v.hold_s, v.stop, _heading(x2[j] - v.x, y2[j] - v.y), v.speed_mps)
+        out[k] = Vertex(v.x, v.y, v.alt_m, v.item, v.hold_s, v.stop, h, v.speed_mps)
     return out
 
 

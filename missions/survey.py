@@ -345,19 +345,13 @@ def _hover_route(route: Route, trig: float) -> Route:
 
 def _photo_yaws(area: Area, route: Route) -> dict[int, float]:
     """Route point index -> heading of its line at each photo stop, in degrees from true north (what a vehicle's
-    yaw is): the plane's north turns away from true north away from its centre."""
-    from pyproj import Geod
-
+    yaw is)."""
     ks = [k for k, p in enumerate(route.points) if p.kind == KIND_PHOTO]
     if not ks:
         return {}
-    h = np.radians([_leg_heading(route, route.points[k].leg) for k in ks])
-    xy = np.array([(route.points[k].x, route.points[k].y) for k in ks])
-    lat, lon = _latlon(area, xy)
-    # a point 100 m along the line: far enough that the projection's rounding (~1e-6 m) turns no heading
-    lat2, lon2 = _latlon(area, xy + 100.0 * np.column_stack([np.sin(h), np.cos(h)]))
-    az = Geod(ellps="WGS84").inv(lon, lat, lon2, lat2)[0]
-    return {k: float(a) % 360.0 for k, a in zip(ks, np.asarray(az).tolist())}
+    az = area.projection.true_azimuths([route.points[k].x for k in ks], [route.points[k].y for k in ks],
+                                       [_leg_heading(route, route.points[k].leg) for k in ks])
+    return dict(zip(ks, az.tolist()))
 
 
 def _leg_heading(route: Route, k: int) -> float:
