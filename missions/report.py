@@ -430,7 +430,10 @@ def simulate(compiled: Compiled) -> Simulation:
                 w.time_spans.append((s0, len(w.verts) - 1, iv, pl, n, src))
                 time_on = None
         elif cmd == C.MAV_CMD_DO_DIGICAM_CONTROL:
-            if it.x == 1:      # param5 "Shot": 1 takes a photo (frame MISSION keeps it in x)
+            # param5 "Shot": 1 takes a photo (frame MISSION keeps it in x), whether or not DO_TRIGGER_CONTROL
+            # has stopped the trigger: PX4's camera_trigger fires a one-shot without looking at its enabled
+            # state (CameraTrigger::Run, "One shot command-based capture handling", PX4-Autopilot 7704fe75)
+            if it.x == 1:
                 w.singles.append((len(w.verts) - 1, trig_payloads, i))
         if ended:
             break

@@ -209,6 +209,26 @@ def test_px4_interval_trigger_shoots_only_while_enabled(tmp_path):
     assert max(gaps) == pytest.approx(5.0 * interval, rel=0.02)
 
 
+def test_a_digicam_shot_fires_while_the_px4_trigger_is_stopped(tmp_path):
+    # PX4's camera_trigger fires a DO_DIGICAM_CONTROL one-shot whatever DO_TRIGGER_CONTROL set (CameraTrigger::Run,
+    # PX4-Autopilot 7704fe75): a shot placed after the last stop is one more photo, not swallowed by the stop
+    from dataclasses import replace
+
+    from missions.compile import compile_plan
+    from missions.items import FRAME_MISSION, MissionItem
+    p = tmp_path / "iv.yaml"
+    p.write_text(INTERVAL_PLAN)
+    c = compile_plan(p)
+    stop = max(i for i, it in enumerate(c.items)
+               if it.command == mavlink.MAV_CMD_DO_TRIGGER_CONTROL and it.param1 == 0)
+    shot = MissionItem(command=mavlink.MAV_CMD_DO_DIGICAM_CONTROL, frame=FRAME_MISSION, x=1)
+    items = c.items[:stop + 1] + (shot,) + c.items[stop + 1:]
+    with_shot = replace(c, items=items, parts=(items,))
+    before, after = simulate(c).photos, simulate(with_shot).photos
+    assert len(after) == len(before) + 1
+    assert [ph.cause for ph in after].count(stop + 1) == 1  # taken by the inserted shot
+
+
 def test_flight_time_of_one_leg_follows_the_stated_model():
     from missions.items import FRAME_GLOBAL_RELATIVE_ALT, MissionItem, deg_to_e7
     from missions.geo import LocalProjection
