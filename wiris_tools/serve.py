@@ -9,7 +9,9 @@ Safety: only GET and HEAD (405 otherwise); the request path is percent-decoded o
 checked (no `..`, `.`, empty, hidden or backslash segments, no NUL); the resolved real path must stay
 inside the served directory, so a symlink pointing outside answers 403. Files are read, never written.
 A connection that sends or reads nothing for IDLE_TIMEOUT_S is closed: every connection holds a thread,
-and a stalled client (or many) must not hold them for ever.
+and a stalled client (or many) must not hold them for ever. At most MAX_CONNECTIONS are served at once;
+one more is answered 503 with Retry-After by the accepting thread and closed, so a flood of connections
+cannot start threads without bound (a GCS opens one or two).
 
 Caching: ETag is the sha256 of the content (the manifest's value for definitions), Last-Modified the
 file's mtime; a matching If-None-Match (or, without it, an If-Modified-Since not older than the file)
@@ -25,7 +27,10 @@ import http.server
 import json
 import os
 import re
+import socket
 import sys
+import threading
+import time
 import urllib.parse
 from dataclasses import dataclass
 from pathlib import Path
@@ -36,6 +41,8 @@ IMMUTABLE = re.compile(r"_v\d+\.xml(\.xz)?$")
 MAX_FILE_BYTES = 16 * 1024 * 1024   # a bundle holds 30 KB definitions; anything bigger is not ours to serve
 ALLOWED = "GET, HEAD"
 IDLE_TIMEOUT_S = 30.0   # a GCS fetches a definition in one go; keep-alive connections idle longer are closed
+MAX_CONNECTIONS = 64    # connections served at once (a thread each); more are refused with 503
+REFUSE_TIMEOUT_S = 0.2  # the accepting thread spends at most about this on one refusal
 
 
 @dataclass(frozen=True)
@@ -244,6 +251,50 @@ class BundleHandler(http.server.BaseHTTPRequestHandler):
 class BundleServer(http.server.ThreadingHTTPServer):
     daemon_threads = True
     block_on_close = False
+    max_connections = MAX_CONNECTIONS   # make_server sets it per server
+
+    def server_activate(self) -> None:
+        super().server_activate()
+        self._slots = threading.BoundedSemaphore(self.max_connections)
+
+    def process_request(self, request, client_address) -> None:
+        if not self._slots.acquire(blocking=False):
+            self._refuse(request, client_address)
+            return
+        try:
+            super().process_request(request, client_address)   # starts the thread that releases the slot
+        except BaseException:
+            self._slots.release()
+            raise
+
+    def process_request_thread(self, request, client_address) -> None:
+        try:
+            super().process_request_thread(request, client_address)
+        finally:
+            self._slots.release()
+
+    def _refuse(self, request, client_address) -> None:
+        """503 to a connection over the cap, without reading its request or starting a thread. The unread
+        request is drained briefly after the answer: closing a socket with unread data resets the connection,
+        and the client could lose the 503 before reading it."""
+        body = b"too many connections; retry shortly\n"
+        head = ("HTTP/1.1 503 Service Unavailable\r\nContent-Type: text/plain; charset=utf-8\r\n"
+                f"Content-Length: {len(body)}\r\nRetry-After: 1\r\nCache-Control: no-store\r\n"
+                "Connection: close\r\n\r\n").encode("ascii")
+        host, port = client_address[:2]
+        self.RequestHandlerClass.config.log(f"- {host}:{port} 503 over the limit of {self.max_connections} "
+                                            "connections")
+        try:
+            request.settimeout(REFUSE_TIMEOUT_S)
+            request.sendall(head + body)
+            request.shutdown(socket.SHUT_WR)
+            deadline = time.monotonic() + REFUSE_TIMEOUT_S
+            while time.monotonic() < deadline and request.recv(65536):
+                pass
+        except OSError:
+            pass
+        finally:
+            request.close()
 
     def handle_error(self, request, client_address) -> None:
         """One log line instead of socketserver's traceback on stderr: a client that hangs up while it
@@ -269,7 +320,6 @@ def bind_http(server_class: type[http.server.HTTPServer], host: str, port: int, 
     """server_class bound to (host, port), IPv6 when `host` is an IPv6 address (http.server listens on
     IPv4 only); a LinkError whose hint names the option to change when binding fails."""
     import errno
-    import socket
 
     from wiris_tools.errors import LinkError
 
@@ -287,9 +337,11 @@ def bind_http(server_class: type[http.server.HTTPServer], host: str, port: int, 
 
 
 def make_server(directory: str | Path, host: str = "127.0.0.1", port: int = 8000, *, prefix: str | None = None,
-                log: Callable[[str], None] | None = None, idle_timeout_s: float = IDLE_TIMEOUT_S) -> BundleServer:
+                log: Callable[[str], None] | None = None, idle_timeout_s: float = IDLE_TIMEOUT_S,
+                max_connections: int = MAX_CONNECTIONS) -> BundleServer:
     """A bound (not yet serving) threaded server for `directory`; port 0 picks a free port.
-    `prefix` None: the URL path of the manifest's http URIs (see prefix_from_manifest)."""
+    `prefix` None: the URL path of the manifest's http URIs (see prefix_from_manifest).
+    `max_connections`: served at once, more are answered 503."""
     from wiris_tools.errors import LinkError
 
     root = Path(directory)
@@ -302,7 +354,8 @@ def make_server(directory: str | Path, host: str = "127.0.0.1", port: int = 8000
     # StreamRequestHandler applies `timeout` to the socket; http.server closes the connection when a read
     # or write of it times out (and logs nothing: there is no request to log)
     handler = type("BoundBundleHandler", (BundleHandler,), {"config": config, "timeout": idle_timeout_s})
-    return bind_http(BundleServer, host, port, handler, what="listen", host_option="--host", port_option="--port")
+    server_class = type("CappedBundleServer", (BundleServer,), {"max_connections": max_connections})
+    return bind_http(server_class, host, port, handler, what="listen", host_option="--host", port_option="--port")
 
 
 def server_url(server: BundleServer) -> str:

@@ -195,6 +195,40 @@ def test_stalled_and_idle_connections_are_closed_after_the_idle_timeout(bundle):
         thread.join(5)
 
 
+def test_connections_over_the_cap_get_503_and_the_slot_comes_back(bundle):
+    """Each served connection holds a thread: beyond max_connections the accepting thread answers 503 with
+    Retry-After and closes (a flood of connections used to start threads without bound); a slot frees when
+    its connection ends."""
+    import time
+
+    lines: list[str] = []
+    srv = make_server(bundle, "127.0.0.1", 0, log=lines.append, max_connections=2)
+    thread = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
+    thread.start()
+    port = srv.server_address[1]
+    try:
+        held = [socket.create_connection(("127.0.0.1", port), timeout=5) for _ in range(2)]
+        for s in held:
+            s.sendall(b"GET /cdf/" + PRO.encode())  # half a request: the connection keeps its thread
+        # accepted in order, so both hold their slot by the time this one is accepted
+        status, headers, body = request(srv, "GET", f"/cdf/{PRO}")
+        assert status == 503 and headers["retry-after"] == "1" and headers["connection"] == "close"
+        assert body == b"too many connections; retry shortly\n"
+        assert len(lines) == 1 and re.fullmatch(r"- 127\.0\.0\.1:\d+ 503 over the limit of 2 connections", lines[0])
+        with socket.create_connection(("127.0.0.1", port), timeout=5) as raw:  # sends nothing: still answered
+            assert raw.recv(65536).startswith(b"HTTP/1.1 503 ")
+        held.pop().close()
+        deadline = time.monotonic() + 5
+        while (status := request(srv, "GET", f"/cdf/{PRO}")[0]) == 503 and time.monotonic() < deadline:
+            time.sleep(0.02)  # the closed connection's thread has not yet seen the end
+        assert status == 200
+        held.pop().close()
+    finally:
+        srv.shutdown()
+        srv.server_close()
+        thread.join(5)
+
+
 def test_a_client_hanging_up_is_one_log_line_not_a_traceback(server, capfd):
     import struct
     import time
