@@ -100,6 +100,12 @@ _OTHER_RESULT_HINT = "a result this tool has no advice for: see the target's doc
 # to keep the caller waiting for ever. A longer timeout gives a slow operation (a format) more time.
 IN_PROGRESS_TIMEOUTS = 10
 
+# udpin: pymavlink sends to every address it has ever heard from, so a long-running emulator or camera
+# kept sending to each ground station that had gone (every restart of one comes from a new port). A peer
+# silent this long is dropped while another is alive (pymavlink keeps the last one); MAVLink peers send a
+# heartbeat every second.
+UDPIN_PEER_TIMEOUT_S = 30.0
+
 
 def command_name(command: int) -> str:
     """MAV_CMD_… name of a command id (or the number when the dialect does not know it)."""
@@ -270,7 +276,8 @@ class Link:
                 raise LinkError(f"bad baud rate {b!r}", where=url, hint="write it as /dev/ttyUSB0,57600") from None
         try:
             conn = mavutil.mavlink_connection(device, baud=baud, autoreconnect=False,
-                                              source_system=255, source_component=0)
+                                              source_system=255, source_component=0,
+                                              udp_timeout=UDPIN_PEER_TIMEOUT_S)
         except (OSError, ValueError, OverflowError, ImportError) as err:  # OverflowError: a port over 65535
             raise LinkError(f"cannot open the link: {err}", where=url,
                             hint="use a pymavlink connection string such as udpin:127.0.0.1:14550, "

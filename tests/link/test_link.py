@@ -390,3 +390,46 @@ def test_new_udpin_peers_while_another_thread_sends():
             thread.join(10)
         assert link.wait_heartbeat(timeout=5) is not None  # the receive side kept going too
     assert errors == []
+
+
+def test_a_silent_udpin_peer_is_dropped_while_another_is_alive(monkeypatch):
+    """pymavlink's udpin sent to every address it had ever heard from: a long-running emulator kept sending
+    to each ground station that had gone. Silent longer than UDPIN_PEER_TIMEOUT_S while another peer is
+    alive, a peer gets nothing more; the last peer is kept however silent."""
+    import time
+
+    import wiris_tools.link as link_module
+
+    monkeypatch.setattr(link_module, "UDPIN_PEER_TIMEOUT_S", 0.3)
+    mav = mavlink2.MAVLink(None, 1, 1)
+    datagram = mav.heartbeat_encode(mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0, 0).pack(mav)
+    with Link("udpin:127.0.0.1:0", heartbeat_s=0) as link, \
+            socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as gone, \
+            socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as alive:
+        beat = link.mav.heartbeat_encode(mavlink2.MAV_TYPE_CAMERA, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+        for s in (gone, alive):
+            s.settimeout(0.5)
+            s.sendto(datagram, ("127.0.0.1", link.local_port))
+        deadline = time.monotonic() + 5
+        while link.stats["received"] < 2 and time.monotonic() < deadline:  # both are peers now
+            time.sleep(0.01)
+        link.send(beat)
+        assert gone.recv(512) and alive.recv(512)  # both heard while both are fresh
+        end = time.monotonic() + 0.6
+        while time.monotonic() < end:
+            alive.sendto(datagram, ("127.0.0.1", link.local_port))
+            time.sleep(0.05)
+        link.send(beat)
+        assert alive.recv(512)
+        with pytest.raises(socket.timeout):
+            gone.recv(512)
+        alive.settimeout(0.2)
+        while True:  # what alive sent has been read by now; drain the answers to it, if any
+            try:
+                alive.recv(512)
+            except socket.timeout:
+                break
+        time.sleep(0.5)  # now alive is silent too, but it is the last peer: kept
+        link.send(beat)
+        alive.settimeout(2)
+        assert alive.recv(512)
