@@ -398,10 +398,11 @@ def _attribute_rules(values: tuple[str | None, ...], has_options: bool) -> tuple
 
 def _check_updates(updates, name, params: _Params, gather) -> Iterator[Hit]:
     for u in _children(updates, "update"):
-        if _text_empty(u):
+        text = u.text  # each .text read builds a new str: read once
+        if not text:
             yield Hit("CDF105", _line(u), name, "<update> is empty (MAVSDK crashes on empty text)")
             continue
-        target = u.text.strip()
+        target = text.strip()
         if gather is not None:
             gather[1].add(target)
         if target == name:
@@ -417,10 +418,11 @@ def _check_option_refs(o, p, name, ptype, params: _Params, gather) -> Iterator[H
     is_trigger = False
     for ex in o.iter("exclude"):  # recursive like QGC; nesting itself is CDF200 (XSD)
         is_trigger = True
-        if _text_empty(ex):
+        text = ex.text
+        if not text:
             yield Hit("CDF105", _line(ex), name, "<exclude> is empty (MAVSDK crashes on empty text)")
             continue
-        target = ex.text.strip()
+        target = text.strip()
         if gather is not None:
             gather[1].add(target)
         if target not in params.by_name:
