@@ -210,6 +210,15 @@ class _Peers(set):
         return iter(list(set.__iter__(self)))
 
 
+class _LastHeard(dict):
+    """When each udpin peer was last heard from. pymavlink's receive path adds a new peer to the peer set
+    first and to this dict after; a send in between would look the peer up here (UDPIN_PEER_TIMEOUT_S makes
+    write() read the time) and fail with KeyError. A peer not yet here has just been heard from."""
+
+    def __missing__(self, address):
+        return time.time()  # pymavlink's clock for these entries
+
+
 class Link:
     """One MAVLink connection (see the module docstring for the API)."""
 
@@ -282,8 +291,9 @@ class Link:
             raise LinkError(f"cannot open the link: {err}", where=url,
                             hint="use a pymavlink connection string such as udpin:127.0.0.1:14550, "
                                  "udpout:HOST:PORT, tcp:HOST:PORT or /dev/ttyUSB0,57600") from None
-        if type(getattr(conn, "clients", None)) is set:  # udpin: see _Peers
+        if type(getattr(conn, "clients", None)) is set:  # udpin: see _Peers and _LastHeard
             conn.clients = _Peers(conn.clients)
+            conn.clients_last_alive = _LastHeard(conn.clients_last_alive)
         return conn
 
     @property

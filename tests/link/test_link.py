@@ -433,3 +433,23 @@ def test_a_silent_udpin_peer_is_dropped_while_another_is_alive(monkeypatch):
         link.send(beat)
         alive.settimeout(2)
         assert alive.recv(512)
+
+
+def test_a_send_between_a_new_peer_and_its_time_does_not_fail():
+    """pymavlink's receive path adds a new udpin peer to its set, then its time to a dict; with the peer
+    timeout on, write() looks every peer's time up, so a send in between raised KeyError (the sender, an
+    emulator's tick, would have died). The moment is two statements wide: the test stands in it by adding
+    a peer to the set alone."""
+    mav = mavlink2.MAVLink(None, 1, 1)
+    datagram = mav.heartbeat_encode(mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0, 0).pack(mav)
+    with Link("udpin:127.0.0.1:0", heartbeat_s=0) as link, \
+            socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as old, \
+            socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as new:
+        old.settimeout(2)
+        new.settimeout(2)
+        old.sendto(datagram, ("127.0.0.1", link.local_port))
+        assert link.wait_heartbeat(timeout=5) is not None
+        new.bind(("127.0.0.1", 0))
+        link._conn.clients.add(new.getsockname())  # added to the set, its time not yet written
+        link.send(link.mav.heartbeat_encode(mavlink2.MAV_TYPE_CAMERA, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0, 0))
+        assert old.recv(512) and new.recv(512)  # the new peer counts as just heard from
