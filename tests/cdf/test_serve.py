@@ -3,6 +3,7 @@ GET/HEAD, ETag/Last-Modified/304, 405, no escape out of the directory, one log l
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import http.client
 import json
@@ -23,6 +24,20 @@ from wiris_tools.serve import make_server, prefix_from_manifest, server_url
 PRO = "workswell_wiris-pro_v1.xml"
 
 
+@contextlib.contextmanager
+def serving(directory, host: str = "127.0.0.1", **kwargs):
+    """make_server(directory, host, 0, **kwargs) serving in a thread for the block, then shut down."""
+    srv = make_server(directory, host, 0, **kwargs)
+    thread = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
+    thread.start()
+    try:
+        yield srv
+    finally:
+        srv.shutdown()
+        srv.server_close()
+        thread.join(5)
+
+
 @pytest.fixture(scope="module")
 def bundle(tmp_path_factory) -> Path:
     base = tmp_path_factory.mktemp("serve")
@@ -39,15 +54,8 @@ def bundle(tmp_path_factory) -> Path:
 @pytest.fixture
 def server(bundle):
     lines: list[str] = []
-    srv = make_server(bundle, "127.0.0.1", 0, log=lines.append)
-    thread = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
-    thread.start()
-    try:
+    with serving(bundle, log=lines.append) as srv:
         yield srv, lines
-    finally:
-        srv.shutdown()
-        srv.server_close()
-        thread.join(5)
 
 
 def request(srv, method: str, path: str, headers: dict | None = None):
@@ -169,11 +177,8 @@ def test_stalled_and_idle_connections_are_closed_after_the_idle_timeout(bundle):
     """Every connection holds a server thread: one that sends half a request, or stays open after its
     answer (HTTP/1.1 keep-alive), is closed once idle for idle_timeout_s (it used to be held for ever)."""
     lines: list[str] = []
-    srv = make_server(bundle, "127.0.0.1", 0, log=lines.append, idle_timeout_s=0.3)
-    thread = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
-    thread.start()
-    port = srv.server_address[1]
-    try:
+    with serving(bundle, log=lines.append, idle_timeout_s=0.3) as srv:
+        port = srv.server_address[1]
         with socket.create_connection(("127.0.0.1", port), timeout=5) as stalled, \
                 socket.create_connection(("127.0.0.1", port), timeout=5) as idle:
             stalled.sendall(b"GET /cdf/" + PRO.encode())  # no end of line, ever
@@ -189,10 +194,6 @@ def test_stalled_and_idle_connections_are_closed_after_the_idle_timeout(bundle):
         assert request(srv, "GET", f"/cdf/{PRO}")[0] == 200  # still serving
         body = answer.split(b"\r\n\r\n", 1)[1]
         assert lines == [f"GET /cdf/{PRO} 200 {len(body)}"] * 2
-    finally:
-        srv.shutdown()
-        srv.server_close()
-        thread.join(5)
 
 
 def test_connections_over_the_cap_get_503_and_the_slot_comes_back(bundle):
@@ -202,11 +203,8 @@ def test_connections_over_the_cap_get_503_and_the_slot_comes_back(bundle):
     import time
 
     lines: list[str] = []
-    srv = make_server(bundle, "127.0.0.1", 0, log=lines.append, max_connections=2)
-    thread = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
-    thread.start()
-    port = srv.server_address[1]
-    try:
+    with serving(bundle, log=lines.append, max_connections=2) as srv:
+        port = srv.server_address[1]
         held = [socket.create_connection(("127.0.0.1", port), timeout=5) for _ in range(2)]
         for s in held:
             s.sendall(b"GET /cdf/" + PRO.encode())  # half a request: the connection keeps its thread
@@ -223,10 +221,6 @@ def test_connections_over_the_cap_get_503_and_the_slot_comes_back(bundle):
             time.sleep(0.02)  # the closed connection's thread has not yet seen the end
         assert status == 200
         held.pop().close()
-    finally:
-        srv.shutdown()
-        srv.server_close()
-        thread.join(5)
 
 
 def test_a_client_hanging_up_is_one_log_line_not_a_traceback(server, capfd):
@@ -261,15 +255,9 @@ def test_concurrent_requests_are_served(server):
 
 
 def test_explicit_prefix_and_root_prefix(bundle):
-    srv = make_server(bundle, "127.0.0.1", 0, prefix="/", log=lambda _l: None)
-    thread = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
-    thread.start()
-    try:
+    with serving(bundle, prefix="/", log=lambda _l: None) as srv:
         assert request(srv, "GET", f"/{PRO}")[0] == 200
         assert request(srv, "GET", f"/cdf/{PRO}")[0] == 404
-    finally:
-        srv.shutdown()
-        srv.server_close()
     assert prefix_from_manifest(bundle) == "/cdf/"
     assert prefix_from_manifest(bundle / "sub") == "/"
 
@@ -297,16 +285,9 @@ def test_a_prefix_no_request_can_match_is_refused(bundle, prefix, text):
 
 
 def test_a_percent_encoded_prefix_is_served(bundle):
-    srv = make_server(bundle, "127.0.0.1", 0, prefix="/my%20cdf/v1", log=lambda _l: None)
-    thread = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
-    thread.start()
-    try:
+    with serving(bundle, prefix="/my%20cdf/v1", log=lambda _l: None) as srv:
         assert server_url(srv).endswith("/my%20cdf/v1/")
         assert request(srv, "GET", f"/my%20cdf/v1/{PRO}")[0] == 200
-    finally:
-        srv.shutdown()
-        srv.server_close()
-        thread.join(5)
 
 
 @pytest.mark.parametrize("host", ["nosuchhost.invalid", "192.0.2.1"])  # unresolvable; not this machine's
@@ -328,20 +309,13 @@ def _ipv6_loopback() -> bool:
 @pytest.mark.skipif(not _ipv6_loopback(), reason="no IPv6 loopback on this machine")
 def test_serves_on_an_ipv6_address(bundle):
     # http.server listens on IPv4 only: --host ::1 used to fail with "Address family not supported"
-    srv = make_server(bundle, "::1", 0, log=lambda _l: None)
-    thread = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
-    thread.start()
-    try:
+    with serving(bundle, "::1", log=lambda _l: None) as srv:
         url = server_url(srv)
         assert url == f"http://[::1]:{srv.server_address[1]}/cdf/"
         conn = http.client.HTTPConnection("::1", srv.server_address[1], timeout=10)
         conn.request("GET", f"/cdf/{PRO}")
         assert conn.getresponse().status == 200
         conn.close()
-    finally:
-        srv.shutdown()
-        srv.server_close()
-        thread.join(5)
 
 
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
@@ -388,15 +362,9 @@ def test_every_manifest_uri_is_served_and_validates_over_http(tmp_path):
     validation = pytest.importorskip("cdf.validation")
     out = tmp_path / "cdf"
     out.mkdir()
-    srv = make_server(out, "127.0.0.1", 0, prefix="/cdf", log=lambda _l: None)
-    thread = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
-    thread.start()
-    try:
+    with serving(out, prefix="/cdf", log=lambda _l: None) as srv:
         result = build_bundle(out, all_models=True, base_url=server_url(srv).rstrip("/"))
         assert result.entries
         for entry in result.entries:
             report = validation.validate_source(entry.uri, "strict")
             assert report.valid and report.parameters > 0, entry.uri
-    finally:
-        srv.shutdown()
-        srv.server_close()
