@@ -357,13 +357,18 @@ def test_an_interrupted_wait_heartbeat_leaves_the_link_working():
         peer.close()
 
 
+def _gcs_heartbeat() -> bytes:
+    """One HEARTBEAT from a ground station (system 1), as a raw peer socket sends it."""
+    mav = mavlink2.MAVLink(None, 1, 1)
+    return mav.heartbeat_encode(mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0, 0).pack(mav)
+
+
 def test_new_udpin_peers_while_another_thread_sends():
     """pymavlink's udpin write() iterated over its peer set while our receive thread added to it: "Set
     changed size during iteration" in the sending thread (an emulator's tick died, and the emulator
     fell silent: seen once in test_flood_over_udp_keeps_the_emulator_answering). 5 of 5 runs on the old
     code raised within 1000 new peers."""
-    mav = mavlink2.MAVLink(None, 1, 1)
-    datagram = mav.heartbeat_encode(mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0, 0).pack(mav)
+    datagram = _gcs_heartbeat()
     errors: list[BaseException] = []
     with Link("udpin:127.0.0.1:0", heartbeat_s=0) as link:
         stop = threading.Event()
@@ -401,8 +406,7 @@ def test_a_silent_udpin_peer_is_dropped_while_another_is_alive(monkeypatch):
     import wiris_tools.link as link_module
 
     monkeypatch.setattr(link_module, "UDPIN_PEER_TIMEOUT_S", 0.3)
-    mav = mavlink2.MAVLink(None, 1, 1)
-    datagram = mav.heartbeat_encode(mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0, 0).pack(mav)
+    datagram = _gcs_heartbeat()
     with Link("udpin:127.0.0.1:0", heartbeat_s=0) as link, \
             socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as gone, \
             socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as alive:
@@ -440,8 +444,7 @@ def test_a_send_between_a_new_peer_and_its_time_does_not_fail():
     timeout on, write() looks every peer's time up, so a send in between raised KeyError (the sender, an
     emulator's tick, would have died). The moment is two statements wide: the test stands in it by adding
     a peer to the set alone."""
-    mav = mavlink2.MAVLink(None, 1, 1)
-    datagram = mav.heartbeat_encode(mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0, 0).pack(mav)
+    datagram = _gcs_heartbeat()
     with Link("udpin:127.0.0.1:0", heartbeat_s=0) as link, \
             socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as old, \
             socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as new:
