@@ -1,7 +1,7 @@
 """The survey-quality benchmark's areas, generated deterministically (no randomness, no files).
 
 Each area is drawn in metres around a site and converted to [lat, lon] rings through the site's local
-projection, so the benchmark exercises the whole reader path (`missions.area.build_area`) at three
+projection, so the benchmark exercises the whole reader path (`missions.geometry.area.build_area`) at three
 latitudes — Prague (50° N), Sydney (34° S, southern hemisphere), Reykjavík (64° N) — and at Fiji, across
 the 180° meridian. Kinds: convex, concave (L, U, comb, star), holes, thin strips, multipolygons, tiny
 (smaller than one footprint) and large (> 1 km²).
@@ -103,10 +103,10 @@ def bench_areas() -> list[BenchArea]:
 
 
 def to_latlon_polygons(a: BenchArea) -> list[Any]:
-    """The area as missions.area.LatLonPolygon values (what a KML/GeoJSON file would give)."""
+    """The area as missions.geometry.area.LatLonPolygon values (what a KML/GeoJSON file would give)."""
     import numpy as np
-    from missions.area import LatLonPolygon
-    from missions.geo import LocalProjection
+    from missions.geometry.area import LatLonPolygon
+    from missions.geometry.geo import LocalProjection
 
     lat0, lon0 = SITES[a.site]
     proj = LocalProjection(lat0, lon0)

@@ -10,7 +10,7 @@ follows the photos, which grow with the area, while items grow with its square r
 cost grows from a size to any larger one — raw, and with the fixed cost of compiling a plan (a takeoff/waypoint/RTL plan, measured here) taken
 off, which is the one that shows whether a stage grows faster than the mission. Target: ≤ 2×.
 Peak Python memory (tracemalloc) is measured in a second pass, per size, because tracing slows the code.
-`--report` also times `missions.report.report` (simulation + coverage measurement) the same way.
+`--report` also times `missions.measure.report.report` (simulation + coverage measurement) the same way.
 """
 
 from __future__ import annotations
@@ -81,7 +81,7 @@ def main() -> int:
     ap.add_argument("--report", action="store_true", help="also time the measured report")
     args = ap.parse_args()
     from missions.compile import compile_plan
-    from missions.report import report
+    from missions.measure.report import report
 
     sizes = SIZES_M2[:-1] if args.quick else SIZES_M2
     with tempfile.TemporaryDirectory() as tmp:

@@ -1,4 +1,4 @@
-"""Survey quality benchmark: missions.survey against a QGroundControl-style baseline, side by side.
+"""Survey quality benchmark: missions.geometry.survey against a QGroundControl-style baseline, side by side.
 
     .venv/bin/python bench/bench_survey_quality.py [--md | --compact]
 
@@ -13,10 +13,10 @@ Planners:
             holes cannot be expressed (the outer ring is surveyed); one survey per polygon of a
             multipolygon; lawn-mower order; 10 m turnaround stubs; DO_SET_CAM_TRIGG_DIST with param3 = 1
             at entry and exit (images in turnarounds off), photos from distance triggering.
-  ours@0    missions.survey.plan_survey at the same fixed angle 0 (isolates the algorithm).
-  ours@auto missions.survey.plan_survey with the optimised angle.
-Both are measured by the same functions (missions.coverage.measure) on photos re-derived with
-missions.triggers.simulate_distance_trigger from each planner's own path.
+  ours@0    missions.geometry.survey.plan_survey at the same fixed angle 0 (isolates the algorithm).
+  ours@auto missions.geometry.survey.plan_survey with the optimised angle.
+Both are measured by the same functions (missions.measure.coverage.measure) on photos re-derived with
+missions.geometry.triggers.simulate_distance_trigger from each planner's own path.
 
 Columns: cov = area covered by ≥ 1 footprint (%), side/front = minimum achieved overlap (%),
 path/LB = path length ÷ (area / spacing), time = path/speed + 2·v/a per leg end (a = 2 m/s², the
@@ -38,12 +38,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from areas import bench_areas, to_latlon_polygons  # noqa: E402
-from missions.area import build_area  # noqa: E402
-from missions.coverage import measure  # noqa: E402
-from missions.footprint import Footprint, transect_spacing_m, trigger_distance_m  # noqa: E402
-from missions.survey import estimated_time_s, plan_survey  # noqa: E402
-from missions.swaths import frame  # noqa: E402
-from missions.triggers import TriggerSpan, simulate_distance_trigger  # noqa: E402
+from missions.geometry.area import build_area  # noqa: E402
+from missions.measure.coverage import measure  # noqa: E402
+from missions.geometry.footprint import Footprint, transect_spacing_m, trigger_distance_m  # noqa: E402
+from missions.geometry.survey import estimated_time_s, plan_survey  # noqa: E402
+from missions.geometry.swaths import frame  # noqa: E402
+from missions.geometry.triggers import TriggerSpan, simulate_distance_trigger  # noqa: E402
 
 GSD_M = 60.0 * 17e-6 / 13e-3
 FP = Footprint(640 * GSD_M, 512 * GSD_M)
@@ -225,7 +225,7 @@ def compact(rows: list[dict]) -> None:
 
 def low_overlap_section() -> None:
     """Edge coverage when the overlaps leave little slack (QGC #5193): coverage % per planner."""
-    from missions.coverage import coverage_fraction
+    from missions.measure.coverage import coverage_fraction
     configs = ((60.0, 20.0), (40.0, 10.0))
     print("\ncoverage % at low overlap (front/side): QGC's arbitrary first-line offset and one segment per "
           "line against ours")

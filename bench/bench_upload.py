@@ -45,8 +45,8 @@ sys.path.insert(0, str(ROOT / "tests"))
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2  # noqa: E402
 
 import mission_peers  # noqa: E402
-from missions.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem  # noqa: E402
-from missions.planfile import write_plan  # noqa: E402
+from missions.emit.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem  # noqa: E402
+from missions.formats.planfile import write_plan  # noqa: E402
 from wiris_tools.linkemu import LinkEmulator, LinkProfile  # noqa: E402
 from wiris_tools.readback import compare_items  # noqa: E402
 from wiris_tools.transfer import home_item  # noqa: E402

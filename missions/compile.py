@@ -3,10 +3,10 @@
     compiled = compile_plan("plan.yaml")                 # the plan's firmware
     compiled = compile_plan(plan, firmware="px4")        # a loaded Plan, another firmware
 
-Pipeline: load (schema, locations) -> per step: area -> survey/corridor geometry (missions.survey,
-missions.corridor) -> items (missions.emit, firmware × camera) -> firmware check (missions.firmware) ->
-item limit / parts -> setup sequence (missions.setup) -> Lua bridge (missions.lua) -> autopilot params
-(missions.params) -> warnings. Pure: no sockets, no files written; errors are PlanError with the plan's
+Pipeline: load (schema, locations) -> per step: area -> survey/corridor geometry (missions.geometry.survey,
+missions.geometry.corridor) -> items (missions.emit.emitter, firmware × camera) -> firmware check (missions.emit.firmware) ->
+item limit / parts -> setup sequence (missions.emit.setup) -> Lua bridge (missions.emit.lua) -> autopilot params
+(missions.emit.params) -> warnings. Pure: no sockets, no files written; errors are PlanError with the plan's
 file:line:col.
 
 Warnings are "code: message" strings. Codes: altitude_above_120m, assumed_optics, trigger_interval_near_min,
@@ -21,13 +21,13 @@ from pathlib import Path
 from typing import Any
 
 from missions.compiled import AreaInfo, Compiled, PayloadInfo
-from missions.emit import Emitter, Track, TrackPoint, HOVER_HOLD_S
+from missions.emit.emitter import Emitter, Track, TrackPoint, HOVER_HOLD_S
 from missions.errors import PlanError
-from missions.firmware import check_items, profile, split_parts
-from missions.plan import (CameraStep, CorridorStep, LandStep, Plan, RtlStep, SurveyStep, TakeoffStep, WaypointStep,
+from missions.emit.firmware import check_items, profile, split_parts
+from missions.plan.load import (CameraStep, CorridorStep, LandStep, Plan, RtlStep, SurveyStep, TakeoffStep, WaypointStep,
                            load_plan)
-from missions.schema import MAX_ALTITUDE_M, MIN_ALTITUDE_M
-from missions import optics
+from missions.plan.schema import MAX_ALTITUDE_M, MIN_ALTITUDE_M
+from missions.geometry import optics
 
 MAX_AGL_M = 120.0            # the common regulatory ceiling without a permit (EU open category, US Part 107)
 NEAR_MIN_INTERVAL = 1.2      # warn when photos come less than 20 % slower than the camera's minimum
@@ -48,7 +48,7 @@ def _check_reach(home: Any, lat: float, lon: float, what: str, where: str) -> No
     coordinate, and the flight there (along which a RedEdge keeps shooting) would be thousands of km."""
     from pyproj import Geod
 
-    from missions.geo import MAX_EXTENT_M
+    from missions.geometry.geo import MAX_EXTENT_M
 
     distance = Geod(ellps="WGS84").inv(home.lon, home.lat, lon, lat)[2]
     if not distance <= MAX_EXTENT_M:
@@ -63,7 +63,7 @@ def _rededge_survey(alts: list[float], overlaps: list[tuple[float, float]]):
     camera to space its captures by the target altitude's footprint, higher surveys only gain overlap) and the
     tolerance reaches a margin below it, so that it does not shoot while climbing (a quarter of the altitude, at
     least 10 m: our choice, not MicaSense's). The overlaps are the most demanding of the surveys (rounded up)."""
-    from missions.setup import RedEdgeSurvey
+    from missions.emit.setup import RedEdgeSurvey
 
     lowest = min(alts)
     target = max(int(math.floor(lowest)), 1)
@@ -74,10 +74,10 @@ def _rededge_survey(alts: list[float], overlaps: list[tuple[float, float]]):
 
 def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -> Compiled:
     from cdf.catalogue import catalogue
-    from missions.lua import render_script
-    from missions.params import autopilot_params
-    from missions.setup import setup_steps
-    from missions.survey import MAX_PHOTOS
+    from missions.emit.lua import render_script
+    from missions.emit.params import autopilot_params
+    from missions.emit.setup import setup_steps
+    from missions.geometry.survey import MAX_PHOTOS
 
     plan = path_or_plan if isinstance(path_or_plan, Plan) else load_plan(path_or_plan)
     fw = firmware or plan.vehicle.firmware
@@ -184,8 +184,8 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
             photos_left = max(0, MAX_PHOTOS - sum(len(g.photos) for g in intent))
             try:
                 if kind == "survey":
-                    from missions.area import load_area
-                    from missions.survey import plan_survey
+                    from missions.geometry.area import load_area
+                    from missions.geometry.survey import plan_survey
 
                     area = load_area(step.area, exclude=step.exclude, base_dir=plan.base_dir,
                                      where=plan.step_where(step, "area"))
@@ -195,7 +195,7 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
                                       min_interval_s=info.min_interval_s, refly_90=step.refly_90,
                                       hover=step.trigger == "hover", start_latlon=start, photos_left=photos_left)
                 else:
-                    from missions.corridor import plan_corridor
+                    from missions.geometry.corridor import plan_corridor
 
                     if step.trigger == "hover":
                         raise PlanError("corridors are flown with distance or interval triggering",

@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from missions.items import MissionItem
+from missions.emit.items import MissionItem
 
 
 @dataclass(frozen=True)
@@ -47,7 +47,7 @@ class AreaInfo:
     step: int                       # index of the step in the plan's mission list
     kind: str                       # "survey" | "corridor"
     payloads: tuple[str, ...]       # payload names; the first sets the lines
-    area: Any                       # missions.area.Area (projected shapely geometry + projection)
+    area: Any                       # missions.geometry.area.Area (projected shapely geometry + projection)
     altitude_m: float               # above home
     front_overlap: float            # fraction 0..1 requested
     side_overlap: float

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import math
 
-from missions.area import LatLonPolygon, build_area
+from missions.geometry.area import LatLonPolygon, build_area
 from missions.compiled import AreaInfo, Compiled, PayloadInfo
-from missions.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem, deg_to_e7, mavlink
+from missions.emit.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem, deg_to_e7, mavlink
 
 HOME = (50.1102, 14.5031, 262.0)
 THERMAL = PayloadInfo("thermal", "wiris-pro", "thermal", 100, 13.0, (10.88, 8.704), (640, 512), True, 1.0)
@@ -27,7 +27,7 @@ def handmade(size_m=200.0, alt=40.0, front=0.8, side=0.7, hover=False, speed=6.0
     """A square survey flown as a lawn-mower written out item by item (no planner involved)."""
     half = size_m / 2
     # a square centred 150 m north-east of home
-    from missions.geo import LocalProjection
+    from missions.geometry.geo import LocalProjection
     p0 = LocalProjection(HOME[0], HOME[1])
     corners = [(150 - half, 150 - half), (150 + half, 150 - half), (150 + half, 150 + half), (150 - half, 150 + half)]
     ll = [p0.point_to_latlon(x, y) for x, y in corners]

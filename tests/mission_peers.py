@@ -23,7 +23,7 @@ import threading
 import queue
 from pathlib import Path
 
-from missions.items import MissionItem
+from missions.emit.items import MissionItem
 
 WORKER = Path(__file__).resolve().with_name("mission_peers_worker.py")
 

@@ -6,9 +6,9 @@ import math
 
 from hypothesis import strategies as st
 
-from missions.area import Area
-from missions.footprint import Footprint
-from missions.geo import LocalProjection
+from missions.geometry.area import Area
+from missions.geometry.footprint import Footprint
+from missions.geometry.geo import LocalProjection
 
 # WIRIS Pro 640×512, 17 µm pixels, 13 mm lens at 60 m: the benchmark's thermal footprint.
 GSD_M = 60 * 17e-6 / 13e-3

@@ -20,7 +20,7 @@ import random
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
-from missions.items import MissionItem
+from missions.emit.items import MissionItem
 from wiris_tools.errors import LinkError
 from wiris_tools.link import Link
 from wiris_tools.linkemu import LinkEmulator, LinkProfile

@@ -16,7 +16,7 @@ from collections.abc import Sequence
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from missions.items import MissionItem
+from missions.emit.items import MissionItem
 from wiris_tools.errors import LinkError
 
 

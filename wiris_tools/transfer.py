@@ -62,8 +62,8 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from missions.items import MISSION_TYPE_MISSION, MissionItem
-from missions.planfile import FLOAT32_MAX
+from missions.emit.items import MISSION_TYPE_MISSION, MissionItem
+from missions.formats.planfile import FLOAT32_MAX
 from wiris_tools.errors import LinkError
 from wiris_tools.link import Link
 from wiris_tools.readback import compare_items, readback_firmware
@@ -684,7 +684,7 @@ def load_for_upload(path: str, mission_type: int = MISSION_TYPE_MISSION, *, part
     suffix = p.suffix.lower()
     kind = TYPE_NAMES.get(mission_type, str(mission_type))
     if suffix in PLAN_SUFFIXES:
-        from missions.planfile import load_plan
+        from missions.formats.planfile import load_plan
         items, fence, rally, home = load_plan(p)
         chosen = {MISSION_TYPE_MISSION: items, mavlink2.MAV_MISSION_TYPE_FENCE: fence,
                   mavlink2.MAV_MISSION_TYPE_RALLY: rally}[mission_type]
@@ -692,7 +692,7 @@ def load_for_upload(path: str, mission_type: int = MISSION_TYPE_MISSION, *, part
         if mission_type != MISSION_TYPE_MISSION:
             raise PlanError(f"a WPL 110 file holds a mission, not a {kind} list", where=str(p),
                             hint="upload fence and rally from a .plan file")
-        from missions.wpl import load_wpl
+        from missions.formats.wpl import load_wpl
         chosen, home = load_wpl(p)
     elif suffix in CAPTURE_SUFFIXES:
         if mission_type != MISSION_TYPE_MISSION:
@@ -705,7 +705,7 @@ def load_for_upload(path: str, mission_type: int = MISSION_TYPE_MISSION, *, part
                             where=str(p), hint="compile it elsewhere and upload the .plan file") from None
         compiled = compile_plan(str(p), firmware=firmware)
         try:
-            from missions.report import report
+            from missions.measure.report import report
             errors = report(compiled)["errors"]
         except ImportError:
             errors = []
@@ -737,7 +737,7 @@ def load_for_upload(path: str, mission_type: int = MISSION_TYPE_MISSION, *, part
 
 def home_item(home: tuple[float, float, float] | None) -> MissionItem:
     """ArduPilot's item 0: the home position (it replaces it with its own home on upload)."""
-    from missions.items import FRAME_GLOBAL, deg_to_e7
+    from missions.emit.items import FRAME_GLOBAL, deg_to_e7
     lat, lon, alt = home if home is not None else (0.0, 0.0, 0.0)
     return MissionItem(command=mavlink2.MAV_CMD_NAV_WAYPOINT, frame=FRAME_GLOBAL, x=deg_to_e7(lat),
                        y=deg_to_e7(lon), z=float(alt))
@@ -795,8 +795,8 @@ def download_file(link: Link, out: str, *, target_system: int | None = None, tar
     from pathlib import Path
 
     from missions.errors import PlanError
-    from missions.planfile import atomic_write, check_writable, write_plan
-    from missions.wpl import write_wpl
+    from missions.formats.planfile import atomic_write, check_writable, write_plan
+    from missions.formats.wpl import write_wpl
 
     p = Path(out)
     suffix = p.suffix.lower()

@@ -52,7 +52,7 @@ from dataclasses import dataclass, field
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from missions.items import MissionItem
+from missions.emit.items import MissionItem
 from wiris_tools.link import Link
 from wiris_tools.readback import ALT_REFERENCE, ap_float16, ap_loiter_radius, ap_loiter_turns, readback_rule
 from wiris_tools.transfer import item_from_msg, with_opaque_id

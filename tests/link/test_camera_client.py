@@ -15,7 +15,7 @@ from click.testing import CliRunner
 
 from cdf.catalogue import catalogue
 from missions.compiled import SetupStep
-from missions.setup import dumps_setup
+from missions.emit.setup import dumps_setup
 from raw_peers import timed_call
 from wiris_tools.camera_client import CameraClient, load_setup, parse_setup
 from wiris_tools.cli import cli
@@ -415,8 +415,8 @@ def test_setup_param_set_types_are_checked(step, error):
 def test_rededge_exposure_reaches_every_imager(tmp_path):
     """A compiled plan's RedEdge exposure settings: one DIGICAM_CONFIGURE, which the camera never answers, sent
     retries + 1 times over the wire (counted where the emulator receives it) and applied to all five bands."""
-    from missions.plan import Payload
-    from missions.setup import setup_steps
+    from missions.plan.load import Payload
+    from missions.emit.setup import setup_steps
 
     cam = catalogue().get("rededge-mx")
     settings = {"exposure_mode": "manual", "shutter_divisor": 2000, "iso": "iso800"}

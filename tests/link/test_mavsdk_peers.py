@@ -10,7 +10,7 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 import mission_peers
-from missions.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem
+from missions.emit.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem
 from wiris_tools.link import Link
 from wiris_tools.readback import compare_items
 from wiris_tools.transfer import MissionClient

@@ -9,7 +9,7 @@ import math
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from missions.items import (FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MISSION_TYPE_FENCE, MISSION_TYPE_MISSION,
+from missions.emit.items import (FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MISSION_TYPE_FENCE, MISSION_TYPE_MISSION,
                             MISSION_TYPE_RALLY, MissionItem)
 from raw_peers import lose_accepted_acks, scripted_vehicle
 from wiris_tools.errors import LinkError

@@ -11,9 +11,9 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from missions.items import MISSION_TYPE_FENCE, MissionItem
-from missions.planfile import load_plan, write_plan
-from missions.wpl import load_wpl, write_wpl
+from missions.emit.items import MISSION_TYPE_FENCE, MissionItem
+from missions.formats.planfile import load_plan, write_plan
+from missions.formats.wpl import load_wpl, write_wpl
 from wiris_tools.cli import cli
 from wiris_tools.readback import compare_items
 from wiris_tools.vehicle_sim import VehicleSim
@@ -326,7 +326,7 @@ def test_plan_numbers_beyond_float32_are_located(path, value):
     if value is not None:
         doc["mission"]["plannedHomePosition"][2] = value
     from missions.errors import PlanError
-    from missions.planfile import read_plan
+    from missions.formats.planfile import read_plan
 
     with pytest.raises(PlanError) as err:
         read_plan(json.dumps(doc), "x.plan")

@@ -18,7 +18,7 @@ import time
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from missions.items import MISSION_TYPE_FENCE, MISSION_TYPE_MISSION, MissionItem
+from missions.emit.items import MISSION_TYPE_FENCE, MISSION_TYPE_MISSION, MissionItem
 from raw_peers import lose_accepted_acks, scripted_vehicle
 from wiris_tools.errors import LinkError
 from wiris_tools.link import Link
@@ -34,7 +34,7 @@ def f32(v: float) -> float:
     return struct.unpack("<f", struct.pack("<f", v))[0]
 
 
-# What a compiled plan holds (missions.firmware emits these commands), in the frames each firmware takes.
+# What a compiled plan holds (missions.emit.firmware emits these commands), in the frames each firmware takes.
 MISSION = [
     MissionItem(command=C.MAV_CMD_NAV_TAKEOFF, frame=3, param1=15.0, param4=NAN, x=473977507, y=85456075, z=30.0),
     MissionItem(command=C.MAV_CMD_DO_CHANGE_SPEED, frame=2, param1=1.0, param2=8.5, param3=-1.0),

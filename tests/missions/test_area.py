@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from missions.area import load_area
+from missions.geometry.area import load_area
 from missions.errors import PlanError
 
 DATA = Path(__file__).parent / "data"
@@ -138,7 +138,7 @@ def test_missing_and_unknown_files(tmp_path: Path) -> None:
 
 
 def test_oversized_file_is_refused(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    import missions.area as area_mod
+    import missions.geometry.area as area_mod
     monkeypatch.setattr(area_mod, "MAX_AREA_FILE_BYTES", 100)
     big = tmp_path / "big.geojson"
     big.write_text(" " * 200 + "{}")

@@ -10,11 +10,11 @@ import yaml
 from pymavlink.dialects.v20 import ardupilotmega as m
 
 from cdf.catalogue import catalogue
-from missions import lua
+from missions.emit import lua
 from missions.compile import compile_plan
 from missions.errors import PlanError
-from missions.plan import parse_plan
-from missions.setup import commands_for
+from missions.plan.load import parse_plan
+from missions.emit.setup import commands_for
 
 PLANS = Path(__file__).resolve().parent / "plans"
 
@@ -386,10 +386,10 @@ def test_a_step_far_from_home_is_refused(tmp_path, step, what):
 
 
 def test_the_photo_budget_is_the_whole_plans(tmp_path, monkeypatch):
-    import missions.survey
+    import missions.geometry.survey
 
     one = len(build(tmp_path).intent[0].photos)
-    monkeypatch.setattr(missions.survey, "MAX_PHOTOS", int(one * 1.5))   # room for one survey, not two
+    monkeypatch.setattr(missions.geometry.survey, "MAX_PHOTOS", int(one * 1.5))   # room for one survey, not two
 
     def twice(doc):
         doc["mission"].insert(2, copy.deepcopy(doc["mission"][1]))
@@ -403,13 +403,13 @@ def test_px4_params(tmp_path):
     params = {n: v for n, v, _ in c.params}
     assert params["TRIG_INTERFACE"] == 3 and params["TRIG_MODE"] == 4
     assert params["MAV_1_FORWARD"] == 1 and params["SER_TEL2_BAUD"] == 57600
-    from missions.params import format_params
+    from missions.emit.params import format_params
     text = format_params(c)
     assert "param set TRIG_MODE 4" in text and "# " in text
 
 
 def test_ardupilot_params_file_format(tmp_path):
-    from missions.params import format_params
+    from missions.emit.params import format_params
     c = build(tmp_path)
     lines = format_params(c).splitlines()
     assert "CAM1_TYPE,6" in lines and "SERIAL2_PROTOCOL,2" in lines and "SERIAL2_BAUD,57" in lines
@@ -550,10 +550,10 @@ LINE = [[50.110, 14.500], [50.113, 14.504]]
 ])
 def test_geometry_argument_errors_carry_a_hint(planner, kwargs, where):
     # the plan schema keeps these out of a plan file; library callers get the same where, what and hint
-    from missions.area import load_area
-    from missions.corridor import plan_corridor
-    from missions.footprint import Footprint
-    from missions.survey import plan_survey
+    from missions.geometry.area import load_area
+    from missions.geometry.corridor import plan_corridor
+    from missions.geometry.footprint import Footprint
+    from missions.geometry.survey import plan_survey
 
     fp = Footprint(across_m=50.0, along_m=40.0)
     with pytest.raises(PlanError) as ei:

@@ -12,12 +12,12 @@ import pytest
 import yaml
 
 from missions.compile import compile_plan
-from missions.corridor import plan_corridor
-from missions.coverage import measure
-from missions.footprint import Footprint
-from missions.geo import LocalProjection
-from missions.plan import parse_plan
-from missions.report import report
+from missions.geometry.corridor import plan_corridor
+from missions.measure.coverage import measure
+from missions.geometry.footprint import Footprint
+from missions.geometry.geo import LocalProjection
+from missions.plan.load import parse_plan
+from missions.measure.report import report
 
 # the reviewer's corridor-loop plan (/tmp/s12/rev-geom/repro/corridor-loop): a 300 m square, starting at its
 # south-west corner and going east, north, west and south again (counter-clockwise), 60 m wide at 40 m
@@ -101,11 +101,11 @@ def test_side_overlap_of_a_loop_is_measured_all_round_it(tmp_path):
     # out. With the old measure that was luck: whether a line bent round every corner was measured at all
     # depended on where its photos fell (the old lines were; the loop's closed lines read 0.4075 for 0.40, the
     # outer pair unmeasured). The reviewer's 46 % for this loop is at its bends, which the side overlap leaves out
-    # by definition (see missions.coverage), and reads the same on an open corridor with one such bend; away
+    # by definition (see missions.measure.coverage), and reads the same on an open corridor with one such bend; away
     # from the bends every independent count gives the spacing's 60 %.
-    from missions.coverage import min_side_overlap
-    from missions.report import simulate
-    from missions.triggers import PhotoPoint
+    from missions.measure.coverage import min_side_overlap
+    from missions.measure.flight import simulate
+    from missions.geometry.triggers import PhotoPoint
 
     c = _compile(tmp_path, SQUARE)
     (first, end), = [a.items for a in c.areas]
@@ -139,8 +139,8 @@ def test_side_overlap_of_a_loop_measures_every_pair_of_lines(name):
     # half a spacing further out, 0.603 instead of 0.40.
     from shapely.geometry import LineString, Point, Polygon
 
-    from missions.coverage import min_side_overlap
-    from missions.triggers import PhotoPoint
+    from missions.measure.coverage import min_side_overlap
+    from missions.geometry.triggers import PhotoPoint
 
     plan = _plan(LOOPS[name])
     assert min_side_overlap(plan.photos, FP) == pytest.approx(0.6, abs=0.003)

@@ -11,10 +11,10 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 from shapely.geometry import box
 
 from missions_geometry import WIRIS_60M, area_from_xy, convex_polygons, leg_crossings, star_polygons
-from missions.coverage import coverage_fraction, footprint_polygons, measure, min_front_overlap, min_side_overlap
-from missions.footprint import Footprint, transect_spacing_m
-from missions.survey import plan_survey
-from missions.triggers import PhotoPoint
+from missions.measure.coverage import coverage_fraction, footprint_polygons, measure, min_front_overlap, min_side_overlap
+from missions.geometry.footprint import Footprint, transect_spacing_m
+from missions.geometry.survey import plan_survey
+from missions.geometry.triggers import PhotoPoint
 
 FP20 = Footprint(20.0, 10.0)        # 20 m across, 10 m along
 
@@ -141,8 +141,8 @@ def test_random_concave_areas_are_covered_at_any_overlap(poly, overlap, angle) -
 def _gps_track_corridor():
     """A corridor along a GPS track: a point every 2 m, each up to 0.3 m off the straight line (the reviewer's
     corridor-gps-track plan), so the lines turn by up to ~17° at every vertex."""
-    from missions.corridor import plan_corridor
-    from missions.geo import LocalProjection
+    from missions.geometry.corridor import plan_corridor
+    from missions.geometry.geo import LocalProjection
     rng = np.random.default_rng(1)
     xy = np.column_stack([rng.uniform(-0.3, 0.3, 200), 2.0 * np.arange(200)])
     lat, lon = LocalProjection(50.10, 14.50).to_latlon(xy[:, 0], xy[:, 1])

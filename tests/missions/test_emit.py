@@ -8,10 +8,10 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as m
 
 from cdf.catalogue import catalogue
-from missions import lua
-from missions.emit import Emitter, Track, TrackPoint
+from missions.emit import lua
+from missions.emit.emitter import Emitter, Track, TrackPoint
 from missions.errors import PlanError
-from missions.firmware import ARDUPILOT, PX4, check_items
+from missions.emit.firmware import ARDUPILOT, PX4, check_items
 
 
 def emitter(prof, payloads=("thermal",)):
@@ -100,7 +100,7 @@ def test_visible_settings_in_flight_refused_on_px4():
 
 def test_altitudes_are_whole_centimetres_as_ardupilot_stores_them():
     """ArduPilot keeps mission altitudes in cm; a finer value would read back different under --verify."""
-    from missions import emit
+    from missions.emit import emitter as emit
 
     item = emit._nav(16, 50.0, 14.0, 40.123456)
     assert item.z == 40.12

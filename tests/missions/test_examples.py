@@ -1,6 +1,6 @@
 """The example plans of examples/: each compiles on its firmware without errors, reaches ≥ 99.5 % measured
 coverage, and its files are read back exactly — .plan by MAVSDK's QGroundControl importer (a real third-party
-reader), .waypoints by missions.wpl."""
+reader), .waypoints by missions.formats.wpl."""
 
 from __future__ import annotations
 
@@ -11,10 +11,11 @@ import pytest
 
 import mission_peers
 from missions.compile import compile_plan
-from missions.items import FRAME_GLOBAL, MissionItem, mavlink
-from missions.outputs import write_outputs
-from missions.report import report, simulate
-from missions.wpl import read_wpl
+from missions.emit.items import FRAME_GLOBAL, MissionItem, mavlink
+from missions.formats.outputs import write_outputs
+from missions.measure.flight import simulate
+from missions.measure.report import report
+from missions.formats.wpl import read_wpl
 
 EXAMPLES = sorted((Path(__file__).resolve().parents[2] / "examples").glob("*.yaml"))
 

@@ -13,14 +13,14 @@ from shapely.geometry import LineString, Point, Polygon, box
 
 from handmade_mission import handmade
 from missions_geometry import WIRIS_60M
-from missions.area import LatLonPolygon, build_area, load_area
-from missions.coverage import measure
-from missions.geo import LocalProjection
-from missions.items import mavlink
-from missions.report import report
-from missions.route import build_route
-from missions.survey import DEFAULT_EXIT_MARGIN_M, plan_survey
-from missions.triggers import TriggerSpan, simulate_distance_trigger
+from missions.geometry.area import LatLonPolygon, build_area, load_area
+from missions.measure.coverage import measure
+from missions.geometry.geo import LocalProjection
+from missions.emit.items import mavlink
+from missions.measure.report import report
+from missions.geometry.route import build_route
+from missions.geometry.survey import DEFAULT_EXIT_MARGIN_M, plan_survey
+from missions.geometry.triggers import TriggerSpan, simulate_distance_trigger
 
 DATA = Path(__file__).parent / "data"
 FP = WIRIS_60M

@@ -8,8 +8,8 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as m
 
 from missions.errors import PlanError
-from missions.firmware import ARDUPILOT, PX4, check_items, split_parts
-from missions.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem
+from missions.emit.firmware import ARDUPILOT, PX4, check_items, split_parts
+from missions.emit.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem
 
 # Written from shared/reference/autopilots-and-cameras.md §2.2 / §3.1 / §7 and survey-planners §7, by name.
 REFERENCE = {

@@ -10,7 +10,7 @@ from hypothesis import given, settings, strategies as st
 from pyproj import Geod
 
 from missions.errors import PlanError
-from missions.geo import LocalProjection, unwrap_lons
+from missions.geometry.geo import LocalProjection, unwrap_lons
 
 GEOD = Geod(ellps="WGS84")
 

@@ -9,9 +9,9 @@ import math
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from missions import lua
+from missions.emit import lua
 from missions.errors import PlanError
-from missions.items import mavlink
+from missions.emit.items import mavlink
 
 
 def lua54():

@@ -165,7 +165,7 @@ def test_split_mission_is_a_warning_not_an_error(tmp_path):
 
 def test_compile_writes_nothing_when_the_measured_report_has_errors(tmp_path, monkeypatch):
     """A mission the report finds unflyable (e.g. a part over the item limit) is printed, not written."""
-    import missions.report as report_module
+    import missions.measure.report as report_module
 
     real_report = report_module.report
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 import pytest
 
 from cdf.catalogue import catalogue
-from missions import optics
+from missions.geometry import optics
 from missions.errors import PlanError
-from missions.plan import Payload
+from missions.plan.load import Payload
 
 
 def info(camera: str, lens: float | None = None, imager: str | None = None, landscape: bool = True):

@@ -10,13 +10,13 @@ import xml.etree.ElementTree as ET
 import pytest
 
 from mission_plans import small_plan
-from missions import outputs
+from missions.formats import outputs
 from missions.compile import compile_plan
 from missions.errors import PlanError
-from missions.outputs import write_outputs
-from missions.planfile import read_plan
-from missions.report import report
-from missions.wpl import read_wpl
+from missions.formats.outputs import write_outputs
+from missions.formats.planfile import read_plan
+from missions.measure.report import report
+from missions.formats.wpl import read_wpl
 
 KML = "{http://www.opengis.net/kml/2.2}"
 
@@ -95,7 +95,7 @@ def test_a_failing_writer_leaves_the_directory_untouched(small, tmp_path, monkey
 
     def boom(fc):
         raise RuntimeError("disk on fire")
-    monkeypatch.setattr("missions.kml_out.render_kml", boom)
+    monkeypatch.setattr("missions.formats.kml.render_kml", boom)
     with pytest.raises(RuntimeError):
         write_outputs(small, out)
     assert _snapshot(out) == before
@@ -125,7 +125,7 @@ def test_a_failure_while_moving_rolls_back(small, tmp_path, monkeypatch):
 
 
 def test_new_directory_is_not_left_behind_on_failure(small, tmp_path, monkeypatch):
-    monkeypatch.setattr("missions.geojson_out.feature_collection",
+    monkeypatch.setattr("missions.formats.geojson.feature_collection",
                         lambda *a: (_ for _ in ()).throw(ValueError("bad geometry")))
     with pytest.raises(ValueError):
         write_outputs(small, tmp_path / "fresh")

@@ -12,11 +12,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from missions import planfile, wpl
+from missions.formats import planfile, wpl
 from missions.errors import PlanError
-from missions.items import MISSION_TYPE_FENCE, MISSION_TYPE_RALLY, MissionItem
-from missions.planfile import load_plan, read_plan, write_plan
-from missions.wpl import load_wpl, read_wpl, write_wpl
+from missions.emit.items import MISSION_TYPE_FENCE, MISSION_TYPE_RALLY, MissionItem
+from missions.formats.planfile import load_plan, read_plan, write_plan
+from missions.formats.wpl import load_wpl, read_wpl, write_wpl
 
 CORPUS = Path(__file__).resolve().parents[3] / "shared" / "corpus" / "plans"
 if not CORPUS.is_dir():

@@ -11,8 +11,9 @@ import pytest
 
 from handmade_mission import handmade
 from missions.errors import PlanError
-from missions.preview import COLOURS, MAX_WAYPOINT_LABELS, build_picture, write_preview
-from missions.report import report, simulate
+from missions.formats.preview import COLOURS, MAX_WAYPOINT_LABELS, build_picture, write_preview
+from missions.measure.flight import simulate
+from missions.measure.report import report
 
 SVG = "{http://www.w3.org/2000/svg}"
 

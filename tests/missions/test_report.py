@@ -10,8 +10,9 @@ import yaml
 
 from handmade_mission import THERMAL, handmade
 from missions.compiled import Compiled
-from missions.items import mavlink
-from missions.report import report, simulate
+from missions.emit.items import mavlink
+from missions.measure.flight import simulate
+from missions.measure.report import report
 
 
 def test_report_has_the_binding_fields():
@@ -215,7 +216,7 @@ def test_a_digicam_shot_fires_while_the_px4_trigger_is_stopped(tmp_path):
     from dataclasses import replace
 
     from missions.compile import compile_plan
-    from missions.items import FRAME_MISSION, MissionItem
+    from missions.emit.items import FRAME_MISSION, MissionItem
     p = tmp_path / "iv.yaml"
     p.write_text(INTERVAL_PLAN)
     c = compile_plan(p)
@@ -230,9 +231,9 @@ def test_a_digicam_shot_fires_while_the_px4_trigger_is_stopped(tmp_path):
 
 
 def test_flight_time_of_one_leg_follows_the_stated_model():
-    from missions.items import FRAME_GLOBAL_RELATIVE_ALT, MissionItem, deg_to_e7
-    from missions.geo import LocalProjection
-    from missions.report import ACCEL_MPS2, CLIMB_MPS, DESCENT_MPS, LAND_FINAL_M, LAND_MPS
+    from missions.emit.items import FRAME_GLOBAL_RELATIVE_ALT, MissionItem, deg_to_e7
+    from missions.geometry.geo import LocalProjection
+    from missions.measure.flight import ACCEL_MPS2, CLIMB_MPS, DESCENT_MPS, LAND_FINAL_M, LAND_MPS
     home = (50.0, 14.0, 300.0)
     lat, lon = LocalProjection(home[0], home[1]).point_to_latlon(0.0, 600.0)
     items = (MissionItem(mavlink.MAV_CMD_NAV_TAKEOFF, FRAME_GLOBAL_RELATIVE_ALT, z=30.0),
@@ -257,9 +258,9 @@ def test_a_vtol_keeps_its_speed_through_turns(frame):
     # a VTOL flies the mission fixed-wing: a right-angle corner costs a copter a stop (braking and accelerating
     # again: v/a more than at constant speed, as for the start and end of the flight), a VTOL nothing; both take
     # off and land vertically
-    from missions.geo import LocalProjection
-    from missions.items import FRAME_GLOBAL_RELATIVE_ALT, MissionItem, deg_to_e7
-    from missions.report import ACCEL_MPS2, CLIMB_MPS, DESCENT_MPS, LAND_FINAL_M, LAND_MPS
+    from missions.geometry.geo import LocalProjection
+    from missions.emit.items import FRAME_GLOBAL_RELATIVE_ALT, MissionItem, deg_to_e7
+    from missions.measure.flight import ACCEL_MPS2, CLIMB_MPS, DESCENT_MPS, LAND_FINAL_M, LAND_MPS
     home = (50.0, 14.0, 300.0)
     proj = LocalProjection(home[0], home[1])
     takeoff, land = ((mavlink.MAV_CMD_NAV_TAKEOFF, mavlink.MAV_CMD_NAV_LAND) if frame == "copter" else
@@ -316,7 +317,7 @@ def test_flying_over_a_hole_is_reported():
 
 def _compile_yaml(tmp_path, survey: dict, firmware: str = "ardupilot"):
     from missions.compile import compile_plan
-    from missions.plan import parse_plan
+    from missions.plan.load import parse_plan
     doc = {"version": 1, "name": "t", "vehicle": {"firmware": firmware, "frame": "copter", "speed_mps": 4.5},
            "home": {"lat": 50.0995, "lon": 14.5, "alt_amsl_m": 250},
            "payloads": {"thermal": {"camera": "wiris-pro", "imager": "thermal", "lens_mm": 13, "component_id": 100}},

@@ -13,8 +13,8 @@ import pytest
 
 from cdf.catalogue import catalogue
 from missions.errors import PlanError
-from missions.plan import Payload
-from missions.setup import RedEdgeSurvey, commands_for, dumps_setup, setup_steps, wire_params
+from missions.plan.load import Payload
+from missions.emit.setup import RedEdgeSurvey, commands_for, dumps_setup, setup_steps, wire_params
 
 
 def wiris(settings: dict, comp: int = 101, camera: str = "wiris-pro") -> Payload:

@@ -11,13 +11,13 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 from shapely.geometry import Point
 
 from missions_geometry import WIRIS_60M
-from missions.area import load_area
-from missions.corridor import plan_corridor
-from missions.coverage import measure
+from missions.geometry.area import load_area
+from missions.geometry.corridor import plan_corridor
+from missions.measure.coverage import measure
 from missions.errors import PlanError
-from missions.geo import unwrap_lons
-from missions.survey import plan_survey
-from missions.triggers import simulate_distance_trigger
+from missions.geometry.geo import unwrap_lons
+from missions.geometry.survey import plan_survey
+from missions.geometry.triggers import simulate_distance_trigger
 
 DATA = Path(__file__).parent / "data"
 FP = WIRIS_60M

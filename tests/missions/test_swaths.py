@@ -11,9 +11,9 @@ from shapely.geometry import LineString, Polygon, box
 from shapely import affinity
 
 from missions_geometry import WIRIS_60M, area_from_xy, leg_crossings, star_polygons
-from missions.route import build_cells, order_legs
-from missions.survey import plan_survey
-from missions.swaths import generate_swaths, line_offsets, normalise_angle
+from missions.geometry.route import build_cells, order_legs
+from missions.geometry.survey import plan_survey
+from missions.geometry.swaths import generate_swaths, line_offsets, normalise_angle
 
 FP = WIRIS_60M
 SPACING = FP.across_m * 0.3
@@ -103,7 +103,7 @@ def test_auto_angle_flies_along_a_long_strip(azimuth: float) -> None:
 
 
 def test_auto_angle_is_never_worse_than_fixed_angles_by_the_objective() -> None:
-    from missions.survey import angle_objective
+    from missions.geometry.survey import angle_objective
     poly = Polygon([(0, 0), (500, 80), (620, 400), (100, 330)])
     plan = plan_survey(area_from_xy(poly), FP, 80, 70, angle_deg="auto", turnaround_m=10, speed_mps=6)
 

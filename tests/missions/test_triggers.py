@@ -7,7 +7,7 @@ import math
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from missions.triggers import TriggerSpan, photos_along, simulate_distance_trigger
+from missions.geometry.triggers import TriggerSpan, photos_along, simulate_distance_trigger
 
 
 def test_straight_leg_start_photo_then_every_distance() -> None:

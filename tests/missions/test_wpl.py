@@ -12,8 +12,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from missions.errors import PlanError
-from missions.items import MissionItem
-from missions.wpl import load_wpl, read_wpl, write_wpl
+from missions.emit.items import MissionItem
+from missions.formats.wpl import load_wpl, read_wpl, write_wpl
 
 CORPUS = Path(__file__).resolve().parents[3] / "shared" / "corpus" / "plans"
 

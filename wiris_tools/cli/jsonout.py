@@ -9,6 +9,6 @@ def echo_json(obj, indent: int | None = None) -> None:
     """Cameras and vehicles send NaN for "unknown" (and a broken one may send inf): written as null."""
     import json  # here, not at module level: `wiris --help` imports this module (tests/test_cli_startup.py)
 
-    from missions.jsonfinite import finite
+    from missions.formats.jsonfinite import finite
 
     click.echo(json.dumps(finite(obj), indent=indent, allow_nan=False, default=str))

@@ -38,7 +38,7 @@ def schema_cmd() -> None:
     """Print the JSON Schema of the capture-plan format (for editors)."""
     import json
 
-    from missions.schema import plan_schema
+    from missions.plan.schema import plan_schema
     click.echo(json.dumps(plan_schema(), indent=2))
 
 
@@ -49,8 +49,9 @@ def schema_cmd() -> None:
 @click.option("--firmware", type=click.Choice(["ardupilot", "px4"]), help="override the plan's vehicle.firmware")
 def compile_cmd(plan: str, out_dir: str, firmware: str | None) -> None:
     """Compile PLAN.yaml into mission files in a directory (all or nothing)."""
-    from missions.outputs import write_outputs
-    from missions.report import report, simulate, summary_lines
+    from missions.formats.outputs import write_outputs
+    from missions.measure.flight import simulate
+    from missions.measure.report import report, summary_lines
 
     compiled = _compile(plan, firmware)
     with _located(plan):
@@ -76,7 +77,7 @@ def check_cmd(plan: str, as_json: bool, firmware: str | None) -> None:
     import json
 
     from missions.errors import PlanError
-    from missions.report import error_report, format_report, report
+    from missions.measure.report import error_report, format_report, report
 
     try:
         with _located(plan):
@@ -99,7 +100,7 @@ def check_cmd(plan: str, as_json: bool, firmware: str | None) -> None:
 @click.option("--firmware", type=click.Choice(["ardupilot", "px4"]), help="override the plan's vehicle.firmware")
 def preview_cmd(plan: str, out: str, firmware: str | None) -> None:
     """Draw the compiled mission: area, path, photo footprints, scale, legend."""
-    from missions.preview import write_preview
+    from missions.formats.preview import write_preview
 
     compiled = _compile(plan, firmware)
     with _located(plan):

@@ -85,7 +85,7 @@ def upload(file: str, kind: str, verify: bool, part: int | None, firmware: str |
            signing_key: str | None, target_system: int | None, target_component: int, timeout: float,
            as_json: bool) -> None:
     """Upload FILE (.plan, .waypoints or a capture plan .yaml) to the vehicle at --connect."""
-    from missions.items import MISSION_TYPES
+    from missions.emit.items import MISSION_TYPES
     from wiris_tools.transfer import load_for_upload, upload_file
 
     loaded = load_for_upload(file, MISSION_TYPES[kind], part=part, firmware=firmware)  # fails before connecting

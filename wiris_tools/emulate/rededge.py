@@ -49,7 +49,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from cdf.catalogue import Camera, Setting
 from cdf.errors import CdfError
-from missions.geo import great_circle_m
+from missions.geometry.geo import great_circle_m
 from wiris_tools.emulate import paramext
 
 Message = Any

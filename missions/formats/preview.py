@@ -2,7 +2,7 @@
 
     write_preview(compiled, "plan.png")      # .svg, .png or .html by suffix
 
-Drawn from the simulated flight (missions.report.simulate), not from the planner's intent: area (holes and
+Drawn from the simulated flight (missions.measure.flight.simulate), not from the planner's intent: area (holes and
 exclusions in red), photo footprints (faint orange), the flown path (blue, arrows show direction), photo
 points, numbered waypoints (when there are few enough to read), home, a scale bar, a north arrow, and a
 legend with the report's key figures. North is up: the simulation's azimuthal-equidistant plane is centred
@@ -98,7 +98,8 @@ def _fmt_time(s: float) -> str:
 
 
 def build_picture(compiled: Compiled, sim: Any = None, rep: dict | None = None) -> Picture:
-    from missions.report import footprint_ring, report, simulate
+    from missions.measure.flight import simulate
+    from missions.measure.report import footprint_ring, report
 
     sim = sim or simulate(compiled)
     rep = rep or report(compiled, sim)
@@ -442,8 +443,9 @@ def render_html(pic: Picture, rep: dict) -> str:
 
 def write_preview(compiled: Compiled, out: str | Path) -> Path:
     """Render the preview to `out` (.svg, .png or .html, by suffix), written atomically."""
-    from missions.planfile import replacing
-    from missions.report import report, simulate
+    from missions.formats.planfile import replacing
+    from missions.measure.flight import simulate
+    from missions.measure.report import report
 
     out = Path(out)
     suffix = out.suffix.lower()

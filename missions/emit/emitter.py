@@ -19,12 +19,12 @@ AP_Camera::set_trigger_distance() — so the compiler refuses two WIRIS on one d
   a single shot into DO_DIGICAM_CONTROL for every camera, reference §3.2). On PX4 the waypoint's yaw (param4)
   is its line's heading; ArduPilot drops it, and faces the line because the route arrives along it.
 - A RedEdge is never triggered by the mission: it takes COMMAND_LONG neither for 203 nor 2000 (reference
-  §0.4); it captures itself in overlap mode (missions.setup) from the GPS the autopilot streams to it.
+  §0.4); it captures itself in overlap mode (missions.emit.setup) from the GPS the autopilot streams to it.
 
 In-flight camera changes (`camera` steps): PX4 takes SET_CAMERA_MODE and DO_DIGICAM_CONTROL in missions and
 forwards them; ArduPilot takes neither USER_1/2 nor SET_CAMERA_MODE, and its MAVLinkCamV2 backend (CAMx_TYPE 6,
 the one that finds a WIRIS by its MAV_TYPE_CAMERA heartbeat) does not forward DIGICAM settings, so on
-ArduPilot every change goes through the Lua bridge (missions.lua). USER_1/2 on PX4 is an error naming the rule.
+ArduPilot every change goes through the Lua bridge (missions.emit.lua). USER_1/2 on PX4 is an error naming the rule.
 """
 
 from __future__ import annotations
@@ -34,11 +34,11 @@ import math
 from typing import Any, Sequence
 
 from missions.errors import PlanError
-from missions.firmware import FirmwareProfile
-from missions.geo import great_circle_m
-from missions.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem, deg_to_e7, mavlink
-from missions import lua as bridge
-from missions.setup import commands_for
+from missions.emit.firmware import FirmwareProfile
+from missions.geometry.geo import great_circle_m
+from missions.emit.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem, deg_to_e7, mavlink
+from missions.emit import lua as bridge
+from missions.emit.setup import commands_for
 
 NAN = math.nan
 TAKEOFF_PITCH_DEG = 15.0       # fixed-wing minimum climb pitch of NAV_TAKEOFF param1 (ArduPlane, PX4)

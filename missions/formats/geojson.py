@@ -20,8 +20,8 @@ from __future__ import annotations
 from typing import Any
 
 from missions.compiled import Compiled
-from missions.jsonfinite import finite
-from missions.report import Simulation
+from missions.formats.jsonfinite import finite
+from missions.measure.flight import Simulation
 
 # A 100 km² survey has ~10^6 photos; a GIS tool opening a GeoJSON of a million rectangles is unusable.
 # Past this count, footprints are left out (the collection says so); photo points are always written.
@@ -33,7 +33,7 @@ def _r7(v: float) -> float:
 
 
 def _command_name(cmd: int) -> str:
-    from missions.items import mavlink
+    from missions.emit.items import mavlink
     entry = mavlink.enums["MAV_CMD"].get(cmd)
     return entry.name if entry is not None else str(cmd)
 

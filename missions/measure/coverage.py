@@ -56,8 +56,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from missions.footprint import Footprint
-from missions.triggers import PhotoPoint
+from missions.geometry.footprint import Footprint
+from missions.geometry.triggers import PhotoPoint
 
 _PARALLEL_SIN = math.sin(math.radians(2.0))
 # A photo of a bent line whose neighbours on its line differ more than this in heading sits in a corner: the

@@ -1,8 +1,8 @@
 """Survey planning: the one call the compiler makes per `survey` step. Pure geometry — no MAVLink.
 
-    from missions.area import load_area
-    from missions.footprint import Footprint
-    from missions.survey import plan_survey
+    from missions.geometry.area import load_area
+    from missions.geometry.footprint import Footprint
+    from missions.geometry.survey import plan_survey
 
     area = load_area("areas/north.kml", exclude=[...], base_dir=plan_dir)
     plan = plan_survey(area, Footprint(across_m=50.2, along_m=40.2), front_pct=80, side_pct=70,
@@ -45,12 +45,12 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from missions.area import Area
+from missions.geometry.area import Area
 from missions.errors import PlanError
-from missions.footprint import Footprint, transect_spacing_m, trigger_distance_m
-from missions.route import KIND_PHOTO, Route, RoutePoint, build_route, order_legs
-from missions.swaths import Leg, SwathSet, candidate_angles, generate_swaths, normalise_angle
-from missions.triggers import PhotoPoint, TriggerSpan, simulate_distance_trigger
+from missions.geometry.footprint import Footprint, transect_spacing_m, trigger_distance_m
+from missions.geometry.route import KIND_PHOTO, Route, RoutePoint, build_route, order_legs
+from missions.geometry.swaths import Leg, SwathSet, candidate_angles, generate_swaths, normalise_angle
+from missions.geometry.triggers import PhotoPoint, TriggerSpan, simulate_distance_trigger
 
 # A multirotor brakes and re-accelerates at each leg end; at ~2 m/s² (ArduCopter WPNAV_ACCEL default
 # 250 cm/s²) that costs about 2·v/a seconds beyond the straight-line time.
@@ -249,7 +249,7 @@ def plan_survey(area: Area, footprint: Footprint, front_pct: float, side_pct: fl
     warnings: list[PlanWarning] = []
     geom = area.geometry
     if area.dropped[0]:
-        from missions.area import MIN_PART_WIDTH_M
+        from missions.geometry.area import MIN_PART_WIDTH_M
         n, m2 = area.dropped
         warnings.append(PlanWarning("area_sliver_dropped",
                                     f"{n} piece{'s' if n > 1 else ''} of the area ({m2:.1f} m² in all) that the "

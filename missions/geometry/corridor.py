@@ -32,15 +32,15 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from missions.area import Area, LatLonPolygon, _inline_polygon
+from missions.geometry.area import Area, LatLonPolygon, _inline_polygon
 from missions.errors import PlanError
-from missions.footprint import Footprint, transect_spacing_m, trigger_distance_m
-from missions.geo import LocalProjection
-from missions.route import KIND_ENTRY, KIND_EXIT, KIND_TURN_IN
-from missions.survey import (DEFAULT_EXIT_MARGIN_M, MAX_PHOTOS, PlanWarning, SurveyStats, Waypoint,
+from missions.geometry.footprint import Footprint, transect_spacing_m, trigger_distance_m
+from missions.geometry.geo import LocalProjection
+from missions.geometry.route import KIND_ENTRY, KIND_EXIT, KIND_TURN_IN
+from missions.geometry.survey import (DEFAULT_EXIT_MARGIN_M, MAX_PHOTOS, PlanWarning, SurveyStats, Waypoint,
                              check_photo_budget, estimated_time_s)
-from missions.swaths import DEFAULT_EDGE_MARGIN_M, line_offsets
-from missions.triggers import PhotoPoint, TriggerSpan, simulate_distance_trigger
+from missions.geometry.swaths import DEFAULT_EDGE_MARGIN_M, line_offsets
+from missions.geometry.triggers import PhotoPoint, TriggerSpan, simulate_distance_trigger
 
 
 @dataclass(frozen=True)
@@ -178,7 +178,7 @@ def plan_corridor(line: Sequence[Sequence[float]], width_m: float, footprint: Fo
     closed = len(xy) >= 4 and float(np.hypot(*(xy[-1] - xy[0]))) <= 0.01     # a loop (see the module docstring)
     if closed:
         xy[-1] = xy[0]
-    from missions.geo import MAX_EXTENT_M  # the limit areas have: the local projection's accuracy
+    from missions.geometry.geo import MAX_EXTENT_M  # the limit areas have: the local projection's accuracy
 
     size = float(max(np.ptp(xy[:, 0]), np.ptp(xy[:, 1])))
     if not size <= MAX_EXTENT_M:

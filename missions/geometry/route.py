@@ -31,7 +31,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from missions.swaths import Leg
+from missions.geometry.swaths import Leg
 
 MAX_GRAPH_VERTICES = 400
 MIN_GAP_M2 = 25.0
@@ -366,7 +366,7 @@ def build_route(legs: Sequence[Leg], geometry: Any, turnaround_m: float, exit_ma
 
     `avoid`: holes and exclusion zones (shapely, metres) the stubs and connections keep out of (step 5).
     """
-    from missions.swaths import frame
+    from missions.geometry.swaths import frame
 
     if order is None:
         order = order_legs(legs, start_xy)

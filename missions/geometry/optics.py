@@ -14,7 +14,7 @@ import math
 
 from missions.compiled import PayloadInfo
 from missions.errors import PlanError
-from missions.footprint import Footprint, transect_spacing_m, trigger_distance_m
+from missions.geometry.footprint import Footprint, transect_spacing_m, trigger_distance_m
 
 
 def _imager(camera, imager_id: str | None, where: str | None):
@@ -34,7 +34,7 @@ def _imager(camera, imager_id: str | None, where: str | None):
 
 
 def payload_info(payload, camera, where: str | None = None) -> tuple[PayloadInfo, tuple[str, ...]]:
-    """PayloadInfo for a plan payload (missions.plan.Payload) on a catalogue camera, and warnings.
+    """PayloadInfo for a plan payload (missions.plan.load.Payload) on a catalogue camera, and warnings.
 
     Raises PlanError for an imager with unknown optics (naming the catalogue table's note) and for a lens
     that is not in the table (listing the lenses)."""

@@ -4,7 +4,7 @@
                       fence=fence_items, rally=rally_items, cruise_speed=12.0)
     items, fence, rally, home = read_plan(text, "survey.plan")
 
-Conventions (shared with missions.wpl and the transfer tools):
+Conventions (shared with missions.formats.wpl and the transfer tools):
   * `items` never contain a home row: the file keeps home in `plannedHomePosition`. When uploading
     to ArduPilot the transfer layer puts home in as item 0, as QGC and MAVSDK do.
   * `home` is (lat_deg, lon_deg, alt_m_amsl) or None (written as [0, 0, 0]).
@@ -42,7 +42,7 @@ from pathlib import Path
 from typing import Any, Iterator
 
 from missions.errors import PlanError
-from missions.items import (FRAME_GLOBAL, FRAME_GLOBAL_RELATIVE_ALT, FRAME_GLOBAL_TERRAIN_ALT, MISSION_TYPE_FENCE,
+from missions.emit.items import (FRAME_GLOBAL, FRAME_GLOBAL_RELATIVE_ALT, FRAME_GLOBAL_TERRAIN_ALT, MISSION_TYPE_FENCE,
                             MISSION_TYPE_MISSION, MISSION_TYPE_RALLY, MissionItem)
 
 Home = tuple[float, float, float]
@@ -252,7 +252,7 @@ def write_plan(items, home=None, /, *, firmware: str | int | None = None, vehicl
     `firmware`: "ardupilot" | "px4" | a MAV_AUTOPILOT number; `vehicle`: "copter" | "plane" |
     "vtol" | "rover" | … | a MAV_TYPE number. `fence`/`rally`: MissionItem lists (module docstring).
 
-    File form, used by missions.outputs: `write_plan(path, compiled, items=part)` writes the plan
+    File form, used by missions.formats.outputs: `write_plan(path, compiled, items=part)` writes the plan
     of a compiled mission (its items, or `items`) to `path` atomically and returns the text.
     """
     if isinstance(items, (str, os.PathLike)):

@@ -129,7 +129,7 @@ def _px4(payloads: list[Any], cameras: Mapping[str, Any], triggers: set[str]) ->
 def autopilot_params(prof: Any, payloads: Iterable[Any], cameras: Mapping[str, Any], infos: Mapping[str, Any],
                      instances: Mapping[str, int], needs_lua: bool = False,
                      triggers: Iterable[str] = ()) -> tuple[Param, ...]:
-    """(name, value, why) for the firmware `prof` (missions.firmware.FirmwareProfile)."""
+    """(name, value, why) for the firmware `prof` (missions.emit.firmware.FirmwareProfile)."""
     payloads = list(payloads)
     if prof.name == "ardupilot":
         rows = _ardupilot(payloads, cameras, infos, instances, needs_lua)

@@ -23,7 +23,7 @@ import math
 from typing import Iterable, Sequence
 
 from missions.errors import PlanError
-from missions.items import FRAME_MISSION, MissionItem, mavlink
+from missions.emit.items import FRAME_MISSION, MissionItem, mavlink
 
 MARKER = 0xA000          # bits 15–13 = 0b101: our ids; other scripts' DO_SEND_SCRIPT_MESSAGE ids are left alone
 MARKER_MASK = 0xE000

@@ -41,7 +41,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from missions.geo import leaf_parts
+from missions.geometry.geo import leaf_parts
 
 # Aircraft cross-track error of a GNSS multirotor is ~0.5–1 m; the outermost footprints reach this far
 # past the boundary so that the edge stays covered when the line is flown slightly inside.

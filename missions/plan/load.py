@@ -8,7 +8,7 @@ Loading is three passes over untrusted text, each collecting problems instead of
    line/column; we convert them ourselves with a size cap, a depth cap and a node budget (an alias bomb
    expands through the budget, not through memory), reject duplicate keys (PyYAML silently keeps the last)
    and read only `true`/`false` as booleans (YAML 1.1 turns `off`, an isotherm mode, into False).
-2. The JSON Schema (`missions.schema`), each error mapped back to file:line:col, unknown keys answered with
+2. The JSON Schema (`missions.plan.schema`), each error mapped back to file:line:col, unknown keys answered with
    "did you mean" (difflib) and unit hints (`altitude: 40` -> altitude_m).
 3. Meaning: payload and camera names, settings against the camera catalogue (the same `Setting.check` and
    messages as the camera definition), altitude_m xor gsd_cm, overlap, the RedEdge/WIRIS component clash.
@@ -27,13 +27,13 @@ from types import MappingProxyType
 from typing import Any, Iterable, Mapping
 
 from missions.errors import PlanError
-from missions.schema import COMPONENT_IDS, MAX_ALTITUDE_M, MIN_ALTITUDE_M, STEPS, plan_schema
+from missions.plan.schema import COMPONENT_IDS, MAX_ALTITUDE_M, MIN_ALTITUDE_M, STEPS, plan_schema
 
 MAX_PLAN_BYTES = 1_000_000      # a hand-written plan is a few kB; inline areas of thousands of points still fit
 MAX_NODES = 200_000             # YAML nodes after alias expansion
 MAX_DEPTH = 40
 # Above this the front overlap puts photos closer than a consumer GNSS receiver's position noise
-# (missions.footprint.MAX_OVERLAP_PCT gives the same limit to the geometry).
+# (missions.geometry.footprint.MAX_OVERLAP_PCT gives the same limit to the geometry).
 MAX_OVERLAP_PCT = 95.0
 
 # The RedEdge answers only on component 100 (MAV_COMP_ID_CAMERA) or 0 (rededge serial API); a WIRIS that

@@ -3,8 +3,8 @@
     paths = write_outputs(compiled, "build/missions")
 
 Files, named after the plan (NAME = compiled.name):
-  NAME.plan            QGroundControl plan (missions.planfile) — the whole mission
-  NAME.waypoints       QGC WPL 110 (missions.wpl): Mission Planner, MAVProxy `wp load`, pymavlink
+  NAME.plan            QGroundControl plan (missions.formats.planfile) — the whole mission
+  NAME.waypoints       QGC WPL 110 (missions.formats.wpl): Mission Planner, MAVProxy `wp load`, pymavlink
   NAME.geojson         area, holes/exclusions, flown path, waypoints, photo points, footprints (geojson_out)
   NAME.kml             the same features as KML (kml_out)
   NAME.setup.json      the pre-flight command sequence (`wiris camera apply`)
@@ -37,19 +37,19 @@ from missions.errors import PlanError
 
 
 def _json_text(obj) -> str:
-    from missions.jsonfinite import finite
+    from missions.formats.jsonfinite import finite
     return json.dumps(finite(obj), indent=1, ensure_ascii=False, allow_nan=False) + "\n"
 
 
 def setup_document(compiled: Compiled) -> dict:
-    """NAME.setup.json: the ordered pre-flight steps in missions.setup's format (what `wiris camera apply` reads)."""
-    from missions.setup import setup_json
+    """NAME.setup.json: the ordered pre-flight steps in missions.emit.setup's format (what `wiris camera apply` reads)."""
+    from missions.emit.setup import setup_json
     return setup_json(compiled.name, compiled.setup)
 
 
 def _params_text(compiled: Compiled) -> str:
     try:
-        from missions.params import format_params
+        from missions.emit.params import format_params
     except ImportError:   # the compiler core's formatter; the fallback is Mission Planner's "NAME,VALUE" form
         lines = [f"# {compiled.name}: autopilot parameters this mission relies on ({compiled.firmware})"]
         for name, value, why in compiled.params:
@@ -60,9 +60,9 @@ def _params_text(compiled: Compiled) -> str:
 
 
 def _writers(compiled: Compiled, rep: dict, sim) -> list[tuple[str, Callable[[Path], None]]]:
-    from missions import planfile, wpl
-    from missions.geojson_out import dumps_collection, feature_collection
-    from missions.kml_out import render_kml
+    from missions.formats import planfile, wpl
+    from missions.formats.geojson import dumps_collection, feature_collection
+    from missions.formats.kml import render_kml
 
     name = compiled.name
     fc = feature_collection(compiled, sim, rep)
@@ -95,8 +95,9 @@ def _stale_parts(out_dir: Path, name: str, keep: set[str]) -> list[Path]:
 
 def write_outputs(compiled: Compiled, out_dir: str | Path, rep: dict | None = None, sim=None) -> list[Path]:
     """Write every output file of `compiled` into `out_dir`; return their paths (in the order above)."""
-    from missions.planfile import new_file_mode
-    from missions.report import report, simulate
+    from missions.formats.planfile import new_file_mode
+    from missions.measure.flight import simulate
+    from missions.measure.report import report
 
     out_dir = Path(out_dir)
     try:

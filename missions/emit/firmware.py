@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import math
 
 from missions.errors import PlanError
-from missions.items import MissionItem, mavlink
+from missions.emit.items import MissionItem, mavlink
 
 C = mavlink  # MAV_CMD_* constants of the ArduPilot dialect (a superset of common.xml)
 

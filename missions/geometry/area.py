@@ -3,7 +3,7 @@
 
     area = load_area("areas/north.kml", exclude=["areas/substation.geojson"], base_dir=plan_dir)
     area.geometry      # shapely Polygon | MultiPolygon in metres (x east, y north), exterior CCW
-    area.projection    # missions.geo.LocalProjection used for it (and for everything planned on it)
+    area.projection    # missions.geometry.geo.LocalProjection used for it (and for everything planned on it)
 
 Every problem is a `PlanError` saying where (file:line for KML, file + JSON path for GeoJSON, `area[i]`
 for inline points), what, and a hint: fewer than 3 points, zero area, self-intersection (with the two
@@ -23,7 +23,7 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 
 from missions.errors import PlanError
-from missions.geo import LocalProjection, leaf_parts
+from missions.geometry.geo import LocalProjection, leaf_parts
 
 MAX_AREA_FILE_BYTES = 20 * 1024 * 1024   # a 20 MB boundary file is already ~500k vertices
 MAX_VERTICES = 200_000
@@ -357,7 +357,7 @@ def _clean_ring(lats: np.ndarray, lons: np.ndarray, proj: LocalProjection, where
         raise PlanError(f"{what} has {len(lats)} vertices (limit {MAX_VERTICES})", where=where,
                         hint="simplify the boundary")
     x, y = proj.to_xy(lats, lons)
-    from missions.geo import MAX_EXTENT_M
+    from missions.geometry.geo import MAX_EXTENT_M
     far = ~(np.isfinite(x) & np.isfinite(y)) | (np.hypot(x, y) > MAX_EXTENT_M)
     if far.any():
         i = int(np.argmax(far))
@@ -507,7 +507,7 @@ def _drop_slivers(geom: Any, cut: Any) -> tuple[Any, tuple[int, float]]:
 
 
 def _check_latitudes(p: LatLonPolygon) -> None:
-    from missions.geo import MAX_ABS_LAT_DEG
+    from missions.geometry.geo import MAX_ABS_LAT_DEG
     for ring in (p.outer, *p.holes):
         for i, (lat, _lon) in enumerate(ring):
             if abs(lat) > MAX_ABS_LAT_DEG:
@@ -516,7 +516,7 @@ def _check_latitudes(p: LatLonPolygon) -> None:
 
 
 def _check_extent(geom: Any, source: str) -> None:
-    from missions.geo import MAX_EXTENT_M
+    from missions.geometry.geo import MAX_EXTENT_M
     x0, y0, x1, y1 = geom.bounds
     size = max(x1 - x0, y1 - y0)
     if size > MAX_EXTENT_M:

@@ -27,8 +27,8 @@ from decimal import ROUND_HALF_UP, Decimal, InvalidOperation
 from pathlib import Path
 
 from missions.errors import PlanError
-from missions.items import FRAME_GLOBAL, MISSION_TYPE_MISSION, MissionItem
-from missions.planfile import FLOAT32_MAX, MAX_ITEMS, READ_HINT, _scale, atomic_write, check_finite, xy_hint
+from missions.emit.items import FRAME_GLOBAL, MISSION_TYPE_MISSION, MissionItem
+from missions.formats.planfile import FLOAT32_MAX, MAX_ITEMS, READ_HINT, _scale, atomic_write, check_finite, xy_hint
 
 Home = tuple[float, float, float]
 
@@ -69,7 +69,7 @@ def _row(index: int, it: MissionItem, current: int) -> str:
 
 
 def _home_item(home: Home | None) -> MissionItem:
-    from missions.items import deg_to_e7
+    from missions.emit.items import deg_to_e7
     lat, lon, alt = home if home is not None else (0.0, 0.0, 0.0)
     return MissionItem(command=CMD_NAV_WAYPOINT, frame=FRAME_GLOBAL, x=deg_to_e7(lat), y=deg_to_e7(lon),
                        z=float(alt))
@@ -89,7 +89,7 @@ def wpl_text(items, home: Home | None = None) -> str:
 def write_wpl(items, /, *args, home: Home | None = None, firmware: str | None = None) -> str:
     """WPL 110 text: home row 0, then `items` (which never contain a home row) from row 1.
 
-    `write_wpl(items, home)` returns the text. File form, used by missions.outputs:
+    `write_wpl(items, home)` returns the text. File form, used by missions.formats.outputs:
     `write_wpl(path, items, home=..., firmware=...)` also writes it to `path` atomically.
     `firmware` is accepted for symmetry with write_plan; the file is the same for both stacks: row 0 is home
     in the format (Mission Planner writes it so, QGroundControl reads it so for either stack). MAVSDK's

@@ -1,0 +1,2 @@
+"""Stage 4, files: QGroundControl `.plan` (`planfile`), QGC WPL 110 (`wpl`), GeoJSON and KML (`geojson`, `kml`),
+pictures (`preview`), and writing a compiled mission's files all or nothing (`outputs`)."""
