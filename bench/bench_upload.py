@@ -4,7 +4,7 @@
     .venv/bin/python bench/bench_upload.py [--quick] [--reps 3] [--trials 200] [--flavour px4|ardupilot]
 
 Setup per row (items x loss): a PX4-like vehicle_sim (MISSION_REQUEST_INT, re-requests after
-250 ms; `--flavour ardupilot`: legacy MISSION_REQUEST, 1 s re-requests, INVALID_SEQUENCE NACKs) behind wiris_tools.linkemu at 57600 baud 8N1 = 5760 bytes/s each way, 20 ms latency each
+250 ms; `--flavour ardupilot`: legacy MISSION_REQUEST, 1 s re-requests, INVALID_SEQUENCE NACKs) behind tests/linkemu.py at 57600 baud 8N1 = 5760 bytes/s each way, 20 ms latency each
 way, the given loss on both directions, seeded. Our uploader (`wiris mission upload FILE.plan
 --json`, default spec timeouts; its own measured upload time) and MAVSDK 4.1.0's mission_raw
 uploader (default 0.5 s timeout; the time of upload_mission()) each run in a child process and
@@ -47,7 +47,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2  # noqa: E402
 import mission_peers  # noqa: E402
 from missions.emit.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem  # noqa: E402
 from missions.formats.planfile import write_plan  # noqa: E402
-from wiris_tools.linkemu import LinkEmulator, LinkProfile  # noqa: E402
+from linkemu import LinkEmulator, LinkProfile  # noqa: E402
 from wiris_tools.readback import compare_items  # noqa: E402
 from wiris_tools.transfer import home_item  # noqa: E402
 from wiris_tools.vehicle_sim import VehicleSim  # noqa: E402

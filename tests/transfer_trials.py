@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from missions.emit.items import MissionItem
 from wiris_tools.errors import LinkError
 from wiris_tools.link import Link
-from wiris_tools.linkemu import LinkEmulator, LinkProfile
+from linkemu import LinkEmulator, LinkProfile
 from wiris_tools.transfer import MissionClient, Timeouts
 from wiris_tools.vehicle_sim import VehicleSim
 

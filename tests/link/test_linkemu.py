@@ -9,7 +9,7 @@ import socket
 
 import pytest
 
-from wiris_tools.linkemu import LinkEmulator, LinkProfile, Wire
+from linkemu import LinkEmulator, LinkProfile, Wire
 
 
 def wire(seed=1, **kw) -> Wire:
