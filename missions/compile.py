@@ -4,12 +4,12 @@
     compiled = compile_plan(plan, firmware="px4")        # a loaded Plan, another firmware
 
 Pipeline: load (schema, locations) -> per step: area -> survey/corridor geometry (missions.geometry.survey,
-missions.geometry.corridor) -> items (missions.emit.emitter, firmware × camera) -> firmware check (missions.emit.firmware) ->
-item limit / parts -> setup sequence (missions.emit.setup) -> Lua bridge (missions.emit.lua) -> autopilot params
+missions.geometry.corridor) -> items (missions.emit.emitter, firmware × camera) -> firmware check
+(missions.emit.firmware) -> item limit / parts -> setup sequence (missions.emit.setup) -> Lua bridge (missions.emit.lua) -> autopilot params
 (missions.emit.params) -> warnings. Pure: no sockets, no files written; errors are PlanError with the plan's
 file:line:col.
 
-Warnings are "code: message" strings. Codes: altitude_above_120m, assumed_optics, trigger_interval_near_min,
+Warnings are `PlanWarning(code, message)` values. Codes: altitude_above_120m, assumed_optics, trigger_interval_near_min,
 area_smaller_than_footprint (and the survey planner's own codes), no_takeoff, component_id_chosen,
 no_optics, mission_split, px4_single_capture_all.
 """
@@ -20,16 +20,15 @@ import math
 from pathlib import Path
 from typing import Any
 
-from missions.compiled import AreaInfo, Compiled, PayloadInfo
+from missions.compiled import AreaInfo, Compiled, PayloadInfo, PlanWarning
 from missions.emit.emitter import Emitter, Track, TrackPoint, HOVER_HOLD_S
 from missions.errors import PlanError
 from missions.emit.firmware import check_items, profile, split_parts
-from missions.plan.load import (CameraStep, CorridorStep, LandStep, Plan, RtlStep, SurveyStep, TakeoffStep, WaypointStep,
-                           load_plan)
-from missions.plan.schema import MAX_ALTITUDE_M, MIN_ALTITUDE_M
+from missions.plan.load import (CameraStep, CorridorStep, LandStep, Plan, RtlStep, SurveyStep, TakeoffStep,
+                                WaypointStep, load_plan)
+from missions.plan.schema import MAX_AGL_M, MAX_ALTITUDE_M, MIN_ALTITUDE_M
 from missions.geometry import optics
 
-MAX_AGL_M = 120.0            # the common regulatory ceiling without a permit (EU open category, US Part 107)
 NEAR_MIN_INTERVAL = 1.2      # warn when photos come less than 20 % slower than the camera's minimum
 TURNAROUND_DEFAULT_M = {"copter": 10.0, "plane": 30.0, "vtol": 30.0}   # QGC's defaults (survey-planners §1.4)
 
@@ -117,12 +116,13 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     altitudes: list[tuple[float, str]] = []
     speed = plan.vehicle.speed_mps
     if em.speed_is_airspeed:
-        warnings.append(f"speed_is_airspeed: ArduPilot flies a {plan.vehicle.frame}'s vehicle.speed_mps "
-                        f"({speed:g} m/s) as airspeed (a ground-speed DO_CHANGE_SPEED would set its minimum ground "
-                        "speed instead); with wind the ground speed differs, so photo intervals and flight time "
-                        "vary (distance triggering keeps its spacing)")
+        warnings.append(PlanWarning(
+            "speed_is_airspeed", f"ArduPilot flies a {plan.vehicle.frame}'s vehicle.speed_mps ({speed:g} m/s) as "
+            "airspeed (a ground-speed DO_CHANGE_SPEED would set its minimum ground speed instead); with wind the "
+            "ground speed differs, so photo intervals and flight time vary (distance triggering keeps its spacing)"))
     if not any(isinstance(s, TakeoffStep) for s in plan.mission):
-        warnings.append("no_takeoff: the mission has no takeoff step; it must be started with the vehicle in the air")
+        warnings.append(PlanWarning("no_takeoff", "the mission has no takeoff step; it must be started with the "
+                                                  "vehicle in the air"))
 
     for step in plan.mission:
         here = plan.step_where(step)
@@ -171,14 +171,15 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
                 elif other == lead:
                     continue
                 elif other not in infos:
-                    warnings.append(f"no_optics: {other} triggers alongside {lead} but its optics are unknown, "
-                                    "so its coverage cannot be measured")
+                    warnings.append(PlanWarning("no_optics", f"{other} triggers alongside {lead} but its optics are "
+                                                             "unknown, so its coverage cannot be measured"))
                 elif moving:
                     optics.check_interval(infos[other], trig, speed, where=where_speed)
             if moving:
                 if info.min_interval_s and interval < NEAR_MIN_INTERVAL * info.min_interval_s:
-                    warnings.append(f"trigger_interval_near_min: {lead} shoots every {interval:.2f} s at {here}, close "
-                                    f"to its minimum of {info.min_interval_s:g} s; a gust of tail wind loses photos")
+                    warnings.append(PlanWarning(
+                        "trigger_interval_near_min", f"{lead} shoots every {interval:.2f} s at {here}, close to its "
+                        f"minimum of {info.min_interval_s:g} s; a gust of tail wind loses photos"))
             turnaround = step.turnaround_m if step.turnaround_m is not None else TURNAROUND_DEFAULT_M[plan.vehicle.frame]
             start = em.s.last_pos[:2] if em.s.last_pos else (plan.home.lat, plan.home.lon)
             photos_left = max(0, MAX_PHOTOS - sum(len(g.photos) for g in intent))
@@ -216,7 +217,7 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
             first = em.item_count
             em.track(track, where=plan.step_where(step, "trigger"))
             for w in geo.warnings:
-                warnings.append(f"{w.code}: {kind} at {here}: {w.message}")
+                warnings.append(PlanWarning(w.code, f"{kind} at {here}: {w.message}"))
             areas.append(AreaInfo(step=step.index, kind=kind, payloads=step.payloads, area=area, altitude_m=alt,
                                   front_overlap=step.front_pct / 100.0, side_overlap=step.side_pct / 100.0,
                                   trigger=step.trigger, trigger_distance_m=geo.trigger_distance_m,
@@ -245,16 +246,16 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     for k, part in enumerate(parts):
         check_items(part, prof, where=f"part {k + 1}")
     if len(parts) > 1:
-        warnings.append(f"mission_split: {len(items)} items exceed {prof.title}'s limit of {limit} "
-                        f"({prof.item_limit_why if not plan.vehicle.max_mission_items else 'vehicle.max_mission_items'})"
-                        f"; split into {len(parts)} parts: each part ends holding position (NAV_LOITER_UNLIM), upload "
-                        "the next and switch to AUTO again; it resumes at that position with speed and camera "
-                        "trigger restored")
+        warnings.append(PlanWarning(
+            "mission_split", f"{len(items)} items exceed {prof.title}'s limit of {limit} "
+            f"({prof.item_limit_why if not plan.vehicle.max_mission_items else 'vehicle.max_mission_items'})"
+            f"; split into {len(parts)} parts: each part ends holding position (NAV_LOITER_UNLIM), upload "
+            "the next and switch to AUTO again; it resumes at that position with speed and camera trigger restored"))
 
     for alt, where in altitudes:
         if alt > MAX_AGL_M:
-            warnings.append(f"altitude_above_120m: {alt:g} m above home at {where}; most rules allow "
-                            f"{MAX_AGL_M:g} m above ground without a permit (ground assumed flat at home's height)")
+            warnings.append(PlanWarning("altitude_above_120m", f"{alt:g} m above home at {where}; most rules allow "
+                            f"{MAX_AGL_M:g} m above ground without a permit (ground assumed flat at home's height)"))
 
     rededge = {name: _rededge_survey(alts, rededge_overlap[name]) for name, alts in rededge_alts.items()}
     for name, alt, step_speed, where_speed in rededge_speeds:
@@ -275,7 +276,7 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     payloads = tuple(infos[p.name] for p in plan.payloads if p.name in infos)
     for name, e in optics_errors.items():
         if not any(name in a.payloads[:1] for a in areas):
-            warnings.append(f"no_optics: {name}: {e.message}")
+            warnings.append(PlanWarning("no_optics", f"{name}: {e.message}"))
     return Compiled(
         name=plan.name, firmware=prof.name, frame=plan.vehicle.frame,
         home=(plan.home.lat, plan.home.lon, plan.home.alt_amsl_m), speed_mps=speed, items=items, parts=parts,

@@ -14,6 +14,18 @@ from missions.emit.items import MissionItem
 
 
 @dataclass(frozen=True)
+class PlanWarning:
+    """Something the pilot should know that does not stop the mission: `code` is stable (the report's JSON
+    carries it), `message` says what and where."""
+
+    code: str
+    message: str
+
+    def __str__(self) -> str:
+        return f"{self.code}: {self.message}"
+
+
+@dataclass(frozen=True)
 class PayloadInfo:
     """A payload as the compiler resolved it from the plan and the catalogue."""
 
@@ -106,7 +118,7 @@ class Compiled:
     setup: tuple[SetupStep, ...]
     lua: str | None = None                      # the ArduPilot bridge script, when in-flight changes need it
     params: tuple[tuple[str, float, str], ...] = ()   # autopilot parameters: name, value, why
-    warnings: tuple[str, ...] = ()
+    warnings: tuple[PlanWarning, ...] = ()
     intent: tuple[Any, ...] = field(default=(), compare=False)   # planner geometry, for previews only
 
     def payload(self, name: str) -> PayloadInfo:

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 import math
 from typing import Any, Sequence
 
+from missions.compiled import PlanWarning
 from missions.errors import PlanError
 from missions.emit.firmware import FirmwareProfile
 from missions.geometry.geo import great_circle_m
@@ -81,7 +82,7 @@ class _State:
     last_pos: tuple[float, float, float] | None = None
     script_run: int = 0        # script items since the last NAV item
     lua: bool = False
-    warnings: list[str] = field(default_factory=list)
+    warnings: list[PlanWarning] = field(default_factory=list)
     speed_set: bool = False
 
 
@@ -89,7 +90,7 @@ class _State:
 class Emitted:
     items: tuple[MissionItem, ...]
     needs_lua: bool
-    warnings: tuple[str, ...]
+    warnings: tuple[PlanWarning, ...]
 
 
 def _do(command: int, p1: float = 0.0, p2: float = 0.0, p3: float = 0.0, p4: float = 0.0, x: int = 0, y: int = 0,
@@ -262,8 +263,9 @@ class Emitter:
             others = [n for n, c in self.cameras.items() if n != payload and c.protocol != "rededge-serial"]
             if others:
                 self.s.warnings.append(
-                    f"px4_single_capture_all: PX4 turns a single IMAGE_START_CAPTURE into DO_DIGICAM_CONTROL for "
-                    f"every camera (reference §3.2), so {', '.join(others)} may shoot too at {where or 'a capture'}")
+                    PlanWarning("px4_single_capture_all", "PX4 turns a single IMAGE_START_CAPTURE into "
+                                "DO_DIGICAM_CONTROL for every camera (reference §3.2), so "
+                                f"{', '.join(others)} may shoot too at {where or 'a capture'}"))
         return _do(mavlink.MAV_CMD_IMAGE_START_CAPTURE, target, 0.0, 1.0, 0.0, 0, 0, NAN, comment=f"one photo: {note}")
 
     def camera_change(self, payload: str, values: Sequence[tuple[str, Any]], where: str | None = None) -> None:

@@ -37,7 +37,8 @@ from missions.errors import PlanError
 from missions.geometry.footprint import Footprint, transect_spacing_m, trigger_distance_m
 from missions.geometry.geo import LocalProjection
 from missions.geometry.route import KIND_ENTRY, KIND_EXIT, KIND_TURN_IN
-from missions.geometry.survey import (DEFAULT_EXIT_MARGIN_M, MAX_PHOTOS, PlanWarning, SurveyStats, Waypoint,
+from missions.compiled import PlanWarning
+from missions.geometry.survey import (DEFAULT_EXIT_MARGIN_M, MAX_PHOTOS, SurveyStats, Waypoint,
                              check_photo_budget, estimated_time_s)
 from missions.geometry.swaths import DEFAULT_EDGE_MARGIN_M, line_offsets
 from missions.geometry.triggers import PhotoPoint, TriggerSpan, simulate_distance_trigger

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 
-from missions.compiled import PayloadInfo
+from missions.compiled import PayloadInfo, PlanWarning
 from missions.errors import PlanError
 from missions.geometry.footprint import Footprint, transect_spacing_m, trigger_distance_m
 
@@ -61,9 +61,9 @@ def payload_info(payload, camera, where: str | None = None) -> tuple[PayloadInfo
     warnings = []
     assumed = [a for a in im.assumed if a in ("pixel_pitch", "lenses", "resolution", "sensor")]
     if assumed:
-        warnings.append(f"assumed_optics: {payload.name} ({camera.id} {im.id}): "
+        warnings.append(PlanWarning("assumed_optics", f"{payload.name} ({camera.id} {im.id}): "
                         f"{', '.join(a.replace('_', ' ') for a in assumed)} assumed, not from a datasheet "
-                        f"({table}); GSD, footprint and spacing are only as good as that assumption")
+                        f"({table}); GSD, footprint and spacing are only as good as that assumption"))
     info = PayloadInfo(name=payload.name, camera_id=camera.id, imager=im.id, component_id=payload.component_id,
                        focal_mm=focal, sensor_mm=tuple(im.sensor_size_mm), resolution_px=tuple(im.resolution_px),
                        landscape=payload.landscape, min_interval_s=im.min_interval_s)

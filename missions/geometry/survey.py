@@ -45,6 +45,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from missions.compiled import PlanWarning
 from missions.geometry.area import Area
 from missions.errors import PlanError
 from missions.geometry.footprint import Footprint, transect_spacing_m, trigger_distance_m
@@ -72,12 +73,6 @@ def check_photo_budget(estimate: float, what: str, left: int = MAX_PHOTOS) -> No
         raise PlanError(f"this {what} would take about {estimate:,.0f} photos{earlier}, more than the "
                         f"{MAX_PHOTOS:,} one plan can hold",
                         hint="split it into several plans, or fly higher (fewer, larger photos)")
-
-
-@dataclass(frozen=True)
-class PlanWarning:
-    code: str
-    message: str
 
 
 @dataclass(frozen=True)

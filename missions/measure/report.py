@@ -32,9 +32,8 @@ import numpy as np
 
 from missions.compiled import Compiled, PayloadInfo
 from missions.measure.flight import Photo, Simulation, simulate
+from missions.plan.schema import MAX_AGL_M
 
-# Most of the world's drone rules (EU 2019/947 open category, FAA part 107) cap flights at 120 m / 400 ft.
-MAX_AGL_M = 120.0
 # Coverage below this is worth a warning: the examples and the tests hold the compiler to it.
 COVERAGE_TARGET = 0.995
 # Measured minimum overlaps within this of the request are rounding at the edges, not a planning fault.
@@ -42,8 +41,8 @@ OVERLAP_SLACK = 0.01
 
 
 def area_geometry(area: Any, proj: Any) -> Any:
-    """`area` (missions.geometry.area.Area) as a shapely geometry in projection `proj` (re-projected through lat/lon when
-    it was built in another plane; its edges are short enough to stay straight in both)."""
+    """`area` (missions.geometry.area.Area) as a shapely geometry in projection `proj` (re-projected through
+    lat/lon when it was built in another plane; its edges are short enough to stay straight in both)."""
     from shapely.geometry import MultiPolygon, Polygon
 
     if area.projection == proj:
@@ -226,7 +225,7 @@ def _r(v: float | None, nd: int = 4) -> float | None:
 def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | None = None) -> dict:
     """The measured report (`wiris mission check --json`)."""
     sim = sim or simulate(compiled)
-    warnings: list[dict] = [_compiler_warning(m) for m in compiled.warnings]
+    warnings: list[dict] = [{"code": w.code, "message": w.message} for w in compiled.warnings]
     errors: list[dict] = []
     names = [p.name for p in compiled.payloads]
     photos_of = {n: [p for p in sim.photos if n in p.payloads] for n in names}
@@ -291,7 +290,8 @@ def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | N
     # safety and feasibility
     max_alt = max((v.alt_m for v in sim.vertices), default=0.0)
     high = [v for v in sim.vertices if v.alt_m > MAX_AGL_M + 1e-6]
-    if high:
+    # the compiler already warned with the plan's file:line:col when the plan asks for it
+    if high and not any(w.code == "altitude_above_120m" for w in compiled.warnings):
         v = max(high, key=lambda v: v.alt_m)
         warnings.append({"code": "altitude_above_120m",
                          "message": f"item {v.item + seq_base} flies at {v.alt_m:.1f} m above home, above the "
@@ -366,13 +366,6 @@ def _over_zones_text(a: Any, row: dict) -> str:
                      "return")
     return (f"step {a.step} ({a.kind}): the flown path runs {total:.0f} m inside the area's holes or exclusion "
             f"zones — {'; '.join(parts)}. Check that overflight is allowed")
-
-
-def _compiler_warning(text: str) -> dict:
-    """The compiler's warnings are "code: message" strings; keep its code."""
-    import re
-    m = re.match(r"([a-z][a-z0-9_]*): (.*)", text, re.S)
-    return {"code": m.group(1), "message": m.group(2)} if m else {"code": "compiler", "message": text}
 
 
 def _optics_warnings(compiled: Compiled) -> list[dict]:

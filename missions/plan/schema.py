@@ -23,6 +23,9 @@ SCHEMA_ID = "https://wiris-tools.invalid/schema/capture-plan-1.json"
 # compiler warns from 120 m, the common regulatory ceiling, see missions.compile).
 MIN_ALTITUDE_M = 2.0
 MAX_ALTITUDE_M = 500.0
+# Most of the world's drone rules (EU 2019/947 open category, FAA part 107) cap flights at 120 m / 400 ft above
+# ground without a permit: above it the compiler and the report warn, they do not refuse.
+MAX_AGL_M = 120.0
 MAX_SPEED_MPS = 50.0
 COMPONENT_IDS = (100, 101, 102, 103, 104, 105)   # MAV_COMP_ID_CAMERA..CAMERA6 (common.xml)
 

@@ -13,6 +13,7 @@ from cdf.catalogue import catalogue
 from missions.emit import lua
 from missions.compile import compile_plan
 from missions.errors import PlanError
+from missions.measure.report import report
 from missions.plan.load import parse_plan
 from missions.emit.setup import commands_for
 
@@ -249,7 +250,7 @@ def test_rededge_and_wiris_both_on_100(tmp_path):
 def test_item_limit_splits_into_parts(tmp_path):
     c = build(tmp_path, lambda d: d["vehicle"].update(max_mission_items=20))
     assert c.item_limit == 20 and len(c.parts) > 1 and all(len(p) <= 20 for p in c.parts)
-    assert any(w.startswith("mission_split:") for w in c.warnings)
+    assert any(w.code == "mission_split" for w in c.warnings)
 
 
 def test_too_fast_for_the_camera_names_the_speed(tmp_path):
@@ -266,8 +267,17 @@ def test_too_fast_for_the_camera_names_the_speed(tmp_path):
 
 def test_warnings_altitude_and_assumed_optics(tmp_path):
     c = build(tmp_path, lambda d: survey(d).update(altitude_m=150))
-    codes = {w.split(":")[0] for w in c.warnings}
+    codes = {w.code for w in c.warnings}
     assert {"altitude_above_120m", "assumed_optics"} <= codes
+
+
+def test_a_high_waypoint_is_warned_about_once(tmp_path):
+    """The compiler warns with the plan's location; the report does not repeat it from the re-flight."""
+    c = build(tmp_path, lambda d: d["mission"].insert(-1, {"waypoint": {"lat": 50.1105, "lon": 14.5035,
+                                                                        "alt_m": 130}}))
+    rep = report(c)
+    high = [w for w in rep["warnings"] if w["code"] == "altitude_above_120m"]
+    assert len(high) == 1 and ".yaml:" in high[0]["message"]
 
 
 @pytest.mark.parametrize("frame,first,p1", [("plane", "NAV_TAKEOFF", 15.0), ("vtol", "NAV_VTOL_TAKEOFF", 0.0),
@@ -287,7 +297,7 @@ def test_speed_type_per_firmware_and_frame(tmp_path, frame, fw):
     air = fw == "ardupilot" and frame != "copter"
     assert speeds and all(it.param1 == (m.SPEED_TYPE_AIRSPEED if air else m.SPEED_TYPE_GROUNDSPEED) and it.param2 == 5
                           for it in speeds)
-    assert any(w.startswith("speed_is_airspeed:") for w in c.warnings) == air
+    assert any(w.code == "speed_is_airspeed" for w in c.warnings) == air
 
 
 @pytest.mark.parametrize("fw", ["ardupilot", "px4"])
@@ -336,7 +346,7 @@ def test_unknown_optics_lead_refused_second_warned(tmp_path):
         doc["payloads"]["agro"] = {"camera": "wiris-agro", "component_id": 102}
         survey(doc)["payloads"] = ["thermal", "agro"]
     c = build(tmp_path, second, firmware="px4")     # ArduPilot would refuse a second distance-triggered WIRIS
-    assert any(w.startswith("no_optics:") for w in c.warnings)
+    assert any(w.code == "no_optics" for w in c.warnings)
     assert [p.name for p in c.payloads] == ["thermal"]
 
 

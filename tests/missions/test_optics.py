@@ -77,7 +77,7 @@ def test_several_lenses_need_lens_mm():
 
 def test_assumed_optics_warn():
     _, warn = info("wiris-pro", 13)
-    assert warn and warn[0].startswith("assumed_optics:") and "pixel pitch" in warn[0]
+    assert warn and warn[0].code == "assumed_optics" and "pixel pitch" in warn[0].message
 
 
 def test_unknown_visible_imager_named():
