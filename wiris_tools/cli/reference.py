@@ -31,16 +31,22 @@ def _commands(group: click.Group, ctx: click.Context) -> Iterator[tuple[click.Co
         command = group.get_command(ctx, name)
         if command is None or command.hidden:
             continue
-        sub = click.Context(command, info_name=name, parent=ctx, terminal_width=HELP_WIDTH,
-                            max_content_width=HELP_WIDTH)
+        sub = _context(command, name, ctx)
         yield command, sub
         if isinstance(command, click.Group):
             yield from _commands(command, sub)
 
 
+def _context(command: click.Command, name: str, parent: click.Context | None) -> click.Context:
+    """The context click would make for `command` (its context_settings, e.g. `-h` as a help option, which
+    children inherit), at the fixed width."""
+    settings = {**command.context_settings, "terminal_width": HELP_WIDTH, "max_content_width": HELP_WIDTH}
+    return click.Context(command, info_name=name, parent=parent, **settings)
+
+
 def render_reference(root: click.Group) -> str:
     """Markdown with one section per command: its path as heading and its `--help` as a code block."""
-    top = click.Context(root, info_name="wiris", terminal_width=HELP_WIDTH, max_content_width=HELP_WIDTH)
+    top = _context(root, "wiris", None)
     sections = [HEADER]
     for command, ctx in [(root, top), *_commands(root, top)]:
         sections.append(f"## `{ctx.command_path}`\n\n```text\n{command.get_help(ctx).rstrip()}\n```\n")
