@@ -43,7 +43,8 @@ message has them and they are not 0 = broadcast) name someone else.
 Signing (MAVLink 2, as ArduPilot supports it): pass `signing_key` (32 bytes, see
 wiris_tools.signing for the key file format). Everything we send is signed; incoming messages that
 are unsigned, MAVLink 1, signed with another key or replayed with an old timestamp are dropped and
-counted in `stats["rejected_signature"]` - they never reach an inbox or callback.
+counted in `stats["rejected_signature"]` - they never reach an inbox or callback. A frame that fails
+leaves its stream's timestamp where it was (pymavlink's own check does not: see _MAVLink).
 """
 
 from __future__ import annotations
@@ -77,6 +78,7 @@ from pymavlink import mavutil  # noqa: E402
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2  # noqa: E402
 
 from wiris_tools.errors import LinkError  # noqa: E402
+from wiris_tools.signing import check_signed_frame, signing_timestamp  # noqa: E402
 
 Message = Any  # a pymavlink MAVLink_message
 Filter = Callable[[Message], bool]
@@ -219,6 +221,22 @@ class _LastHeard(dict):
         return time.time()  # pymavlink's clock for these entries
 
 
+class _MAVLink(mavlink2.MAVLink):
+    """pymavlink's encoder and parser (framing, CRC, decoding all its own) with the signature check of the
+    MAVLink signing spec: a stream's timestamp is recorded only from a frame whose signature verified (see
+    wiris_tools.signing.check_signed_frame for what pymavlink does instead and why it matters)."""
+
+    def check_signature(self, msgbuf: bytearray, srcSystem: int, srcComponent: int) -> bool:
+        signing = self.signing
+        check = check_signed_frame(msgbuf, signing.secret_key, srcSystem, srcComponent,
+                                   signing.stream_timestamps, signing.timestamp)
+        if check.accepted:
+            signing.stream_timestamps[check.stream] = check.timestamp
+            # we sign onwards from the highest verified timestamp, as pymavlink and the spec do
+            signing.timestamp = max(signing.timestamp, check.timestamp)
+        return check.accepted
+
+
 class Link:
     """One MAVLink connection (see the module docstring for the API)."""
 
@@ -244,15 +262,14 @@ class Link:
         self._conn = self._open(url, baud)
         # Our own encoder/parser rather than mavutil's: mavutil picks MAVLink 1 or 2 through a
         # process-wide environment variable, which would leak between links in one process.
-        self.mav = mavlink2.MAVLink(self._conn, srcSystem=system, srcComponent=component)
+        self.mav = _MAVLink(self._conn, srcSystem=system, srcComponent=component)
         self.mav.robust_parsing = True
         if signing_key is not None:
             self.mav.signing.secret_key = bytes(signing_key)
             self.mav.signing.sign_outgoing = True
             self.mav.signing.allow_unsigned_callback = None
             self.mav.signing.link_id = signing_link_id
-            # Timestamp unit is 10 us since 2015-01-01 (MAVLink signing spec).
-            self.mav.signing.timestamp = int((time.time() - 1420070400) * 100_000)
+            self.mav.signing.timestamp = signing_timestamp(time.time())
         self._stats = _Stats()
         self._subs: list[Subscription] = []
         self._subs_lock = threading.Lock()

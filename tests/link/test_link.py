@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 import socket
 import threading
+import time
 
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
@@ -271,6 +272,57 @@ def test_signed_link_drops_unsigned_and_wrongly_signed(gcs_kwargs):
     finally:
         b.close()
         a.close()
+
+
+def signed_heartbeat(timestamp: int, *, system: int = 7, key: bytes = KEY) -> bytes:
+    """A HEARTBEAT frame from `system` (component 1, signing link 0), signed with `key`, dated `timestamp`."""
+    mav = mavlink2.MAVLink(None, srcSystem=system, srcComponent=1)
+    mav.signing.secret_key, mav.signing.sign_outgoing, mav.signing.timestamp = key, True, timestamp
+    return bytes(mav.heartbeat_encode(mavlink2.MAV_TYPE_QUADROTOR, mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA, 0, 0,
+                                      mavlink2.MAV_STATE_ACTIVE).pack(mav))
+
+
+def verdicts(frames: list[bytes]) -> list[bool]:
+    """Send each frame in turn to a fresh signed Link over UDP: was it taken (True) or rejected (False)?"""
+    out = []
+    with Link("udpin:127.0.0.1:0", signing_key=KEY, heartbeat_s=0) as victim, \
+            socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+        for frame in frames:
+            before = victim.stats
+            sock.sendto(frame, ("127.0.0.1", victim.local_port))
+            for _ in range(500):
+                now = victim.stats
+                if now["received"] > before["received"] or now["rejected_signature"] > before["rejected_signature"]:
+                    break
+                time.sleep(0.01)
+            else:
+                raise AssertionError("the link never read the frame")
+            out.append(now["received"] > before["received"])
+    return out
+
+
+def test_signed_streams_follow_the_spec_timestamp_rules():
+    from wiris_tools.signing import TIMESTAMP_UNITS_PER_S, signing_timestamp
+    now = signing_timestamp(time.time())
+    minute, hour = 60 * TIMESTAMP_UNITS_PER_S, 3600 * TIMESTAMP_UNITS_PER_S
+    first = signed_heartbeat(now)
+    # a replay, and an older frame, on a stream already heard are refused; a later one is taken
+    assert verdicts([first, first, signed_heartbeat(now - 1), signed_heartbeat(now + 1)]) == [True, False, False, True]
+    # a new stream may start up to a minute behind our clock (a recording replayed later may not) ...
+    assert verdicts([signed_heartbeat(now - 2 * minute), signed_heartbeat(now - minute // 2)]) == [False, True]
+    # ... and, correctly signed, any time ahead of it: peers adopt the highest timestamp they verify
+    assert verdicts([signed_heartbeat(now + hour), signed_heartbeat(now + hour - 1)]) == [True, False]
+
+
+def test_a_badly_signed_frame_does_not_move_its_stream_on():
+    from wiris_tools.signing import TIMESTAMP_UNITS_PER_S, signing_timestamp
+    now = signing_timestamp(time.time())
+    nobody = bytearray(signed_heartbeat(2**48 - 1))
+    nobody[-6:] = bytes(6)   # no key at all
+    wrong = signed_heartbeat(now + 10 * TIMESTAMP_UNITS_PER_S, key=bytes(32))
+    # before the first real frame of the stream, and between two of them
+    assert verdicts([bytes(nobody), wrong, signed_heartbeat(now), bytes(nobody), wrong,
+                     signed_heartbeat(now + 1)]) == [False, False, True, False, False, True]
 
 
 def test_mavlink1_cannot_be_signed():
