@@ -26,7 +26,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Iterable, Mapping
 
-from missions.errors import PlanError
+from missions.errors import PlanError, Problem
 from missions.plan.schema import COMPONENT_IDS, MAX_ALTITUDE_M, MIN_ALTITUDE_M, STEPS, plan_schema
 
 MAX_PLAN_BYTES = 1_000_000      # a hand-written plan is a few kB; inline areas of thousands of points still fit
@@ -40,16 +40,6 @@ MAX_OVERLAP_PCT = 95.0
 # the plan leaves unplaced is moved to the first free id of 101..105 instead (reported as a note).
 REDEDGE_COMPONENT = 100
 
-
-
-@dataclass(frozen=True)
-class Problem:
-    where: str
-    message: str
-    hint: str | None = None
-
-    def __str__(self) -> str:
-        return f"{self.where}: {self.message}" + (f" (hint: {self.hint})" if self.hint else "")
 
 
 @dataclass(frozen=True)
@@ -862,14 +852,12 @@ def raise_problems(problems: list[Problem], file: str) -> None:
     problems = sorted(problems, key=key)
     if len(problems) == 1:
         p = problems[0]
-        err = PlanError(p.message, where=p.where, hint=p.hint)
-    else:
-        lines = [f"{len(problems)} problems in the plan:"]
-        for p in problems:
-            lines.append(f"  {p.where}: {p.message}" + (f"\n      hint: {p.hint}" if p.hint else ""))
-        err = PlanError("\n".join(lines), where=None, hint=None)
-    err.problems = tuple(problems)   # type: ignore[attr-defined]
-    raise err
+        raise PlanError(p.message, where=p.where, hint=p.hint, problems=(p,))
+    lines = [f"{len(problems)} problems in the plan:"]
+    for p in problems:
+        lines.append(f"  {p.where}: {p.message}" + (f"\n      hint: {p.hint}" if p.hint else ""))
+    raise PlanError("\n".join(lines), where=None, hint=None, problems=tuple(problems))
+
 
 
 def parse_plan(text: str, path: str = "<plan>", base_dir: str | Path | None = None) -> Plan:
