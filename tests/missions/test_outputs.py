@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 from pathlib import Path
@@ -14,9 +15,9 @@ from missions import outputs
 from missions.compile import compile_plan
 from missions.errors import PlanError
 from missions.outputs import write_outputs
-from missions.planfile import read_plan
+from missions.planfile import load_plan as read_plan_file, read_plan
 from missions.report import report
-from missions.wpl import read_wpl
+from missions.wpl import load_wpl, read_wpl
 
 KML = "{http://www.opengis.net/kml/2.2}"
 
@@ -36,9 +37,14 @@ def test_every_output_is_written_and_reads_back(small, tmp_path):
     paths = write_outputs(small, out)
     names = sorted(p.name for p in paths)
     assert names == sorted(f"small.{s}" for s in ("plan", "waypoints", "geojson", "kml", "setup.json", "params",
-                                                   "report.json", "lua"))
-    assert sorted(p.name for p in out.iterdir()) == names            # nothing else, no temp files
-    assert [p.name for p in tmp_path.iterdir()] == ["out"]            # the temp dir next to it is gone
+                                                   "report.json", "lua", "manifest.json"))
+    assert sorted(p.name for p in out.iterdir()) == names            # nothing else, no temp folder
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]
+    # the manifest lists every other file with the sha256 of its bytes
+    manifest = json.loads((out / "small.manifest.json").read_text())
+    assert manifest["name"] == "small"
+    assert {r["file"]: r["sha256"] for r in manifest["files"]} == {
+        n: hashlib.sha256((out / n).read_bytes()).hexdigest() for n in names if n != "small.manifest.json"}
     # the .plan and .waypoints hold exactly the compiled items
     items, fence, rally, home = read_plan((out / "small.plan").read_text(), "small.plan")
     assert len(items) == len(small.items) and all(a.same_on_wire(b) for a, b in zip(items, small.items))
@@ -102,26 +108,54 @@ def test_a_failing_writer_leaves_the_directory_untouched(small, tmp_path, monkey
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
 
 
-def test_a_failure_while_moving_rolls_back(small, tmp_path, monkeypatch):
+def test_a_failure_before_the_commit_leaves_the_directory_untouched(small, tmp_path, monkeypatch):
     out = tmp_path / "out"
     write_outputs(small, out)
     (out / "notes.txt").write_text("mine")
     before = _snapshot(out)
+    real = os.rename
+
+    def full(src, dst):
+        if Path(dst).name == ".small.commit":
+            raise OSError(28, "No space left on device")
+        return real(src, dst)
+    monkeypatch.setattr(outputs.os, "rename", full)
+    with pytest.raises(PlanError, match="cannot write the outputs: No space left") as e:
+        write_outputs(small, out)
+    assert "nothing was changed" in e.value.hint
+    assert _snapshot(out) == before
+    assert sorted(p.name for p in out.iterdir()) == sorted(before)   # no temporary folder either
+
+
+def test_a_failure_after_the_commit_is_refused_by_readers_and_finished_by_the_next_run(tmp_path, monkeypatch):
+    """Once the new set is committed it wins: a failure while moving it in leaves it waiting in .NAME.commit,
+    readers refuse NAME's half-moved files meanwhile, and the next compile finishes it (stale parts removed)."""
+    split = compile_plan(small_plan(tmp_path, name="m", limit=10))
+    whole = compile_plan(small_plan(tmp_path, name="m"))
+    out = tmp_path / "out"
+    write_outputs(split, out)
     real = os.replace
     calls = {"n": 0}
 
     def flaky(src, dst):
-        calls["n"] += 1
-        if calls["n"] == 9:             # past the set-aside of the old files, in the middle of moving new ones
-            raise OSError(28, "No space left on device")
+        if Path(src).parent.name == ".m.commit":
+            calls["n"] += 1
+            if calls["n"] == 3:
+                raise OSError(5, "Input/output error")
         return real(src, dst)
     monkeypatch.setattr(outputs.os, "replace", flaky)
-    with pytest.raises(PlanError) as e:
-        write_outputs(small, out)
-    assert "No space left" in str(e.value) and e.value.hint
+    with pytest.raises(PlanError, match="cannot finish placing the outputs: Input/output error") as e:
+        write_outputs(whole, out)
+    assert ".m.commit" in e.value.hint and "next compile" in e.value.hint
     monkeypatch.setattr(outputs.os, "replace", real)
-    assert _snapshot(out) == before
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+    assert (out / ".m.commit").is_dir()
+    for fname in ("m.plan", "m.waypoints", "m.part1.plan"):
+        with pytest.raises(PlanError, match="compile of m into this folder was interrupted"):
+            (read_plan_file if fname.endswith(".plan") else load_wpl)(out / fname)
+    paths = write_outputs(whole, out)                  # the next run: finishes the committed set, then its own
+    assert sorted(p.name for p in out.iterdir()) == sorted(p.name for p in paths)
+    assert not list(out.glob("m.part*"))
+    read_plan_file(out / "m.plan")
 
 
 def test_new_directory_is_not_left_behind_on_failure(small, tmp_path, monkeypatch):
@@ -148,7 +182,7 @@ def test_unusable_output_paths_say_what_to_do(small, tmp_path):
     assert e.value.where == str(too_long) and "at most 255 bytes" in e.value.hint
     (tmp_path / "file").write_text("x")
     under_a_file = tmp_path / "file" / "out"               # its parent is a file: nothing can be made beside it
-    with pytest.raises(PlanError, match="cannot write next to the output directory") as e:
+    with pytest.raises(PlanError, match="cannot create the output directory") as e:
         write_outputs(small, under_a_file)
     assert e.value.where == str(under_a_file) and "parent must be a writable directory" in e.value.hint
     assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]
