@@ -186,3 +186,212 @@ def test_unusable_output_paths_say_what_to_do(small, tmp_path):
         write_outputs(small, under_a_file)
     assert e.value.where == str(under_a_file) and "parent must be a writable directory" in e.value.hint
     assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]
+
+
+# ------------------------------------------------------------------------- nothing the tool did not write
+
+def _tree(d: Path) -> dict[str, object]:
+    """Every entry under d: a regular file's bytes, or what else it is (a symlink with its target)."""
+    out: dict[str, object] = {}
+    for root, dirs, files in os.walk(d):
+        for n in dirs + files:
+            p = Path(root) / n
+            rel = str(p.relative_to(d))
+            if p.is_symlink():
+                out[rel] = f"symlink -> {os.readlink(p)}"
+            elif p.is_dir():
+                out[rel] = "directory"
+            elif p.is_file():
+                out[rel] = p.read_bytes()
+            else:
+                out[rel] = "other"
+    return out
+
+
+@pytest.mark.parametrize("kind", ["directory", "symlink", "fifo"])
+@pytest.mark.parametrize("fname", ["small.kml", "small.manifest.json"])
+def test_a_non_regular_file_in_the_way_of_an_output_is_refused_before_anything_is_written(small, tmp_path, kind,
+                                                                                        fname):
+    out = tmp_path / "out"
+    write_outputs(small, out)                     # an earlier set, then the user's thing under an output name
+    target = out / fname
+    target.unlink()
+    if kind == "directory":
+        target.mkdir()
+        (target / "photo.jpg").write_bytes(b"the user's photo")
+    elif kind == "symlink":
+        (tmp_path / "elsewhere.txt").write_text("the user's file")
+        target.symlink_to(tmp_path / "elsewhere.txt")
+    else:
+        os.mkfifo(target)
+    before = _tree(tmp_path)
+    with pytest.raises(PlanError, match="is in the way of an output file; refusing to replace it") as e:
+        write_outputs(small, out)
+    assert e.value.where == str(target) and "move it away" in e.value.hint
+    assert _tree(tmp_path) == before
+
+
+def test_stale_parts_are_removed_only_when_the_last_manifest_lists_them_as_regular_files(tmp_path):
+    split = compile_plan(small_plan(tmp_path, name="s", limit=10))
+    whole = compile_plan(small_plan(tmp_path, name="s"))
+    assert len(split.parts) >= 3
+    out = tmp_path / "out"
+    write_outputs(split, out)
+    (out / "s.part1.plan").unlink()
+    (out / "s.part1.plan").mkdir()                          # the user's folder where a listed part was
+    (out / "s.part1.plan" / "keep.txt").write_text("mine")
+    (out / "s.part2.waypoints").unlink()
+    (out / "s.part2.waypoints").symlink_to(tmp_path / "s.yaml")
+    (out / "s.part9.plan").write_text("a part no manifest lists")   # e.g. left by an older wiris-tools
+    (out / ".s.photos.tmp").mkdir()                         # hidden, but not a name a compile's mkdtemp makes
+    write_outputs(whole, out)
+    assert (out / ".s.photos.tmp").is_dir()
+    left = sorted(p.name for p in out.glob("s.part*"))
+    assert left == ["s.part1.plan", "s.part2.waypoints", "s.part9.plan"]
+    assert (out / "s.part1.plan" / "keep.txt").read_text() == "mine"
+    assert (out / "s.part9.plan").read_text() == "a part no manifest lists"
+    assert (tmp_path / "s.yaml").exists()
+    # no reader takes the part the last compile does not list
+    with pytest.raises(PlanError, match=r"not a file of the last compile of s \(s.manifest.json does not list it\)"):
+        read_plan_file(out / "s.part9.plan")
+
+
+def test_an_output_that_is_an_input_of_the_plan_is_refused(tmp_path):
+    """`-o` the plan's own area folder, or any output name that is (a hard link to) the plan, an area or an
+    exclusion file: refused naming both, before anything is written."""
+    import shutil
+
+    examples = Path(__file__).resolve().parents[2] / "examples"
+    shutil.copytree(examples, tmp_path / "ex")
+    plan = tmp_path / "ex" / "solar-park.yaml"
+    compiled = compile_plan(plan)
+    areas = tmp_path / "ex" / "areas"
+    assert {Path(p).resolve() for p in compiled.inputs} == {plan.resolve(), areas / "solar-park.geojson",
+                                                           areas / "substation.geojson"}
+    cases = [(areas, areas / "solar-park.geojson")]           # the finding: -o examples/areas
+    linked = tmp_path / "linked"
+    linked.mkdir()
+    for fname, src in (("solar-park.kml", areas / "substation.geojson"), ("solar-park.setup.json", plan)):
+        d = linked / fname.split(".", 1)[1]
+        d.mkdir()
+        os.link(src, d / fname)                                # a hard link: the same file under an output name
+        cases.append((d, src))
+    rep = report(compiled)
+    for out, victim in cases:
+        before = _tree(tmp_path)
+        with pytest.raises(PlanError, match="an input of the plan") as e:
+            write_outputs(compiled, out, rep=rep)
+        assert str(victim) in str(e.value) and e.value.where.startswith(str(out) + os.sep), str(e.value)
+        assert _tree(tmp_path) == before
+
+
+# ------------------------------------------------------------------------------------- readers check
+
+
+def test_readers_refuse_a_compiled_file_that_is_not_the_manifests(small, tmp_path):
+    out = tmp_path / "out"
+    write_outputs(small, out)
+    read_plan_file(out / "small.plan")
+    load_wpl(out / "small.waypoints")
+    text = (out / "small.waypoints").read_text()
+    edited = text.replace("\t40\t", "\t45\t", 1)             # the take-off altitude, by hand
+    assert edited != text
+    (out / "small.waypoints").write_text(edited)
+    with pytest.raises(PlanError, match="differs from what the last compile of small wrote") as e:
+        load_wpl(out / "small.waypoints")
+    assert e.value.where == str(out / "small.waypoints") and e.value.hint
+    from wiris_tools.camera_client import load_setup
+    load_setup(out / "small.setup.json")
+    (out / "small.setup.json").write_text((out / "small.setup.json").read_text().replace("small", "other", 1))
+    with pytest.raises(PlanError, match="differs from what the last compile"):
+        load_setup(out / "small.setup.json")
+    # a file no manifest speaks for (QGroundControl's own .plan next to it) is read as before
+    (out / "mine.plan").write_bytes((out / "small.plan").read_bytes())
+    read_plan_file(out / "mine.plan")
+
+
+# ---------------------------------------------------------------------------------------------- SIGKILL
+
+KILLS = 40
+
+
+def _write_forever(sets, out: Path, ready: Path) -> None:
+    """The child: write the two sets in turn until killed."""
+    ready.touch()
+    while True:
+        for compiled, rep, sim in sets:
+            write_outputs(compiled, out, rep=rep, sim=sim)
+
+
+def _visible(d: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(d.iterdir()) if not p.name.startswith(".")}
+
+
+def test_a_sigkill_at_any_moment_leaves_one_complete_set_after_the_next_run(tmp_path):
+    """A real child process writes a split mission (parts) and an unsplit one of the same NAME in turn, and is
+    SIGKILLed at 40 random moments (seeded). After each kill, readers take no file that is not the manifest's;
+    and after recovery, what the next run does first, the folder holds exactly one of the two sets, nothing else,
+    no temporary folder."""
+    import multiprocessing
+    import random
+    import time
+
+    from missions.outputs import check_output, recover_outputs
+    from missions.report import simulate
+
+    split = compile_plan(small_plan(tmp_path, name="k", limit=10))
+    whole = compile_plan(small_plan(tmp_path, name="k"))
+    sets = []
+    for c in (split, whole):
+        sim = simulate(c)
+        sets.append((c, report(c, sim), sim))
+    expected = []
+    for i, (c, rep, sim) in enumerate(sets):
+        write_outputs(c, tmp_path / f"ref{i}", rep=rep, sim=sim)
+        expected.append(_visible(tmp_path / f"ref{i}"))
+    assert expected[0].keys() != expected[1].keys()
+    out = tmp_path / "out"
+    write_outputs(*sets[1][:1], out, rep=sets[1][1], sim=sets[1][2])
+    rng = random.Random(20240611)
+    fork = multiprocessing.get_context("fork")
+    seen = {"pending commit": 0, "temp folder": 0, "clean": 0}
+    for kill in range(KILLS):
+        ready = tmp_path / f"ready-{kill}"
+        child = fork.Process(target=_write_forever, args=(sets, out, ready), daemon=True)
+        child.start()
+        for _ in range(20_000):
+            if ready.exists() or not child.is_alive():
+                break
+            time.sleep(0.001)
+        assert ready.exists(), "the writer did not start"
+        time.sleep(rng.uniform(0.0, 0.3))
+        child.kill()                                 # SIGKILL
+        child.join(30)
+        assert child.exitcode == -9, child.exitcode
+        hidden = sorted(p.name for p in out.iterdir() if p.name.startswith("."))
+        if ".k.commit" in hidden:
+            seen["pending commit"] += 1
+        elif hidden:
+            seen["temp folder"] += 1
+            # not committed: the folder's set is exactly as it was
+            assert _visible(out) in expected, (kill, hidden)
+        else:
+            seen["clean"] += 1
+            assert _visible(out) in expected, kill
+        # before any recovery, a reader takes only files of the set the manifest names, and only when complete
+        manifest = (out / "k.manifest.json").read_bytes()
+        owner = next(e for e in expected if e["k.manifest.json"] == manifest)
+        for p in sorted(out.glob("k*.plan")) + sorted(out.glob("k*.waypoints")):
+            data = p.read_bytes()
+            try:
+                check_output(p, data)
+            except PlanError:
+                continue
+            assert ".k.commit" not in hidden and data == owner[p.name], (kill, p.name)
+        recover_outputs(out, "k")                   # what the next run does first
+        assert _visible(out) in expected, kill
+        assert sorted(p.name for p in out.iterdir() if p.name.startswith(".")) == [], kill
+    # the kills landed at different stages (the seed and the machine decide which; most land mid-write)
+    assert seen["pending commit"] + seen["temp folder"] > 0, seen
+    paths = write_outputs(*sets[0][:1], out, rep=sets[0][1], sim=sets[0][2])    # and the next run completes
+    assert _visible(out) == expected[0] and sorted(p.name for p in out.iterdir()) == sorted(p.name for p in paths)
