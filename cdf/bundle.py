@@ -12,10 +12,17 @@ different bytes under an existing file name or manifest version, and says to rai
 Every file is validated with the validator's `strict` profile before anything is written, and the
 directory is changed atomically: files are built in a temporary directory, then renamed into place
 (the manifest last), so an error leaves the directory exactly as it was.
+
+The immutability check holds when builds run at the same time: each holds an exclusive lock (flock) on the
+bundle directory's parent from reading what is published until its files are in place, so a second build
+of the same version sees the first one's files and is refused (or finds them identical). The parent is
+locked rather than the directory itself because a new bundle directory appears by one rename.
 """
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import hashlib
 import json
 import lzma
@@ -26,7 +33,7 @@ import tempfile
 import urllib.parse
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Iterable
+from typing import Iterable, Iterator
 
 from cdf.catalogue import Camera, Catalogue
 from cdf.errors import CdfError
@@ -221,6 +228,35 @@ def build_bundle(directory: str | Path, models: Iterable[str] = (), *, all_model
                                    file=file_name, uri=uri, sha256=hashlib.sha256(data).hexdigest(),
                                    bytes=len(data)))
 
+    with _build_lock(directory):
+        return _publish(directory, cat, entries, outputs, skipped)
+
+
+@contextlib.contextmanager
+def _build_lock(directory: Path) -> Iterator[None]:
+    """Hold the exclusive lock on the bundle directory's parent (created if missing) for the block: one build
+    at a time checks and changes what is published there."""
+    fd = None
+    try:
+        parent = directory.resolve().parent    # one lock for every spelling of the path, symlinks included
+        parent.mkdir(parents=True, exist_ok=True)
+        fd = os.open(parent, os.O_RDONLY | os.O_DIRECTORY)
+        fcntl.flock(fd, fcntl.LOCK_EX)         # released when fd closes, also when the process dies
+    except OSError as err:
+        if fd is not None:
+            os.close(fd)
+        raise CdfError(f"cannot write the bundle: {err.strerror or err}", where=str(directory),
+                       hint="nothing was changed; the directory's parent must exist or be creatable, "
+                            "readable and writable, on a file system that can lock") from None
+    try:
+        yield
+    finally:
+        os.close(fd)
+
+
+def _publish(directory: Path, cat: Catalogue, entries: list[BundleEntry], outputs: dict[str, bytes],
+             skipped: list[tuple[str, str]]) -> BuildResult:
+    """Check the built files against what `directory` publishes and write them (under _build_lock)."""
     # Immutability: nothing published may change under the same name or version.
     existing = _read_manifest(directory) if directory.exists() else []
     built = {(e.id, e.version): e for e in entries}

@@ -25,7 +25,7 @@ from missions.emit.emitter import Emitter, Track, TrackPoint, HOVER_HOLD_S
 from missions.errors import PlanError
 from missions.emit.firmware import check_items, profile, split_parts
 from missions.plan.load import (CameraStep, CorridorStep, LandStep, Plan, RtlStep, SurveyStep, TakeoffStep,
-                                WaypointStep, load_plan)
+                                WaypointStep, input_files, load_plan)
 from missions.plan.schema import MAX_AGL_M, MAX_ALTITUDE_M, MIN_ALTITUDE_M
 from missions.geometry import optics
 
@@ -281,4 +281,4 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
         name=plan.name, firmware=prof.name, frame=plan.vehicle.frame,
         home=(plan.home.lat, plan.home.lon, plan.home.alt_amsl_m), speed_mps=speed, items=items, parts=parts,
         item_limit=limit, payloads=payloads, areas=tuple(areas), setup=setup, lua=lua, params=params,
-        warnings=tuple(dict.fromkeys(warnings)), intent=tuple(intent))
+        warnings=tuple(dict.fromkeys(warnings)), intent=tuple(intent), inputs=input_files(plan))

@@ -120,6 +120,7 @@ class Compiled:
     params: tuple[tuple[str, float, str], ...] = ()   # autopilot parameters: name, value, why
     warnings: tuple[PlanWarning, ...] = ()
     intent: tuple[Any, ...] = field(default=(), compare=False)   # planner geometry, for previews only
+    inputs: tuple[str, ...] = field(default=(), compare=False)   # the files the plan was read from (never written)
 
     def payload(self, name: str) -> PayloadInfo:
         return next(p for p in self.payloads if p.name == name)

@@ -802,6 +802,8 @@ def load_setup(path: str | Path) -> list[Step]:
     if len(raw) > MAX_SETUP_BYTES:
         raise LinkError(f"file is larger than {MAX_SETUP_BYTES} bytes", where=str(path),
                         hint="give the NAME.setup.json that `wiris mission compile` wrote, not another file")
+    from missions.formats.outputs import check_output
+    check_output(p, raw)        # only the last complete compile's NAME.setup.json (PlanError otherwise)
     try:
         data = json.loads(raw.decode("utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as err:

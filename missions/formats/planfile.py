@@ -640,4 +640,6 @@ def load_plan(path: str | Path) -> tuple[list[MissionItem], list[MissionItem], l
         data = p.read_bytes()
     except OSError as err:
         raise PlanError(f"cannot read the file: {err.strerror}", where=str(p), hint=READ_HINT) from None
+    from missions.formats.outputs import check_output
+    check_output(p, data)       # a compiled NAME.plan: only the last complete compile's
     return read_plan(data, str(p))

@@ -199,4 +199,6 @@ def load_wpl(path: str | Path, *, home_row: bool | None = None) -> tuple[list[Mi
         data = p.read_bytes()
     except OSError as err:
         raise PlanError(f"cannot read the file: {err.strerror}", where=str(p), hint=READ_HINT) from None
+    from missions.formats.outputs import check_output
+    check_output(p, data)       # a compiled NAME.waypoints: only the last complete compile's
     return read_wpl(data, str(p), home_row=home_row)

@@ -886,6 +886,17 @@ def parse_plan(text: str, path: str = "<plan>", base_dir: str | Path | None = No
                         where=path, hint="please report this with the plan") from None
 
 
+def input_files(plan: Plan) -> tuple[str, ...]:
+    """Every file the plan is read from: the plan file itself and each area and exclusion file, as paths."""
+    files = [plan.path] if plan.path != "<plan>" else []
+    for step in plan.mission:
+        if isinstance(step, SurveyStep):
+            for src in (step.area, *step.exclude):
+                if isinstance(src, str):
+                    files.append(str(Path(src) if Path(src).is_absolute() else Path(plan.base_dir) / src))
+    return tuple(dict.fromkeys(files))
+
+
 def load_plan(path: str | Path) -> Plan:
     """Read and parse a plan file (size-capped, UTF-8)."""
     p = Path(path)

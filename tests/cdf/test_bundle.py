@@ -332,3 +332,74 @@ def test_cli_errors_exit_1_without_traceback(tmp_path):
     assert r.exit_code == 1 and "--all" in r.output
     r = CliRunner().invoke(cli, ["cdf", "build", "--all"])
     assert r.exit_code == 2   # usage: -o is required
+
+
+# ------------------------------------------------------------------------------------------ concurrency
+
+RACE_ROUNDS = 24
+
+
+def _wait_for(path: Path, proc_a, proc_b) -> None:
+    import time
+
+    for _ in range(120_000):                     # up to about two minutes on a loaded machine
+        if path.exists():
+            return
+        assert proc_a.poll() in (None, 0) and proc_b.poll() in (None, 0), "a build process died"
+        time.sleep(0.001)
+    raise AssertionError(f"no {path.name} from the build processes")
+
+
+def test_two_concurrent_builds_of_one_version_with_different_content_cannot_both_publish(tmp_path):
+    """Two real processes build wiris-pro v1 at the same moment, one from a table that labels a setting
+    differently: exactly one publishes, the other is refused as a change of a published version, and the
+    published file is the winner's. Half the rounds build into an existing empty folder, half create it."""
+    import subprocess
+    import sys
+
+    ours = table_copy(tmp_path / "a")
+    theirs = table_copy(tmp_path / "b")
+
+    def relabel(data):
+        for s in data["groups"]["radiometry"]:
+            if s["key"] == "emissivity":
+                s["label"] = "Object emissivity"
+    edit_yaml(theirs / "workswell.yaml", relabel)
+    content = {who: cdf.generate.definition_xml(load_catalogue(t).get("wiris-pro"))
+               for who, t in (("a", ours), ("b", theirs))}
+    assert content["a"] != content["b"]
+    work = tmp_path / "work"
+    work.mkdir()
+    for k in range(0, RACE_ROUNDS, 2):
+        (work / f"out-{k}").mkdir()
+    worker = Path(__file__).with_name("bundle_race_worker.py")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(Path(__file__).resolve().parents[2]),
+                                                         os.environ.get("PYTHONPATH", "")])}
+    procs = [subprocess.Popen([sys.executable, str(worker), who, str(t), str(work), str(RACE_ROUNDS)], env=env)
+             for who, t in (("a", ours), ("b", theirs))]
+    try:
+        for k in range(RACE_ROUNDS):
+            for who in "ab":
+                _wait_for(work / f"ready-{k}-{who}", *procs)
+            (work / f"go-{k}").touch()
+            outcomes = {}
+            for who in "ab":
+                _wait_for(work / f"result-{k}-{who}", *procs)
+                outcomes[who] = (work / f"result-{k}-{who}").read_text(encoding="utf-8")
+            winners = [who for who, text in outcomes.items() if text == "ok"]
+            assert len(winners) == 1, (k, outcomes)
+            loser = outcomes["b" if winners == ["a"] else "a"]
+            assert re.search(r"wiris-pro: (definition version 1 is already published|"
+                             r"workswell_wiris-pro_v1.xml already exists) with different content", loser), (k, loser)
+            out = work / f"out-{k}"
+            assert (out / "workswell_wiris-pro_v1.xml").read_bytes() == content[winners[0]]
+            rows = json.loads((out / MANIFEST).read_text())["models"]
+            assert [r["sha256"] for r in rows] == [hashlib.sha256(content[winners[0]]).hexdigest()]
+            assert sorted(p.name for p in out.iterdir()) == sorted([MANIFEST, "workswell_wiris-pro_v1.xml"])
+        for p in procs:
+            assert p.wait(60) == 0
+    finally:
+        for p in procs:
+            if p.poll() is None:
+                p.kill()
+                p.wait(5)

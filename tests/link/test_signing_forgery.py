@@ -81,7 +81,7 @@ def forge(victim: Link, ids: tuple[int, int], variant: str) -> None:
 
 
 def waypoints() -> list:
-    from missions.items import FRAME_GLOBAL_RELATIVE_ALT, MissionItem
+    from missions.emit.items import FRAME_GLOBAL_RELATIVE_ALT, MissionItem
     return [MissionItem(command=mavlink2.MAV_CMD_NAV_WAYPOINT, frame=FRAME_GLOBAL_RELATIVE_ALT,
                         x=490000000 + 1000 * i, y=160000000, z=40.0) for i in range(ITEMS_ON_THE_WIRE)]
 

@@ -180,3 +180,43 @@ def test_compile_writes_nothing_when_the_measured_report_has_errors(tmp_path, mo
     assert r.exit_code == 1
     assert "error [item_limit]" in r.output
     assert not out.exists()
+
+
+def test_compile_into_the_plans_own_area_folder_is_refused_and_the_area_kept(tmp_path):
+    import shutil
+
+    examples = Path(__file__).resolve().parents[2] / "examples"
+    shutil.copytree(examples, tmp_path / "ex")
+    areas = tmp_path / "ex" / "areas"
+    before = {p.name: p.read_bytes() for p in areas.iterdir()}
+    r = run("mission", "compile", tmp_path / "ex" / "solar-park.yaml", "-o", areas)
+    assert r.exit_code == 1 and "Traceback" not in r.output, r.output
+    assert (f"{areas / 'solar-park.geojson'}: this output would overwrite {areas / 'solar-park.geojson'}, "
+            "an input of the plan") in r.output and "hint:" in r.output
+    assert {p.name: p.read_bytes() for p in areas.iterdir()} == before
+
+
+def test_compile_refuses_a_folder_in_the_way_of_an_output_and_keeps_it(tmp_path):
+    plan = small_plan(tmp_path)
+    out = tmp_path / "out"
+    (out / "small.kml").mkdir(parents=True)
+    (out / "small.kml" / "survey-photos.txt").write_text("the user's")
+    r = run("mission", "compile", plan, "-o", out)
+    assert r.exit_code == 1 and "Traceback" not in r.output, r.output
+    assert f"{out / 'small.kml'}: a directory is in the way of an output file; refusing to replace it" in r.output
+    assert [p.name for p in out.iterdir()] == ["small.kml"]
+    assert (out / "small.kml" / "survey-photos.txt").read_text() == "the user's"
+
+
+def test_a_compiled_plan_edited_by_hand_is_the_users_to_upload(tmp_path):
+    """QGroundControl saves a .plan in place: the edit is not mistaken for a half-written compile."""
+    from missions.formats.planfile import load_plan as read_plan_file
+
+    plan = small_plan(tmp_path)
+    out = tmp_path / "out"
+    assert run("mission", "compile", plan, "-o", out).exit_code == 0
+    doc = json.loads((out / "small.plan").read_text())
+    doc["mission"]["items"][0]["params"][6] = 45          # the take-off altitude, by hand
+    (out / "small.plan").write_text(json.dumps(doc))
+    mission, _fence, _rally, _home = read_plan_file(out / "small.plan")
+    assert mission[0].z == 45

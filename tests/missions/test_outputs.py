@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 from pathlib import Path
@@ -14,9 +15,9 @@ from missions.formats import outputs
 from missions.compile import compile_plan
 from missions.errors import PlanError
 from missions.formats.outputs import write_outputs
-from missions.formats.planfile import read_plan
+from missions.formats.planfile import load_plan as read_plan_file, read_plan
 from missions.measure.report import report
-from missions.formats.wpl import read_wpl
+from missions.formats.wpl import load_wpl, read_wpl
 
 KML = "{http://www.opengis.net/kml/2.2}"
 
@@ -36,9 +37,14 @@ def test_every_output_is_written_and_reads_back(small, tmp_path):
     paths = write_outputs(small, out)
     names = sorted(p.name for p in paths)
     assert names == sorted(f"small.{s}" for s in ("plan", "waypoints", "geojson", "kml", "setup.json", "params",
-                                                   "report.json", "lua"))
-    assert sorted(p.name for p in out.iterdir()) == names            # nothing else, no temp files
-    assert [p.name for p in tmp_path.iterdir()] == ["out"]            # the temp dir next to it is gone
+                                                   "report.json", "lua", "manifest.json"))
+    assert sorted(p.name for p in out.iterdir()) == names            # nothing else, no temp folder
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]
+    # the manifest lists every other file with the sha256 of its bytes
+    manifest = json.loads((out / "small.manifest.json").read_text())
+    assert manifest["name"] == "small"
+    assert {r["file"]: r["sha256"] for r in manifest["files"]} == {
+        n: hashlib.sha256((out / n).read_bytes()).hexdigest() for n in names if n != "small.manifest.json"}
     # the .plan and .waypoints hold exactly the compiled items
     items, fence, rally, home = read_plan((out / "small.plan").read_text(), "small.plan")
     assert len(items) == len(small.items) and all(a.same_on_wire(b) for a, b in zip(items, small.items))
@@ -102,26 +108,54 @@ def test_a_failing_writer_leaves_the_directory_untouched(small, tmp_path, monkey
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
 
 
-def test_a_failure_while_moving_rolls_back(small, tmp_path, monkeypatch):
+def test_a_failure_before_the_commit_leaves_the_directory_untouched(small, tmp_path, monkeypatch):
     out = tmp_path / "out"
     write_outputs(small, out)
     (out / "notes.txt").write_text("mine")
     before = _snapshot(out)
+    real = os.rename
+
+    def full(src, dst):
+        if Path(dst).name == ".small.commit":
+            raise OSError(28, "No space left on device")
+        return real(src, dst)
+    monkeypatch.setattr(outputs.os, "rename", full)
+    with pytest.raises(PlanError, match="cannot write the outputs: No space left") as e:
+        write_outputs(small, out)
+    assert "nothing was changed" in e.value.hint
+    assert _snapshot(out) == before
+    assert sorted(p.name for p in out.iterdir()) == sorted(before)   # no temporary folder either
+
+
+def test_a_failure_after_the_commit_is_refused_by_readers_and_finished_by_the_next_run(tmp_path, monkeypatch):
+    """Once the new set is committed it wins: a failure while moving it in leaves it waiting in .NAME.commit,
+    readers refuse NAME's half-moved files meanwhile, and the next compile finishes it (stale parts removed)."""
+    split = compile_plan(small_plan(tmp_path, name="m", limit=10))
+    whole = compile_plan(small_plan(tmp_path, name="m"))
+    out = tmp_path / "out"
+    write_outputs(split, out)
     real = os.replace
     calls = {"n": 0}
 
     def flaky(src, dst):
-        calls["n"] += 1
-        if calls["n"] == 9:             # past the set-aside of the old files, in the middle of moving new ones
-            raise OSError(28, "No space left on device")
+        if Path(src).parent.name == ".m.commit":
+            calls["n"] += 1
+            if calls["n"] == 3:
+                raise OSError(5, "Input/output error")
         return real(src, dst)
     monkeypatch.setattr(outputs.os, "replace", flaky)
-    with pytest.raises(PlanError) as e:
-        write_outputs(small, out)
-    assert "No space left" in str(e.value) and e.value.hint
+    with pytest.raises(PlanError, match="cannot finish placing the outputs: Input/output error") as e:
+        write_outputs(whole, out)
+    assert ".m.commit" in e.value.hint and "next compile" in e.value.hint
     monkeypatch.setattr(outputs.os, "replace", real)
-    assert _snapshot(out) == before
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+    assert (out / ".m.commit").is_dir()
+    for fname in ("m.plan", "m.waypoints", "m.part1.plan"):
+        with pytest.raises(PlanError, match="compile of m into this folder was interrupted"):
+            (read_plan_file if fname.endswith(".plan") else load_wpl)(out / fname)
+    paths = write_outputs(whole, out)                  # the next run: finishes the committed set, then its own
+    assert sorted(p.name for p in out.iterdir()) == sorted(p.name for p in paths)
+    assert not list(out.glob("m.part*"))
+    read_plan_file(out / "m.plan")
 
 
 def test_new_directory_is_not_left_behind_on_failure(small, tmp_path, monkeypatch):
@@ -148,7 +182,217 @@ def test_unusable_output_paths_say_what_to_do(small, tmp_path):
     assert e.value.where == str(too_long) and "at most 255 bytes" in e.value.hint
     (tmp_path / "file").write_text("x")
     under_a_file = tmp_path / "file" / "out"               # its parent is a file: nothing can be made beside it
-    with pytest.raises(PlanError, match="cannot write next to the output directory") as e:
+    with pytest.raises(PlanError, match="cannot create the output directory") as e:
         write_outputs(small, under_a_file)
     assert e.value.where == str(under_a_file) and "parent must be a writable directory" in e.value.hint
     assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]
+
+
+# ------------------------------------------------------------------------- nothing the tool did not write
+
+def _tree(d: Path) -> dict[str, object]:
+    """Every entry under d: a regular file's bytes, or what else it is (a symlink with its target)."""
+    out: dict[str, object] = {}
+    for root, dirs, files in os.walk(d):
+        for n in dirs + files:
+            p = Path(root) / n
+            rel = str(p.relative_to(d))
+            if p.is_symlink():
+                out[rel] = f"symlink -> {os.readlink(p)}"
+            elif p.is_dir():
+                out[rel] = "directory"
+            elif p.is_file():
+                out[rel] = p.read_bytes()
+            else:
+                out[rel] = "other"
+    return out
+
+
+@pytest.mark.parametrize("kind", ["directory", "symlink", "fifo"])
+@pytest.mark.parametrize("fname", ["small.kml", "small.manifest.json"])
+def test_a_non_regular_file_in_the_way_of_an_output_is_refused_before_anything_is_written(small, tmp_path, kind,
+                                                                                        fname):
+    out = tmp_path / "out"
+    write_outputs(small, out)                     # an earlier set, then the user's thing under an output name
+    target = out / fname
+    target.unlink()
+    if kind == "directory":
+        target.mkdir()
+        (target / "photo.jpg").write_bytes(b"the user's photo")
+    elif kind == "symlink":
+        (tmp_path / "elsewhere.txt").write_text("the user's file")
+        target.symlink_to(tmp_path / "elsewhere.txt")
+    else:
+        os.mkfifo(target)
+    before = _tree(tmp_path)
+    with pytest.raises(PlanError, match="is in the way of an output file; refusing to replace it") as e:
+        write_outputs(small, out)
+    assert e.value.where == str(target) and "move it away" in e.value.hint
+    assert _tree(tmp_path) == before
+
+
+def test_stale_parts_are_removed_only_when_the_last_manifest_lists_them_as_regular_files(tmp_path):
+    split = compile_plan(small_plan(tmp_path, name="s", limit=10))
+    whole = compile_plan(small_plan(tmp_path, name="s"))
+    assert len(split.parts) >= 3
+    out = tmp_path / "out"
+    write_outputs(split, out)
+    (out / "s.part1.plan").unlink()
+    (out / "s.part1.plan").mkdir()                          # the user's folder where a listed part was
+    (out / "s.part1.plan" / "keep.txt").write_text("mine")
+    (out / "s.part2.waypoints").unlink()
+    (out / "s.part2.waypoints").symlink_to(tmp_path / "s.yaml")
+    (out / "s.part9.plan").write_text("a part no manifest lists")   # e.g. left by an older wiris-tools
+    (out / ".s.photos.tmp").mkdir()                         # hidden, but not a name a compile's mkdtemp makes
+    write_outputs(whole, out)
+    assert (out / ".s.photos.tmp").is_dir()
+    left = sorted(p.name for p in out.glob("s.part*"))
+    assert left == ["s.part1.plan", "s.part2.waypoints", "s.part9.plan"]
+    assert (out / "s.part1.plan" / "keep.txt").read_text() == "mine"
+    assert (out / "s.part9.plan").read_text() == "a part no manifest lists"
+    assert (tmp_path / "s.yaml").exists()
+    # no reader takes the part the last compile does not list
+    with pytest.raises(PlanError, match=r"not a file of the last compile of s \(s.manifest.json does not list it\)"):
+        read_plan_file(out / "s.part9.plan")
+
+
+def test_an_output_that_is_an_input_of_the_plan_is_refused(tmp_path):
+    """`-o` the plan's own area folder, or any output name that is (a hard link to) the plan, an area or an
+    exclusion file: refused naming both, before anything is written."""
+    import shutil
+
+    examples = Path(__file__).resolve().parents[2] / "examples"
+    shutil.copytree(examples, tmp_path / "ex")
+    plan = tmp_path / "ex" / "solar-park.yaml"
+    compiled = compile_plan(plan)
+    areas = tmp_path / "ex" / "areas"
+    assert {Path(p).resolve() for p in compiled.inputs} == {plan.resolve(), areas / "solar-park.geojson",
+                                                           areas / "substation.geojson"}
+    cases = [(areas, areas / "solar-park.geojson")]           # the finding: -o examples/areas
+    linked = tmp_path / "linked"
+    linked.mkdir()
+    for fname, src in (("solar-park.kml", areas / "substation.geojson"), ("solar-park.setup.json", plan)):
+        d = linked / fname.split(".", 1)[1]
+        d.mkdir()
+        os.link(src, d / fname)                                # a hard link: the same file under an output name
+        cases.append((d, src))
+    rep = report(compiled)
+    for out, victim in cases:
+        before = _tree(tmp_path)
+        with pytest.raises(PlanError, match="an input of the plan") as e:
+            write_outputs(compiled, out, rep=rep)
+        assert str(victim) in str(e.value) and e.value.where.startswith(str(out) + os.sep), str(e.value)
+        assert _tree(tmp_path) == before
+
+
+# ------------------------------------------------------------------------------------- readers check
+
+
+def test_readers_take_a_hand_edited_compiled_file_and_refuse_an_unlisted_part(small, tmp_path):
+    out = tmp_path / "out"
+    write_outputs(small, out)
+    read_plan_file(out / "small.plan")
+    load_wpl(out / "small.waypoints")
+    text = (out / "small.waypoints").read_text()
+    edited = text.replace("\t40\t", "\t45\t", 1)             # the take-off altitude, by hand
+    assert edited != text
+    (out / "small.waypoints").write_text(edited)
+    items, _home = load_wpl(out / "small.waypoints")           # the user's edit is theirs to fly
+    assert any(it.z == 45 for it in items)
+    from wiris_tools.camera_client import load_setup
+    load_setup(out / "small.setup.json")
+    # a part file the last compile did not write (an earlier, longer compile's) is never flown
+    (out / "small.part3.plan").write_bytes((out / "small.plan").read_bytes())
+    with pytest.raises(PlanError, match="not a file of the last compile of small") as e:
+        read_plan_file(out / "small.part3.plan")
+    assert e.value.where == str(out / "small.part3.plan") and e.value.hint
+    # a file no manifest speaks for (QGroundControl's own .plan next to it) is read as before
+    (out / "mine.plan").write_bytes((out / "small.plan").read_bytes())
+    read_plan_file(out / "mine.plan")
+
+
+# ---------------------------------------------------------------------------------------------- SIGKILL
+
+KILLS = 40
+
+
+def _write_forever(sets, out: Path, ready: Path) -> None:
+    """The child: write the two sets in turn until killed."""
+    ready.touch()
+    while True:
+        for compiled, rep, sim in sets:
+            write_outputs(compiled, out, rep=rep, sim=sim)
+
+
+def _visible(d: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(d.iterdir()) if not p.name.startswith(".")}
+
+
+def test_a_sigkill_at_any_moment_leaves_one_complete_set_after_the_next_run(tmp_path):
+    """A real child process writes a split mission (parts) and an unsplit one of the same NAME in turn, and is
+    SIGKILLed at 40 random moments (seeded). After each kill, readers take no file that is not the manifest's;
+    and after recovery, what the next run does first, the folder holds exactly one of the two sets, nothing else,
+    no temporary folder."""
+    import multiprocessing
+    import random
+    import time
+
+    from missions.formats.outputs import check_output, recover_outputs
+    from missions.measure.flight import simulate
+
+    split = compile_plan(small_plan(tmp_path, name="k", limit=10))
+    whole = compile_plan(small_plan(tmp_path, name="k"))
+    sets = []
+    for c in (split, whole):
+        sim = simulate(c)
+        sets.append((c, report(c, sim), sim))
+    expected = []
+    for i, (c, rep, sim) in enumerate(sets):
+        write_outputs(c, tmp_path / f"ref{i}", rep=rep, sim=sim)
+        expected.append(_visible(tmp_path / f"ref{i}"))
+    assert expected[0].keys() != expected[1].keys()
+    out = tmp_path / "out"
+    write_outputs(*sets[1][:1], out, rep=sets[1][1], sim=sets[1][2])
+    rng = random.Random(20240611)
+    fork = multiprocessing.get_context("fork")
+    seen = {"pending commit": 0, "temp folder": 0, "clean": 0}
+    for kill in range(KILLS):
+        ready = tmp_path / f"ready-{kill}"
+        child = fork.Process(target=_write_forever, args=(sets, out, ready), daemon=True)
+        child.start()
+        for _ in range(20_000):
+            if ready.exists() or not child.is_alive():
+                break
+            time.sleep(0.001)
+        assert ready.exists(), "the writer did not start"
+        time.sleep(rng.uniform(0.0, 0.3))
+        child.kill()                                 # SIGKILL
+        child.join(30)
+        assert child.exitcode == -9, child.exitcode
+        hidden = sorted(p.name for p in out.iterdir() if p.name.startswith("."))
+        if ".k.commit" in hidden:
+            seen["pending commit"] += 1
+        elif hidden:
+            seen["temp folder"] += 1
+            # not committed: the folder's set is exactly as it was
+            assert _visible(out) in expected, (kill, hidden)
+        else:
+            seen["clean"] += 1
+            assert _visible(out) in expected, kill
+        # before any recovery, a reader takes only files of the set the manifest names, and only when complete
+        manifest = (out / "k.manifest.json").read_bytes()
+        owner = next(e for e in expected if e["k.manifest.json"] == manifest)
+        for p in sorted(out.glob("k*.plan")) + sorted(out.glob("k*.waypoints")):
+            data = p.read_bytes()
+            try:
+                check_output(p, data)
+            except PlanError:
+                continue
+            assert ".k.commit" not in hidden and data == owner[p.name], (kill, p.name)
+        recover_outputs(out, "k")                   # what the next run does first
+        assert _visible(out) in expected, kill
+        assert sorted(p.name for p in out.iterdir() if p.name.startswith(".")) == [], kill
+    # the kills landed at different stages (the seed and the machine decide which; most land mid-write)
+    assert seen["pending commit"] + seen["temp folder"] > 0, seen
+    paths = write_outputs(*sets[0][:1], out, rep=sets[0][1], sim=sets[0][2])    # and the next run completes
+    assert _visible(out) == expected[0] and sorted(p.name for p in out.iterdir()) == sorted(p.name for p in paths)
