@@ -7,10 +7,11 @@ import subprocess
 import sys
 from typing import Iterator
 
-# Python's Ctrl-C handler installed as a terminal would start the command: a test run started as a
-# background job hands its children SIGINT ignored, and Python then never raises KeyboardInterrupt
+# Python's Ctrl-C handler installed as a terminal would start the command (a test run started as a
+# background job hands its children SIGINT ignored, and Python then never raises KeyboardInterrupt), then
+# the console script's entry point, which ends start-up on a Ctrl-C and hands it back to the command
 _CODE = ("import signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
-         "from wiris_tools.cli import main; sys.argv = ['wiris'] + sys.argv[1:]; main()")
+         "from wiris_tools.entry import main; sys.argv = ['wiris'] + sys.argv[1:]; main()")
 
 
 @contextlib.contextmanager

@@ -8,10 +8,19 @@ for anything it does not host, never a directory listing.
 Safety: only GET and HEAD (405 otherwise); the request path is percent-decoded once and every segment
 checked (no `..`, `.`, empty, hidden or backslash segments, no NUL); the resolved real path must stay
 inside the served directory, so a symlink pointing outside answers 403. Files are read, never written.
-A connection that sends or reads nothing for IDLE_TIMEOUT_S is closed: every connection holds a thread,
-and a stalled client (or many) must not hold them for ever. At most MAX_CONNECTIONS are served at once;
-one more is answered 503 with Retry-After by the accepting thread and closed, so a flood of connections
-cannot start threads without bound (a GCS opens one or two).
+A request target over MAX_TARGET_CHARS, or with a segment over NAME_MAX_BYTES (no file name is longer),
+is answered 414; a GET or HEAD carrying a body is answered 400 and the connection closed.
+
+Every connection holds a thread and a slot, so none may hold them for ever: a connection that sends or reads
+nothing for IDLE_TIMEOUT_S is closed, and so is one whose request line and headers have not all arrived
+REQUEST_TIMEOUT_S after their first byte (a client trickling a header line now and then resets a per-read
+timeout for ever). At most MAX_CONNECTIONS are served at once and MAX_PER_CLIENT from one client address,
+so that a few slow clients cannot take every slot; one more is answered 503 with Retry-After by the
+accepting thread and closed, so a flood of connections cannot start threads without bound (a GCS opens one
+or two). Behind a reverse proxy every client has the proxy's address: raise max_per_client there.
+
+Log lines write the method and path with control characters escaped (as repr() does) and cut to
+LOG_FIELD_CHARS, so a request cannot write escape sequences or fake lines to the operator's terminal.
 
 Caching: ETag is the sha256 of the content (the manifest's value for definitions), Last-Modified the
 file's mtime; a matching If-None-Match (or, without it, an If-Modified-Since not older than the file)
@@ -24,6 +33,7 @@ from __future__ import annotations
 import email.utils
 import hashlib
 import http.server
+import io
 import json
 import os
 import re
@@ -41,7 +51,12 @@ IMMUTABLE = re.compile(r"_v\d+\.xml(\.xz)?$")
 MAX_FILE_BYTES = 16 * 1024 * 1024   # a bundle holds 30 KB definitions; anything bigger is not ours to serve
 ALLOWED = "GET, HEAD"
 IDLE_TIMEOUT_S = 30.0   # a GCS fetches a definition in one go; keep-alive connections idle longer are closed
+REQUEST_TIMEOUT_S = 10.0  # a request line and its headers, from their first byte (a GCS sends them at once)
 MAX_CONNECTIONS = 64    # connections served at once (a thread each); more are refused with 503
+MAX_PER_CLIENT = 8      # of those, from one client address
+MAX_TARGET_CHARS = 2048  # a request target; the bundle's longest is under 100
+NAME_MAX_BYTES = 255    # a path segment, decoded (Linux's NAME_MAX: open() fails on longer names)
+LOG_FIELD_CHARS = 200   # of a logged method or path
 REFUSE_TIMEOUT_S = 0.2  # the accepting thread spends at most about this on one refusal
 
 
@@ -94,11 +109,68 @@ def _normal_prefix(prefix: str) -> str:
     return p if p == "/" else p + "/"
 
 
+def _loggable(text: str, limit: int = LOG_FIELD_CHARS) -> str:
+    """`text` cut to `limit` characters, control characters (and backslashes) escaped as repr() writes them."""
+    cut = text if len(text) <= limit else text[:limit] + "…"
+    return "".join(c if c.isprintable() and c != "\\" else repr(c)[1:-1] for c in cut)
+
+
+def _linger(sock: socket.socket, seconds: float) -> None:
+    """End the answer (FIN) and read what the client still sends, for at most `seconds`, before the socket is
+    closed: closing it with unread data resets the connection, and the client could lose the answer."""
+    try:
+        sock.settimeout(seconds)
+        sock.shutdown(socket.SHUT_WR)
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline and sock.recv(65536):
+            pass
+    except OSError:
+        pass
+
+
+class _RequestReader(io.RawIOBase):
+    """A connection's reads: each waits at most `idle_timeout_s`, and those of one request's line and headers
+    together at most `request_timeout_s` from the first byte read of it, then TimeoutError (http.server closes
+    the connection). A per-read timeout alone is reset by every byte: a client sending a header line every
+    few seconds would hold its thread and slot for as long as it likes."""
+
+    def __init__(self, sock: socket.socket, idle_timeout_s: float, request_timeout_s: float) -> None:
+        super().__init__()
+        self._sock, self._idle_s, self._request_s = sock, idle_timeout_s, request_timeout_s
+        self._reading_request = False
+        self._deadline: float | None = None   # set by the request's first byte
+
+    def readable(self) -> bool:
+        return True
+
+    def start_request(self) -> None:
+        self._reading_request, self._deadline = True, None
+
+    def end_request(self) -> None:
+        """The request is read: answers are written under the idle timeout."""
+        self._reading_request, self._deadline = False, None
+        self._sock.settimeout(self._idle_s)
+
+    def readinto(self, buffer) -> int:
+        timeout = self._idle_s
+        if self._deadline is not None:
+            timeout = self._deadline - time.monotonic()
+            if timeout <= 0:
+                raise TimeoutError(f"request not complete {self._request_s:g} s after its first byte")
+            timeout = min(timeout, self._idle_s)
+        self._sock.settimeout(timeout)
+        n = self._sock.recv_into(buffer)
+        if n and self._reading_request and self._deadline is None:
+            self._deadline = time.monotonic() + self._request_s
+        return n
+
+
 class BundleHandler(http.server.BaseHTTPRequestHandler):
     server_version = "wiris-cdf-serve"
     sys_version = ""
     protocol_version = "HTTP/1.1"
     config: ServeConfig   # set per server by make_server (a subclass per server, no shared state)
+    request_timeout_s: float = REQUEST_TIMEOUT_S   # likewise (`timeout`, the idle timeout, too)
 
     # ------------------------------------------------------------------ plumbing
     def version_string(self) -> str:
@@ -108,17 +180,44 @@ class BundleHandler(http.server.BaseHTTPRequestHandler):
         pass  # one line per request is written by _log instead
 
     def _log(self, status: int, nbytes: int) -> None:
-        path = getattr(self, "path", None) or "-"   # unset when the request line did not parse
-        path = path if len(path) <= 200 else path[:200] + "…"
-        self.config.log(f"{getattr(self, 'command', None) or '-'} {path} {status} {nbytes}")
+        # path and command are unset when the request line did not parse
+        method, path = _loggable(getattr(self, "command", None) or "-"), _loggable(getattr(self, "path", None) or "-")
+        self.config.log(f"{method} {path} {status} {nbytes}")
+
+    def setup(self) -> None:
+        super().setup()
+        self.rfile.close()   # the plain socket file: reads go through the request deadline instead
+        self._reader = _RequestReader(self.connection, self.timeout, self.request_timeout_s)
+        self.rfile = io.BufferedReader(self._reader)
+
+    def handle_one_request(self) -> None:
+        self._reader.start_request()
+        super().handle_one_request()
 
     def parse_request(self) -> bool:
-        ok = super().parse_request()
+        try:
+            ok = super().parse_request()
+        finally:
+            self._reader.end_request()
         if ok and self.request_version == "HTTP/0.9":
             # a bare "GET /x" line: no headers either way, and no ground station speaks HTTP/0.9
             self.send_error(400, "HTTP/0.9 requests are not supported")
             return False
+        if ok and self.command in ("GET", "HEAD") and self._has_body():
+            # Refused, and the connection closed, rather than the body left unread: it would be parsed as the
+            # next request on the connection, and behind a proxy (which forwards it as part of this request)
+            # that is request smuggling, a request the proxy never saw nor checked.
+            self.send_error(400, f"a {self.command} request has no body")
+            _linger(self.connection, REFUSE_TIMEOUT_S)
+            return False
         return ok
+
+    def _has_body(self) -> bool:
+        lengths = self.headers.get_all("Content-Length") or []
+        return "Transfer-Encoding" in self.headers or any(v.strip() != "0" for v in lengths)
+
+    def handle_expect_100(self) -> bool:
+        return True   # no request body is ever read: the final answer comes instead of "100 Continue"
 
     def _plain(self, status: int, text: str, extra: dict[str, str] | None = None) -> None:
         body = (text + "\n").encode("utf-8")
@@ -137,10 +236,11 @@ class BundleHandler(http.server.BaseHTTPRequestHandler):
     def send_error(self, code: int, message: str | None = None, explain: str | None = None) -> None:
         # malformed request lines, over-long headers and the like (raised inside http.server)
         self.close_connection = True
+        self._reader.end_request()
         if getattr(self, "request_version", "HTTP/0.9") == "HTTP/0.9":
             self.request_version = "HTTP/1.0"   # answer with a status line and headers all the same
         try:
-            self._plain(code, message or http.HTTPStatus(code).phrase)
+            self._plain(code, message or http.HTTPStatus(code).phrase, {"Connection": "close"})
         except (OSError, ValueError):
             pass
 
@@ -157,6 +257,8 @@ class BundleHandler(http.server.BaseHTTPRequestHandler):
     # ------------------------------------------------------------------ resolution
     def _resolve(self) -> tuple[int, Path | None]:
         """(status, file): 200 and a regular file inside the root, or an error status."""
+        if len(self.path) > MAX_TARGET_CHARS:
+            return 414, None
         try:
             raw_path = urllib.parse.urlsplit(self.path).path
         except ValueError:  # e.g. an absolute-form target with a broken IPv6 host: "GET http://[::1/x"
@@ -170,6 +272,8 @@ class BundleHandler(http.server.BaseHTTPRequestHandler):
         except UnicodeDecodeError:
             return 404, None
         segments = decoded.split("/")
+        if any(len(s.encode("utf-8", "surrogatepass")) > NAME_MAX_BYTES for s in segments):
+            return 414, None   # no file has such a name, and the file system would refuse to look (ENAMETOOLONG)
         if not decoded or any(s in ("", ".", "..") or s.startswith(".") or "\\" in s or "\x00" in s
                               for s in segments):
             return 404, None
@@ -180,7 +284,7 @@ class BundleHandler(http.server.BaseHTTPRequestHandler):
             return 404, None
         if os.path.commonpath([str(real), str(self.config.root)]) != str(self.config.root):
             return 403, None   # a symlink that leads out of the bundle
-        if not real.is_file():
+        if not os.path.isfile(real):   # False for any error, where Path.is_file() raises some (a name too long)
             return 404, None
         return 200, real
 
@@ -194,7 +298,7 @@ class BundleHandler(http.server.BaseHTTPRequestHandler):
     def _serve(self, body: bool) -> None:
         status, path = self._resolve()
         if path is None:
-            self._plain(status, {400: "bad request", 403: "forbidden"}.get(status, "not found"))
+            self._plain(status, {400: "bad request", 403: "forbidden", 414: "URI too long"}.get(status, "not found"))
             return
         try:
             st = path.stat()
@@ -248,49 +352,76 @@ class BundleHandler(http.server.BaseHTTPRequestHandler):
         return False
 
 
+class Slots:
+    """Connections served at once: at most `total`, and at most `per_client` from one client address, so
+    that one client (64 slow connections, say) cannot take every slot and have everyone else refused."""
+
+    def __init__(self, total: int, per_client: int) -> None:
+        self.total, self.per_client = total, per_client
+        self._lock = threading.Lock()
+        self._in_use = 0
+        self._by_client: dict[str, int] = {}
+
+    def take(self, client: str) -> str | None:
+        """Take a slot for `client`: None, or why there is none."""
+        with self._lock:
+            if self._in_use >= self.total:
+                return f"over the limit of {self.total} connections"
+            held = self._by_client.get(client, 0)
+            if held >= self.per_client:
+                return f"over the limit of {self.per_client} connections from one address"
+            self._in_use += 1
+            self._by_client[client] = held + 1
+            return None
+
+    def give_back(self, client: str) -> None:
+        with self._lock:
+            self._in_use -= 1
+            held = self._by_client.pop(client) - 1
+            if held:
+                self._by_client[client] = held
+
+
 class BundleServer(http.server.ThreadingHTTPServer):
     daemon_threads = True
     block_on_close = False
-    max_connections = MAX_CONNECTIONS   # make_server sets it per server
+    max_connections = MAX_CONNECTIONS   # make_server sets them per server
+    max_per_client = MAX_PER_CLIENT
 
     def server_activate(self) -> None:
         super().server_activate()
-        self._slots = threading.BoundedSemaphore(self.max_connections)
+        self._slots = Slots(self.max_connections, self.max_per_client)
 
     def process_request(self, request, client_address) -> None:
-        if not self._slots.acquire(blocking=False):
-            self._refuse(request, client_address)
+        refusal = self._slots.take(client_address[0])
+        if refusal is not None:
+            self._refuse(request, client_address, refusal)
             return
         try:
-            super().process_request(request, client_address)   # starts the thread that releases the slot
+            super().process_request(request, client_address)   # starts the thread that gives the slot back
         except BaseException:
-            self._slots.release()
+            self._slots.give_back(client_address[0])
             raise
 
     def process_request_thread(self, request, client_address) -> None:
         try:
             super().process_request_thread(request, client_address)
         finally:
-            self._slots.release()
+            self._slots.give_back(client_address[0])
 
-    def _refuse(self, request, client_address) -> None:
-        """503 to a connection over the cap, without reading its request or starting a thread. The unread
-        request is drained briefly after the answer: closing a socket with unread data resets the connection,
-        and the client could lose the 503 before reading it."""
+    def _refuse(self, request, client_address, why: str) -> None:
+        """503 to a connection over a cap, without reading its request or starting a thread (the unread
+        request is drained briefly after the answer: see _linger)."""
         body = b"too many connections; retry shortly\n"
         head = ("HTTP/1.1 503 Service Unavailable\r\nContent-Type: text/plain; charset=utf-8\r\n"
                 f"Content-Length: {len(body)}\r\nRetry-After: 1\r\nCache-Control: no-store\r\n"
                 "Connection: close\r\n\r\n").encode("ascii")
         host, port = client_address[:2]
-        self.RequestHandlerClass.config.log(f"- {host}:{port} 503 over the limit of {self.max_connections} "
-                                            "connections")
+        self.RequestHandlerClass.config.log(f"- {host}:{port} 503 {why}")
         try:
             request.settimeout(REFUSE_TIMEOUT_S)
             request.sendall(head + body)
-            request.shutdown(socket.SHUT_WR)
-            deadline = time.monotonic() + REFUSE_TIMEOUT_S
-            while time.monotonic() < deadline and request.recv(65536):
-                pass
+            _linger(request, REFUSE_TIMEOUT_S)
         except OSError:
             pass
         finally:
@@ -305,7 +436,8 @@ class BundleServer(http.server.ThreadingHTTPServer):
         else:
             if os.environ.get("WIRIS_DEBUG"):
                 super().handle_error(request, client_address)
-            line = f"internal error: {type(err).__name__}: {err} (rerun with WIRIS_DEBUG=1 for a traceback)"
+            line = (f"internal error: {type(err).__name__}: {_loggable(str(err))} "
+                    "(rerun with WIRIS_DEBUG=1 for a traceback)")
         host, port = client_address[:2]
         self.RequestHandlerClass.config.log(f"- {host}:{port} {line}")
 
@@ -338,10 +470,13 @@ def bind_http(server_class: type[http.server.HTTPServer], host: str, port: int, 
 
 def make_server(directory: str | Path, host: str = "127.0.0.1", port: int = 8000, *, prefix: str | None = None,
                 log: Callable[[str], None] | None = None, idle_timeout_s: float = IDLE_TIMEOUT_S,
-                max_connections: int = MAX_CONNECTIONS) -> BundleServer:
+                request_timeout_s: float = REQUEST_TIMEOUT_S, max_connections: int = MAX_CONNECTIONS,
+                max_per_client: int = MAX_PER_CLIENT) -> BundleServer:
     """A bound (not yet serving) threaded server for `directory`; port 0 picks a free port.
     `prefix` None: the URL path of the manifest's http URIs (see prefix_from_manifest).
-    `max_connections`: served at once, more are answered 503."""
+    `idle_timeout_s`: the longest wait for one read or write; `request_timeout_s`: for a request's line and
+    headers from their first byte. `max_connections`: served at once, `max_per_client` of them from one
+    client address; more are answered 503."""
     from wiris_tools.errors import LinkError
 
     root = Path(directory)
@@ -353,8 +488,10 @@ def make_server(directory: str | Path, host: str = "127.0.0.1", port: int = 8000
                          **({"log": log} if log is not None else {}))
     # StreamRequestHandler applies `timeout` to the socket; http.server closes the connection when a read
     # or write of it times out (and logs nothing: there is no request to log)
-    handler = type("BoundBundleHandler", (BundleHandler,), {"config": config, "timeout": idle_timeout_s})
-    server_class = type("CappedBundleServer", (BundleServer,), {"max_connections": max_connections})
+    handler = type("BoundBundleHandler", (BundleHandler,),
+                   {"config": config, "timeout": idle_timeout_s, "request_timeout_s": request_timeout_s})
+    server_class = type("CappedBundleServer", (BundleServer,),
+                        {"max_connections": max_connections, "max_per_client": max_per_client})
     return bind_http(server_class, host, port, handler, what="listen", host_option="--host", port_option="--port")
 
 

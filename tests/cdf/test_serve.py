@@ -223,6 +223,112 @@ def test_connections_over_the_cap_get_503_and_the_slot_comes_back(bundle):
         held.pop().close()
 
 
+def _closed_by_server(sock: socket.socket, wait_s: float) -> bool:
+    """Whether the server has closed `sock`, waiting at most `wait_s` for it to say so."""
+    import select
+
+    if not select.select([sock], [], [], wait_s)[0]:
+        return False
+    try:
+        return sock.recv(65536) == b""
+    except ConnectionError:
+        return True
+
+
+def test_a_request_trickled_in_is_closed_at_the_request_deadline(bundle):
+    """A byte of a header every 0.05 s keeps a per-read timeout (here 10 s) from ever firing: 64 such clients
+    held every slot for as long as they liked. The request line and headers must all arrive within
+    request_timeout_s of their first byte; a keep-alive connection idle between requests is not cut by it."""
+    import time
+
+    lines: list[str] = []
+    with serving(bundle, log=lines.append, idle_timeout_s=10, request_timeout_s=0.3) as srv:
+        port = srv.server_address[1]
+        with socket.create_connection(("127.0.0.1", port), timeout=5) as slow:
+            slow.sendall(f"GET /cdf/{PRO} HTTP/1.1\r\nX-Slow: ".encode())
+            closed = False
+            for _ in range(400):   # 20 s of one header line, far beyond 0.3 s and within no per-read timeout
+                try:
+                    slow.sendall(b"a")
+                except ConnectionError:
+                    closed = True
+                if closed or (closed := _closed_by_server(slow, 0.05)):
+                    break
+            assert closed, "the trickled request was never cut off"
+        with socket.create_connection(("127.0.0.1", port), timeout=5) as kept:
+            for _ in range(2):   # the second request comes after an idle pause longer than the deadline
+                kept.sendall(f"HEAD /cdf/{PRO} HTTP/1.1\r\nHost: x\r\n\r\n".encode())
+                assert kept.recv(65536).startswith(b"HTTP/1.1 200")
+                time.sleep(0.6)
+        assert lines == [f"HEAD /cdf/{PRO} 200 0"] * 2   # the cut-off request is no request to log
+
+
+def test_one_client_address_holds_at_most_max_per_client_slots(bundle):
+    """Slow connections from one address take at most max_per_client of the slots: the next from that
+    address gets 503 while another address (127.0.0.2, also loopback) is still served."""
+    lines: list[str] = []
+    with serving(bundle, log=lines.append, max_connections=4, max_per_client=2) as srv:
+        port = srv.server_address[1]
+        held = [socket.create_connection(("127.0.0.1", port), timeout=5) for _ in range(2)]
+        try:
+            for s in held:
+                s.sendall(b"GET /cdf/" + PRO.encode())  # half a request: the connection keeps its slot
+            status, headers, _ = request(srv, "GET", f"/cdf/{PRO}")
+            assert status == 503 and headers["retry-after"] == "1"
+            assert re.fullmatch(r"- 127\.0\.0\.1:\d+ 503 over the limit of 2 connections from one address",
+                                lines[0]), lines
+            with socket.create_connection(("127.0.0.1", port), timeout=5, source_address=("127.0.0.2", 0)) as other:
+                other.sendall(f"HEAD /cdf/{PRO} HTTP/1.1\r\nHost: x\r\n\r\n".encode())
+                assert other.recv(65536).startswith(b"HTTP/1.1 200")
+        finally:
+            for s in held:
+                s.close()
+
+
+@pytest.mark.parametrize("path", ["/cdf/" + "a" * 256, "/cdf/" + "%C3%A9" * 128, "/cdf/" + "a/" * 1100])
+def test_an_over_long_segment_or_path_is_414_in_a_short_log_line(server, path):
+    # a segment over 255 bytes used to raise ENAMETOOLONG out of the handler: no answer at all, and a log
+    # line of the whole path
+    srv, lines = server
+    status, _, body = request(srv, "GET", path)
+    assert status == 414 and body == b"URI too long\n"
+    assert len(lines) == 1 and lines[0].endswith("… 414 13") and len(lines[0]) < 220, lines
+    assert request(srv, "GET", "/cdf/" + "a" * 255)[0] == 404   # the longest name a file can have
+
+
+def test_control_characters_in_a_logged_request_are_escaped(server):
+    # logged raw, an escape sequence in a request reached the operator's terminal
+    srv, lines = server
+    raw_request(srv, b"GET /cdf/\x1b[2J\x07\\x HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n")
+    raw_request(srv, b"G\x1b]0;T\x07 /cdf/x HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n")
+    assert lines == ["GET /cdf/\\x1b[2J\\x07\\\\x 404 10", "G\\x1b]0;T\\x07 /cdf/x 405 45"]
+
+
+@pytest.mark.parametrize("headers", [
+    b"Content-Length: 38\r\n", b"Transfer-Encoding: chunked\r\n", b"Content-Length: 0\r\nContent-Length: 38\r\n",
+    b"Content-Length: 38\r\nExpect: 100-continue\r\n",
+])
+@pytest.mark.parametrize("method", ["GET", "HEAD"])
+def test_a_get_or_head_with_a_body_is_400_and_the_body_never_a_request(server, method, headers):
+    """The body used to be left unread and parsed as the next request on the connection: behind a proxy
+    that forwards it as one request's body, a request the proxy never saw (request smuggling)."""
+    srv, lines = server
+    smuggled = b"GET /cdf/manifest.json HTTP/1.1\r\n\r\n"
+    with socket.create_connection(("127.0.0.1", srv.server_address[1]), timeout=5) as s:
+        s.sendall(f"{method} /cdf/{PRO} HTTP/1.1\r\nHost: x\r\n".encode() + headers + b"\r\n" + smuggled)
+        answer = b""
+        while chunk := s.recv(65536):   # until the server closes the connection
+            answer += chunk
+    assert answer.startswith(b"HTTP/1.1 400 ") and b"Connection: close\r\n" in answer
+    assert answer.count(b"HTTP/1.1 ") == 1, answer   # nothing answered to the smuggled request
+    assert lines == [f"{method} /cdf/{PRO} 400 {0 if method == 'HEAD' else 26}"]
+
+
+def test_a_get_with_an_empty_body_is_served(server):
+    srv, _ = server
+    assert request(srv, "GET", f"/cdf/{PRO}", {"Content-Length": "0"})[0] == 200
+
+
 def test_a_client_hanging_up_is_one_log_line_not_a_traceback(server, capfd):
     import struct
     import time

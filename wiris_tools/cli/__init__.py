@@ -13,6 +13,7 @@ from typing import NoReturn
 import click
 
 from cdf.errors import WirisError
+from wiris_tools.entry import raise_keyboard_interrupts
 
 
 class WirisGroup(click.Group):
@@ -21,6 +22,7 @@ class WirisGroup(click.Group):
 
     def invoke(self, ctx: click.Context):
         try:
+            raise_keyboard_interrupts()   # until here the console script's start-up handler ends the process
             return super().invoke(ctx)
         except (click.exceptions.Exit, click.ClickException, click.Abort):
             raise
