@@ -5,9 +5,14 @@ The payload layout and the read sequence are the devguide's (services/ftp.md): a
 (seq uint16, session, opcode, size, req_opcode, burst_complete, padding, offset uint32) and up to 239
 data bytes in FILE_TRANSFER_PROTOCOL.payload[251]. A read is OpenFileRO(path) -> ACK(session, size 4,
 file length); ReadFile(session, offset, size) -> ACK(data) ... NAK(EOF); TerminateSession. BurstReadFile
-streams the rest of the file from `offset` as consecutive ACKs, the last one with burst_complete = 1.
+streams the file from `offset` as consecutive ACKs, at most ServerLimits.burst_packets of them, the last
+one with burst_complete = 1 (the client asks again from there).
 Responses carry the request's seq + 1; a request repeating the last seq gets the last response again
 (the devguide's rule for lost ACKs).
+
+A session nobody closes does not hold its slot for ever (a client whose TerminateSession was lost on the
+radio, or that vanished): see ServerLimits. The client sends TerminateSession until it is answered
+(TERMINATE_TRIES), whatever ended the download.
 """
 
 from __future__ import annotations
@@ -33,6 +38,7 @@ ERR_FAIL, ERR_INVALID_SIZE, ERR_INVALID_SESSION, ERR_NO_SESSIONS, ERR_EOF, ERR_U
 ERR_FILE_NOT_FOUND = 10
 MAX_SESSIONS = 4
 MAX_DOWNLOAD_BYTES = 4 * 1024 * 1024
+TERMINATE_TRIES = 3      # TerminateSession sent at most this often, until the server answers it
 
 # What to do when the camera's FTP server refuses to open a file (NAK error code -> hint) or misbehaves.
 _OPEN_HINTS = {
@@ -70,22 +76,74 @@ def normalise_path(path: str) -> str:
     return path.strip().lstrip("/")
 
 
-class FtpServer:
-    """Read-only files served over MAVLink FTP (pure: `handle(msg)` returns the FILE_TRANSFER_PROTOCOL replies)."""
+@dataclass(frozen=True)
+class ServerLimits:
+    """How long an unclosed session keeps its slot, and how much one request can make the server send.
 
-    def __init__(self, files: dict[str, bytes], mav: Any) -> None:
+    What real servers do (read at source). ArduPilot, libraries/GCS_MAVLink/GCS_FTP.cpp: when every session
+    slot is taken, the oldest one idle for FTP_SESSION_TIMEOUT (3000 ms) goes to the new client, and a session
+    idle for FTP_SESSION_KILL_TIMEOUT (20000 ms) is closed. PX4, src/modules/mavlink/mavlink_ftp.cpp: its one
+    session is closed after 10 s without a request ("Session was closed without activity"). Both answer a
+    BurstReadFile with a big burst (ArduPilot up to 2000 packets, PX4 about 35 KB), but paced to the link:
+    ArduPilot uses at most a third of the port's bandwidth, PX4 sends as its MAVLink TX buffer frees. This
+    server answers at once, unpaced, over UDP, where one burst request brought back the whole file (126
+    datagrams, 33 KB, for a 19-byte request): so the burst itself is bounded. A client asks for the next burst
+    at the offset where one ended with burst_complete (devguide ftp.md, "Reading a file (BurstReadFile)").
+    """
+
+    max_sessions: int = MAX_SESSIONS
+    reclaim_idle_s: float = 3.0      # all slots taken: the oldest session idle this long goes to the new client
+    expire_idle_s: float = 10.0      # a session idle this long is closed
+    burst_packets: int = 8           # ACKs answering one BurstReadFile (8 x 239 data bytes)
+
+
+@dataclass
+class Session:
+    path: str
+    last_request_s: float            # the server's clock at the last request on this session
+
+
+class FtpServer:
+    """Read-only files served over MAVLink FTP (pure: `handle(msg, now)` returns the FILE_TRANSFER_PROTOCOL
+    replies; `now` is the caller's clock, in seconds)."""
+
+    def __init__(self, files: dict[str, bytes], mav: Any, limits: ServerLimits | None = None) -> None:
         self.files = {normalise_path(k): v for k, v in files.items()}
         self.mav = mav
-        self.sessions: dict[int, str] = {}
+        self.limits = limits or ServerLimits()
+        self.sessions: dict[int, Session] = {}
+        self._next_session = 0
         self._last: tuple[int, list[Any]] | None = None
 
-    def handle(self, msg: Any) -> list[Any]:
+    def handle(self, msg: Any, now: float) -> list[Any]:
         req = Packet.unpack(msg.payload)
+        self._expire_idle(now)
+        if req.opcode in (OP_READ, OP_BURST_READ) and req.session in self.sessions:
+            self.sessions[req.session].last_request_s = now
         if self._last is not None and self._last[0] == req.seq and req.opcode != OP_BURST_READ:
             return self._last[1]            # our answer was lost: send it again
-        replies = [self._wrap(msg, p) for p in self._answer(req)]
+        replies = [self._wrap(msg, p) for p in self._answer(req, now)]
         self._last = (req.seq, replies)
         return replies
+
+    def _expire_idle(self, now: float) -> None:
+        for sid in [sid for sid, s in self.sessions.items() if now - s.last_request_s > self.limits.expire_idle_s]:
+            del self.sessions[sid]
+
+    def _new_session_id(self, now: float) -> int | None:
+        """A session id for an OpenFileRO, or None when every slot is in use. When all are taken, the slot of
+        the oldest session idle for `reclaim_idle_s` is freed. Ids rotate through 0-255, so a client that
+        comes back to a reclaimed session is told ERR_INVALID_SESSION instead of reading someone else's file."""
+        if len(self.sessions) >= self.limits.max_sessions:
+            oldest = min(self.sessions, key=lambda sid: self.sessions[sid].last_request_s)
+            if now - self.sessions[oldest].last_request_s < self.limits.reclaim_idle_s:
+                return None
+            del self.sessions[oldest]
+        while self._next_session in self.sessions:
+            self._next_session = (self._next_session + 1) % 256
+        sid = self._next_session
+        self._next_session = (sid + 1) % 256
+        return sid
 
     def _wrap(self, msg: Any, p: Packet) -> Any:
         return self.mav.file_transfer_protocol_encode(0, msg.get_srcSystem(), msg.get_srcComponent(), p.pack())
@@ -99,7 +157,7 @@ class FtpServer:
     def _nak(req: Packet, error: int) -> Packet:
         return Packet(req.seq + 1, req.session, OP_NAK, 1, req.opcode, 0, req.offset, bytes([error]))
 
-    def _answer(self, req: Packet) -> list[Packet]:
+    def _answer(self, req: Packet, now: float) -> list[Packet]:
         if req.opcode == OP_NONE:
             return [self._ack(req)]
         if req.opcode == OP_RESET:
@@ -113,23 +171,23 @@ class FtpServer:
             path = normalise_path(req.data[:req.size].split(b"\0", 1)[0].decode("utf-8", "replace"))
             if path not in self.files:
                 return [self._nak(req, ERR_FILE_NOT_FOUND)]
-            if len(self.sessions) >= MAX_SESSIONS:
+            session = self._new_session_id(now)
+            if session is None:
                 return [self._nak(req, ERR_NO_SESSIONS)]
-            session = next(i for i in range(MAX_SESSIONS) if i not in self.sessions)
-            self.sessions[session] = path
+            self.sessions[session] = Session(path, now)
             return [self._ack(req, session=session, data=struct.pack("<I", len(self.files[path])))]
         if req.opcode in (OP_READ, OP_BURST_READ):
-            path = self.sessions.get(req.session)
-            if path is None:
+            session = self.sessions.get(req.session)
+            if session is None:
                 return [self._nak(req, ERR_INVALID_SESSION)]
-            body = self.files[path]
+            body = self.files[session.path]
             if req.offset >= len(body):
                 return [self._nak(req, ERR_EOF)]
             if req.opcode == OP_READ:
                 size = min(req.size or DATA_MAX, DATA_MAX)
                 return [self._ack(req, data=body[req.offset:req.offset + size], offset=req.offset)]
             out = []
-            offsets = list(range(req.offset, len(body), DATA_MAX))
+            offsets = list(range(req.offset, len(body), DATA_MAX))[:self.limits.burst_packets]
             for i, off in enumerate(offsets):
                 out.append(self._ack(req, data=body[off:off + DATA_MAX], offset=off, seq_add=i + 1,
                                      burst_complete=int(i == len(offsets) - 1)))
@@ -153,7 +211,8 @@ def download(link: Any, system: int, component: int, path: str, *, timeout_s: fl
     # after a refused OpenFileRO). A random start makes that a 1 in 65536 chance.
     seq = [random.randrange(0x10000)]
 
-    def exchange(opcode: int, *, session: int = 0, offset: int = 0, size: int = 0, data: bytes = b"") -> Packet:
+    def exchange(opcode: int, *, session: int = 0, offset: int = 0, size: int = 0, data: bytes = b"",
+                 tries: int = retries + 1) -> Packet:
         seq[0] = (seq[0] + 1) & 0xFFFF
         pkt = Packet(seq[0], session, opcode, size, 0, 0, offset, data)
         msg = link.mav.file_transfer_protocol_encode(0, system, component, pkt.pack())
@@ -163,12 +222,12 @@ def download(link: Any, system: int, component: int, path: str, *, timeout_s: fl
             return p.req_opcode == opcode and p.seq == (seq[0] + 1) & 0xFFFF
 
         with link.inbox("FILE_TRANSFER_PROTOCOL", src_component=component, predicate=ours) as box:
-            for _ in range(retries + 1):
+            for _ in range(tries):
                 link.send(msg)
                 got = box.get(timeout_s)
                 if got is not None:
                     return Packet.unpack(got.payload)
-        raise LinkError(f"no MAVLink FTP answer to opcode {opcode} after {retries + 1} tries", where=where,
+        raise LinkError(f"no MAVLink FTP answer to opcode {opcode} after {tries} tries", where=where,
                         hint="the camera may not serve MAVLink FTP; use its http:// definition if it has one")
 
     name = path.encode()
@@ -206,10 +265,12 @@ def download(link: Any, system: int, component: int, path: str, *, timeout_s: fl
             if progress is not None:
                 progress(len(chunks), length)
     finally:
+        # Sent until answered (an ACK, or a NAK when the server has already closed it): a TerminateSession
+        # lost on the radio left the session holding one of the server's few slots. When none of the tries
+        # is answered the camera has gone quiet, and its idle-session expiry frees the slot; the download's
+        # own outcome (its data, or the error that ended it) is what the caller gets either way.
         try:
-            seq[0] = (seq[0] + 1) & 0xFFFF
-            link.send(link.mav.file_transfer_protocol_encode(
-                0, system, component, Packet(seq[0], session, OP_TERMINATE, 0, 0, 0, 0, b"").pack()))
+            exchange(OP_TERMINATE, session=session, tries=TERMINATE_TRIES)
         except LinkError:
             pass
     if len(chunks) != length:

@@ -227,7 +227,7 @@ class WirisState:
         if mtype in PARAM_EXT_MESSAGES:
             return self._param_ext(msg, mtype)
         if mtype == "FILE_TRANSFER_PROTOCOL" and self.ftp is not None:
-            return self.ftp.handle(msg)
+            return self.ftp.handle(msg, now)
         return []
 
     # -- the command protocol ------------------------------------------------------------------
