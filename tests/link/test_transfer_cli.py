@@ -331,3 +331,27 @@ def test_plan_numbers_beyond_float32_are_located(path, value):
     with pytest.raises(PlanError) as err:
         read_plan(json.dumps(doc), "x.plan")
     assert err.value.where == f"x.plan: {path}" and "float32" in err.value.message and err.value.hint
+
+
+def test_download_deadline_ends_a_vehicle_that_answers_rarely(tmp_path):
+    from raw_peers import rarely_answering_vehicle, timed_call
+
+    out = tmp_path / "vehicle.plan"
+    veh, seen = rarely_answering_vehicle(65535)
+    try:
+        call = timed_call(lambda: run("mission", "download", "--connect", f"udpout:127.0.0.1:{veh.local_port}",
+                                      "-o", str(out), "--deadline", "1.5"), limit_s=120)
+    finally:
+        veh.close()
+    assert call.finished, "the download did not end"
+    r = call.value
+    assert r.exit_code == 1 and "Traceback" not in r.output, r.output
+    assert "did not finish within its deadline of 1.5 s (given)" in r.output and "of 65535 items had arrived" in r.output
+    assert "hint: a slow or lossy link may need longer: raise it with --deadline SECONDS" in r.output
+    assert list(tmp_path.iterdir()) == [] and seen["requests"] > 0
+
+
+@pytest.mark.parametrize("value", ["0", "nan", "-3"])
+def test_download_deadline_must_be_a_positive_number(value):
+    r = run("mission", "download", "--connect", "udpout:127.0.0.1:9", "-o", "x.plan", "--deadline", value)
+    assert r.exit_code == 2 and "--deadline" in r.output
