@@ -9,7 +9,9 @@ Files (what `wiris mission upload/download` call): load_for_upload(path, type) r
 a WPL 110 file or a capture plan (compiled with missions.compile); upload_file(link, path, ...)
 puts the file's home in as item 0 when the vehicle's HEARTBEAT says ArduPilot (as QGC and MAVSDK
 do); download_file(link, out) splits ArduPilot's item 0 off as the file's home and writes .plan
-(mission, fence, rally) or .waypoints atomically.
+(mission, fence, rally) or .waypoints atomically - after the writers' check (missions.itemcheck) that
+every position is a real one and every value one that upload reads back, else PlanError naming the item
+and field, and nothing written.
 
 Only MISSION_ITEM_INT is sent. Requests may come as MISSION_REQUEST_INT or the legacy
 MISSION_REQUEST (ArduPilot's own request path still sends the legacy one); both get the INT item.
