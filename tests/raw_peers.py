@@ -4,6 +4,7 @@
     call = raw_peers.timed_call(lambda: link.command_long(...), limit_s=6)          # never blocks the test
     call.finished, call.waited, call.value, call.error
     left = raw_peers.lose_accepted_acks(sim)   # a VehicleSim's next ACCEPTED is lost; left["n"] = 1 re-arms
+    veh, seen = raw_peers.rarely_answering_vehicle(65535)   # claims 65535 items, answers every 6th request
 """
 
 from __future__ import annotations
@@ -68,3 +69,22 @@ def lose_accepted_acks(sim, count: int = 1) -> dict:
 
     sim._ack = ack
     return left
+
+
+def rarely_answering_vehicle(count: int) -> tuple[Link, dict]:
+    """A hostile vehicle: claims `count` items and answers only every 6th item request - each item arrives just
+    before the per-item retries run out, so without an overall deadline the download crawls on for hours."""
+    seen = {"requests": 0}   # item requests received
+
+    def script(veh, m):
+        src = (m.get_srcSystem(), m.get_srcComponent())
+        if m.get_type() == "MISSION_REQUEST_LIST":
+            veh.send(veh.mav.mission_count_encode(*src, count, 0))
+            return
+        seen["requests"] += 1
+        if seen["requests"] % 6 == 0:
+            veh.send(veh.mav.mission_item_int_encode(*src, m.seq, mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT,
+                                                     mavlink2.MAV_CMD_NAV_WAYPOINT, 0, 1, 0, 0, 0, 0,
+                                                     490000000, 160000000, 50, 0))
+
+    return scripted_vehicle(script, ("MISSION_REQUEST_LIST", "MISSION_REQUEST_INT")), seen

@@ -9,7 +9,9 @@ Files (what `wiris mission upload/download` call): load_for_upload(path, type) r
 a WPL 110 file or a capture plan (compiled with missions.compile); upload_file(link, path, ...)
 puts the file's home in as item 0 when the vehicle's HEARTBEAT says ArduPilot (as QGC and MAVSDK
 do); download_file(link, out) splits ArduPilot's item 0 off as the file's home and writes .plan
-(mission, fence, rally) or .waypoints atomically.
+(mission, fence, rally) or .waypoints atomically - after the writers' check (missions.formats.itemcheck) that
+every position is a real one and every value one that upload reads back, else PlanError naming the item
+and field, and nothing written.
 
 Only MISSION_ITEM_INT is sent. Requests may come as MISSION_REQUEST_INT or the legacy
 MISSION_REQUEST (ArduPilot's own request path still sends the legacy one); both get the INT item.
@@ -27,6 +29,10 @@ Timing (all in `Timeouts`; the defaults are the spec's or tighter):
   * Download requests one item at a time (PX4 insists on order) and re-requests after the RTO,
     capped at `item_s` = 250 ms, `retries` times per item. Only the item asked for is accepted, so
     a late duplicate can never fill another slot.
+  * Download deadline: the per-item limits alone let a vehicle that claims 65535 items and answers
+    only every 6th request hold the download for about 11 hours. So a download also ends, with
+    LinkError, at a deadline: `deadline_s` when given (`wiris mission download --deadline`), else
+    download_deadline_s(count, round trip measured on this link).
   * Error NACKs: ArduPilot answers a duplicate or out-of-order item with MISSION_ACK
     INVALID_SEQUENCE and keeps going (Cockpit PR #2067: it "sends fail ACKs even if it intends to
     keep trying"). So a MISSION_ACK with an error is noted, not fatal: the upload fails with that
@@ -114,6 +120,31 @@ class Timeouts:
     nack_grace_s: float = 2.5   # ArduPilot re-requests 1 s (+ link slowdown) after a transient NACK
     min_rto_s: float = 0.02
     first_s: float = 0.5        # first resend of MISSION_COUNT / MISSION_REQUEST_LIST
+    deadline_floor_s: float = 30.0  # a download's derived deadline: this plus time per item (download_deadline_s)
+
+
+# The derived download deadline: a floor (Timeouts.deadline_floor_s) for small lists and slow starts, then a
+# generous allowance per item of round trips at the link's measured pace. A link losing a third of the packets
+# each way needs about five round trips per item on average (each loss costs a re-request timer of about two
+# round trips); eight leave room for bursts. The margin is the vehicle's own time per item and a
+# MISSION_ITEM_INT's longer airtime than the MISSION_COUNT the round trip was measured on.
+DEADLINE_ROUND_TRIPS_PER_ITEM = 8
+DEADLINE_ITEM_MARGIN_S = 0.01
+
+
+def worst_item_s(t: Timeouts) -> float:
+    """The longest one item can take within the per-item limits: every re-request timer at its cap."""
+    return sum(min(t.item_s * 2 ** k, t.ack_s) for k in range(t.retries + 1))
+
+
+def download_deadline_s(count: int, srtt: float | None, t: Timeouts) -> float:
+    """Seconds a download of `count` items may take in all, from the smoothed round trip `srtt` measured on
+    the link (None: not yet measured, the spec's per-item time is assumed). The round trip is capped at that
+    per-item time: a vehicle answering the count slowly does not earn hours more; and no item is allowed more
+    than the per-item limits allow anyway."""
+    rtt = t.item_s if srtt is None else min(srtt, t.item_s)
+    per_item = min(DEADLINE_ROUND_TRIPS_PER_ITEM * (rtt + DEADLINE_ITEM_MARGIN_S), worst_item_s(t))
+    return t.deadline_floor_s + count * per_item
 
 
 @dataclass(frozen=True)
@@ -216,6 +247,14 @@ def _check_encodable(items: Sequence[MissionItem], where: str) -> None:
                                 where=f"{where}, item {i}", hint="fix the value in the file; nothing was sent")
 
 
+def _past_deadline(deadline_s: float, given: bool, received: str, where: str, t: Timeouts) -> LinkError:
+    source = "given" if given else (f"{t.deadline_floor_s:g} s plus {DEADLINE_ROUND_TRIPS_PER_ITEM} measured round "
+                                    "trips per item")
+    return LinkError(f"the download did not finish within its deadline of {deadline_s:.3g} s ({source}): {received}",
+                     where=where, hint="a slow or lossy link may need longer: raise it with --deadline SECONDS; a "
+                                       "vehicle that answers this rarely on a good link is faulty")
+
+
 def item_from_msg(msg) -> MissionItem:
     return MissionItem(command=msg.command, frame=msg.frame, param1=msg.param1, param2=msg.param2,
                        param3=msg.param3, param4=msg.param4, x=msg.x, y=msg.y, z=msg.z,
@@ -281,12 +320,15 @@ class MissionClient:
         return _Upload(self, list(items), mission_type, where, progress).run()
 
     # -- download ------------------------------------------------------------------------------
-    def download(self, *, mission_type: int = MISSION_TYPE_MISSION,
-                 progress: Progress | None = None) -> tuple[list[MissionItem], TransferResult]:
-        """Read the vehicle's list of `mission_type`; returns (items, result)."""
+    def download(self, *, mission_type: int = MISSION_TYPE_MISSION, progress: Progress | None = None,
+                 deadline_s: float | None = None) -> tuple[list[MissionItem], TransferResult]:
+        """Read the vehicle's list of `mission_type`; returns (items, result). It ends with LinkError
+        `deadline_s` seconds after it started, or when given None at download_deadline_s of the count."""
         t = self.timeouts
         where = self._where(mission_type)
         start = time.monotonic()
+        given = deadline_s is not None
+        end = start + deadline_s if deadline_s is not None else math.inf
         resent = 0
         with self._inbox(["MISSION_COUNT", "MISSION_ITEM_INT", "MISSION_ACK"], mission_type) as box:
             # 1. the count
@@ -304,7 +346,7 @@ class MissionClient:
                 self.link.send(self.link.mav.mission_request_list_encode(self.target_system, self.target_component,
                                                                          mission_type))
                 sent = time.monotonic()
-                deadline = sent + wait
+                deadline = min(sent + wait, end)
                 while True:
                     msg = box.get(max(0.0, deadline - time.monotonic()))
                     if msg is None:
@@ -329,6 +371,8 @@ class MissionClient:
                 if fatal is not None:
                     raise LinkError(f"the vehicle answered {mission_result_name(fatal)} to the list request",
                                     where=where, hint=_NACK_HINTS.get(fatal, _DOWNLOAD_NACK_HINT))
+                if time.monotonic() >= end:
+                    raise _past_deadline(deadline_s, given, "no MISSION_COUNT came", where, t)
                 resent += 1
                 wait = min(wait * 2, t.ack_s)
             if count_msg is None and busy:
@@ -340,6 +384,9 @@ class MissionClient:
                                 hint="check the connection and the target system/component")
             count = count_msg.count
             opaque = opaque_id_of(count_msg)
+            if deadline_s is None:
+                deadline_s = download_deadline_s(count, self.rtt.srtt, t)
+                end = start + deadline_s
             got: dict[int, MissionItem] = {}
             fatal = None      # an error ack that came with (or before) the count was not about the items
             last_answer: int | None = None
@@ -351,7 +398,7 @@ class MissionClient:
                                                                             self.target_component, seq, mission_type))
                     sent = time.monotonic()
                     rto = self.rtt.rto(t.min_rto_s, max(t.item_s, t.min_rto_s), t.item_s)
-                    deadline = sent + min(rto * (2 ** tries), t.ack_s)
+                    deadline = min(sent + min(rto * (2 ** tries), t.ack_s), end)
                     while seq not in got:
                         msg = box.get(max(0.0, deadline - time.monotonic()))
                         if msg is None:
@@ -373,6 +420,9 @@ class MissionClient:
                         raise LinkError(f"the vehicle answered {mission_result_name(fatal)} "
                                         f"to the request for item {seq}", where=where,
                                         hint=_NACK_HINTS.get(fatal, _DOWNLOAD_NACK_HINT))
+                    if time.monotonic() >= end:
+                        raise _past_deadline(deadline_s, given, f"{len(got)} of {count} items had arrived (item {seq} "
+                                             f"was asked for {tries + 1} times)", where, t)
                     tries += 1
                     resent += 1
                     if tries > t.retries:
@@ -789,9 +839,10 @@ def upload_file(link: Link, path: str, *, mission_type: int = MISSION_TYPE_MISSI
 
 
 def download_file(link: Link, out: str, *, target_system: int | None = None, target_component: int = 1,
-                  timeout: float = 10.0, progress: Progress | None = None) -> dict:
+                  timeout: float = 10.0, progress: Progress | None = None, deadline_s: float | None = None) -> dict:
     """Download what the vehicle holds and write it to `out` (.plan: mission, fence and rally;
-    .waypoints: the mission) atomically; a summary dict."""
+    .waypoints: the mission) atomically; a summary dict. `deadline_s` bounds each list's download
+    (None: MissionClient.download's own, from the count and the round trip)."""
     from pathlib import Path
 
     from missions.errors import PlanError
@@ -808,7 +859,7 @@ def download_file(link: Link, out: str, *, target_system: int | None = None, tar
     system = hb.get_srcSystem()
     ardupilot = hb.autopilot == mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA
     client = MissionClient(link, system, target_component)
-    items, res = client.download(mission_type=MISSION_TYPE_MISSION, progress=progress)
+    items, res = client.download(mission_type=MISSION_TYPE_MISSION, progress=progress, deadline_s=deadline_s)
     home = None
     if ardupilot and items:
         h = items.pop(0)
@@ -830,7 +881,7 @@ def download_file(link: Link, out: str, *, target_system: int | None = None, tar
                              "rally lists")
             else:
                 try:
-                    extra[kind], _ = client.download(mission_type=kind)
+                    extra[kind], _ = client.download(mission_type=kind, deadline_s=deadline_s)
                 except ListUnsupported as err:      # the vehicle has no such list: an empty one is the truth
                     extra[kind] = []
                     notes.append(f"{name} not downloaded: {err.message}")

@@ -1,2 +1,3 @@
-"""Stage 4, files: QGroundControl `.plan` (`planfile`), QGC WPL 110 (`wpl`), GeoJSON and KML (`geojson`, `kml`),
+"""Stage 4, files: QGroundControl `.plan` (`planfile`), QGC WPL 110 (`wpl`), what an item of each
+command may hold (`itemcheck`), GeoJSON and KML (`geojson`, `kml`),
 pictures (`preview`), and writing a compiled mission's files all or nothing (`outputs`)."""

@@ -42,6 +42,7 @@ from pathlib import Path
 from typing import Any, Iterator
 
 from missions.errors import PlanError
+from missions.formats.itemcheck import check_items, command_label, home_problem, item_problem
 from missions.emit.items import (FRAME_GLOBAL, FRAME_GLOBAL_RELATIVE_ALT, FRAME_GLOBAL_TERRAIN_ALT, MISSION_TYPE_FENCE,
                             MISSION_TYPE_MISSION, MISSION_TYPE_RALLY, MissionItem)
 
@@ -227,6 +228,7 @@ def plan_document(items, home: Home | None, *, firmware: str | int | None, vehic
         raise PlanError(f"{len(items)} mission items do not fit a MAVLink mission (at most {MAX_ITEMS})",
                         hint="split the mission into several plans (smaller areas)")
     check_finite("a .plan", home, items, fence, rally)
+    check_items("a .plan", home, items, fence, rally)   # what this writes, read_plan reads
     modes = {_FRAME_ALT_MODE.get(it.frame) for it in items if it.frame in _FRAME_ALT_MODE}
     alt_mode = modes.pop() if len(modes) == 1 else (ALT_MODE_RELATIVE if not modes else ALT_MODE_MIXED)
     lat, lon, alt = home if home is not None else (0.0, 0.0, 0.0)
@@ -480,10 +482,26 @@ def _simple(r: _Reader, raw: Any, path: str, mission_type: int) -> MissionItem:
     p = [r.number(v, f"{path}.params[{k}]", null_ok=True) for k, v in enumerate(params)]
     for k in (0, 1, 2, 3, 6):
         _float32(r, p[k], f"{path}.params[{k}]", FLOAT32_HINT)
-    return MissionItem(command=command, frame=frame, param1=_f(p[0]), param2=_f(p[1]), param3=_f(p[2]),
+    item = MissionItem(command=command, frame=frame, param1=_f(p[0]), param2=_f(p[1]), param3=_f(p[2]),
                        param4=_f(p[3]), x=r.fixed(params[4], f"{path}.params[4]", frame),
                        y=r.fixed(params[5], f"{path}.params[5]", frame), z=_f(p[6]), autocontinue=int(auto),
                        mission_type=mission_type)
+    _check_item(r, item, path, unset=frozenset(f for f, v in (("x", p[4]), ("y", p[5])) if v is None))
+    return item
+
+
+# Where item_problem's fields are in a .plan SimpleItem.
+_PLAN_FIELDS = {"x": ".params[4]", "y": ".params[5]", "z": ".params[6]", "frame": ".frame",
+                "autocontinue": ".autoContinue", "command": ".command"}
+
+
+def _check_item(r: _Reader, item: MissionItem, path: str, unset: frozenset[str] = frozenset(),
+                fields: dict[str, str] = _PLAN_FIELDS) -> None:
+    """PlanError at the item's field when it is no real position or holds what no vehicle takes."""
+    problem = item_problem(item, unset=unset)
+    if problem is not None:
+        raise r.err(path + fields.get(problem.field, ""), f"{command_label(item.command)}: {problem.message}",
+                    problem.hint)
 
 
 def _complex(r: _Reader, it: dict[str, Any], path: str) -> list[MissionItem]:
@@ -542,6 +560,9 @@ def _mission(r: _Reader, mission: dict[str, Any]) -> tuple[list[MissionItem], Ho
         alt = _float32(r, r.number(raw_home[2], "mission.plannedHomePosition[2]", null_ok=True),
                        "mission.plannedHomePosition[2]")
         home = (x / 1e7, y / 1e7, 0.0 if alt is None else float(alt))
+        problem = home_problem(home)   # latlon() judged the position: only its altitude is left
+        if problem is not None:
+            raise r.err("mission.plannedHomePosition[2]", problem.message, problem.hint)
     return items, home
 
 
@@ -587,6 +608,7 @@ def _fence(r: _Reader, fence: dict[str, Any]) -> list[MissionItem]:
             alt = _float32(r, r.number(ret[2], "geoFence.breachReturn[2]", null_ok=True), "geoFence.breachReturn[2]")
             out.append(MissionItem(command=CMD_FENCE_RETURN_POINT, frame=FRAME_GLOBAL_RELATIVE_ALT, x=x, y=y,
                                    z=0.0 if alt is None else float(alt), mission_type=MISSION_TYPE_FENCE))
+            _check_item(r, out[-1], "geoFence.breachReturn", fields={"z": "[2]"})
     return out
 
 
@@ -606,6 +628,7 @@ def _rally(r: _Reader, rally: dict[str, Any]) -> list[MissionItem]:
         alt = _float32(r, r.number(p[2], f"{path}[2]"), f"{path}[2]")
         out.append(MissionItem(command=CMD_RALLY_POINT, frame=FRAME_GLOBAL_RELATIVE_ALT, x=x, y=y, z=float(alt),
                                mission_type=MISSION_TYPE_RALLY))
+        _check_item(r, out[-1], path, fields={"z": "[2]"})
     return out
 
 

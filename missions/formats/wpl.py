@@ -25,8 +25,10 @@ import math
 import os
 from decimal import ROUND_HALF_UP, Decimal, InvalidOperation
 from pathlib import Path
+from typing import NamedTuple
 
 from missions.errors import PlanError
+from missions.formats.itemcheck import check_items, command_label, home_problem, item_problem
 from missions.emit.items import FRAME_GLOBAL, MISSION_TYPE_MISSION, MissionItem
 from missions.formats.planfile import FLOAT32_MAX, MAX_ITEMS, READ_HINT, _scale, atomic_write, check_finite, xy_hint
 
@@ -81,6 +83,7 @@ def wpl_text(items, home: Home | None = None) -> str:
         raise PlanError(f"{len(items)} items do not fit a MAVLink mission (at most {MAX_ITEMS - 1} plus home)",
                         hint="save a .plan instead (it keeps home apart: 65535 items fit), or split the mission")
     check_finite("a waypoint", home, items)
+    check_items("a waypoint", home, items)   # what this writes, read_wpl reads
     lines = [HEADER, _row(0, _home_item(home), 1)]
     lines += [_row(i + 1, it, 0) for i, it in enumerate(items)]
     return "\n".join(lines) + "\n"
@@ -136,7 +139,7 @@ def read_wpl(text: str | bytes, name: str = "<waypoints>", *,
         first = lines[0].strip()[:40] if lines else ""
         raise PlanError(f"the first line is {first!r}, not {HEADER!r}", where=f"{name}:1",
                         hint="only QGC WPL 110 is read (Mission Planner and MAVProxy save it)")
-    rows: list[tuple[int, MissionItem, int]] = []
+    rows: list[_Row] = []
     for lineno, line in enumerate(lines[1:], start=2):
         stripped = line.strip()
         if not stripped or stripped.startswith("#"):
@@ -150,9 +153,13 @@ def read_wpl(text: str | bytes, name: str = "<waypoints>", *,
         for k, what, hi in ((0, "index", 65535), (1, "current", 1), (2, "frame", 255), (3, "command", 65535),
                             (11, "autocontinue", 1)):
             d = _decimal(fields[k], where, what)
-            if not d.is_finite() or d != d.to_integral_value() or not 0 <= d <= hi:
-                raise PlanError(f"{what} {fields[k]!r} is not a whole number in 0..{hi}", where=where,
+            if not d.is_finite() or d != d.to_integral_value():
+                raise PlanError(f"{what} {fields[k]!r} is not a whole number", where=where,
                                 hint="write it without decimals, e.g. 16; current and autocontinue are 0 or 1")
+            if not 0 <= d <= hi:
+                raise PlanError(f"{what} {int(d)} is outside 0..{hi}", where=where,
+                                hint="current and autocontinue are 0 or 1" if hi == 1 else
+                                f"{what} is a number from 0 to {hi}")
             ints.append(int(d))
         index, current, frame, command, auto = ints
         if index != len(rows):
@@ -164,31 +171,49 @@ def read_wpl(text: str | bytes, name: str = "<waypoints>", *,
             raise PlanError("a value is beyond the float32 range MISSION_ITEM_INT carries", where=where,
                             hint="params 1-4 and altitude travel as float32 (at most ±3.4e38); NaN means unset")
         xy = []
+        unset = set()
         for k, what in ((8, "latitude/x"), (9, "longitude/y")):
             d = _decimal(fields[k], where, what)
             if not d.is_finite():
                 xy.append(0)
+                unset.add("xy"[k - 8])
                 continue
             v = int((d * _scale(frame)).to_integral_value(rounding=ROUND_HALF_UP))
             if not -2**31 <= v < 2**31:
                 raise PlanError(f"{what} {fields[k]} does not fit MISSION_ITEM_INT for frame {frame}", where=where,
                                 hint=xy_hint(frame))
             xy.append(v)
-        rows.append((lineno, MissionItem(command=command, frame=frame, param1=params[0], param2=params[1],
-                                         param3=params[2], param4=params[3], x=xy[0], y=xy[1], z=z,
-                                         autocontinue=auto, current=current, mission_type=MISSION_TYPE_MISSION),
-                     index))
+        rows.append(_Row(where, MissionItem(command=command, frame=frame, param1=params[0], param2=params[1],
+                                            param3=params[2], param4=params[3], x=xy[0], y=xy[1], z=z,
+                                            autocontinue=auto, current=current, mission_type=MISSION_TYPE_MISSION),
+                         frozenset(unset)))
         if len(rows) > MAX_ITEMS:
             raise PlanError(f"more than {MAX_ITEMS} rows", where=where,
                             hint=f"a MAVLink mission holds at most {MAX_ITEMS} items, home included: split the file")
     if home_row is None:
-        home_row = bool(rows) and rows[0][1].command in (CMD_NAV_WAYPOINT, 0) and rows[0][1].frame == FRAME_GLOBAL
+        home_row = bool(rows) and rows[0].item.command in (CMD_NAV_WAYPOINT, 0) and rows[0].item.frame == FRAME_GLOBAL
     home: Home | None = None
-    items = [it for _, it, _ in rows]
+    items = [row.item for row in rows]
     if home_row and items:
         h = items.pop(0)
-        home = (h.x / 1e7, h.y / 1e7, h.z)
+        home = (math.nan if "x" in rows[0].unset else h.x / 1e7, math.nan if "y" in rows[0].unset else h.y / 1e7,
+                h.z)
+        _check_row(rows[0], home_problem(home))
+    for row in rows[1:] if home_row else rows:
+        _check_row(row, item_problem(row.item, unset=row.unset))
     return items, home
+
+
+class _Row(NamedTuple):
+    where: str                 # NAME:LINE
+    item: MissionItem
+    unset: frozenset[str]      # "x"/"y" written as NaN (read as 0)
+
+
+def _check_row(row: _Row, problem) -> None:
+    """PlanError at the row when item_problem/home_problem found one."""
+    if problem is not None:
+        raise PlanError(f"{command_label(row.item.command)}: {problem.message}", where=row.where, hint=problem.hint)
 
 
 def load_wpl(path: str | Path, *, home_row: bool | None = None) -> tuple[list[MissionItem], Home | None]:

@@ -5,13 +5,14 @@ item, ArduPilot's home row, stale acks, and clear errors when nobody answers."""
 from __future__ import annotations
 
 import math
+import re
 
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from missions.emit.items import (FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MISSION_TYPE_FENCE, MISSION_TYPE_MISSION,
                             MISSION_TYPE_RALLY, MissionItem)
-from raw_peers import lose_accepted_acks, scripted_vehicle
+from raw_peers import lose_accepted_acks, rarely_answering_vehicle, scripted_vehicle, timed_call
 from wiris_tools.errors import LinkError
 from wiris_tools.link import Link
 from wiris_tools.readback import compare_items
@@ -255,3 +256,37 @@ def test_rto_stays_between_floor_and_cap_and_above_srtt(samples, floor, cap):
     assert floor <= rto <= cap or (est.srtt is None and rto == min(0.25, cap))
     if est.srtt is not None and 1.5 * est.srtt <= cap:
         assert rto >= 1.5 * est.srtt - 1e-12   # never retransmit before a normal round trip is over
+
+
+@pytest.mark.parametrize("deadline_s,source", [(1.0, "1 s (given)"), (None, "s (0.5 s plus 8 measured round trips")])
+def test_download_from_a_vehicle_answering_rarely_ends_at_its_deadline(deadline_s, source):
+    # 65535 items when the deadline is given; for the derived one a count whose deadline is a few seconds
+    # (0.5 s + 40 items x 8 round trips) while the vehicle's pace needs about 40 x 0.6 s.
+    count = 65535 if deadline_s is not None else 40
+    veh, seen = rarely_answering_vehicle(count)
+    try:
+        with Link(f"udpout:127.0.0.1:{veh.local_port}") as link:
+            client = MissionClient(link, timeouts=Timeouts(deadline_floor_s=0.5))
+            call = timed_call(lambda: client.download(deadline_s=deadline_s), limit_s=120)
+        assert call.finished and call.error is not None, call
+        text = str(call.error)
+        assert "the download did not finish within its deadline of " in text and source in text, text
+        assert f"of {count} items had arrived" in text and "--deadline SECONDS" in call.error.hint
+        arrived = int(re.search(r"(\d+) of \d+ items had arrived", text).group(1))
+        assert seen["requests"] > 0 and arrived < count   # it gave up before the vehicle had given everything
+    finally:
+        veh.close()
+
+
+def test_derived_download_deadline_grows_with_count_and_round_trip():
+    from wiris_tools.transfer import download_deadline_s, worst_item_s
+
+    t = Timeouts()
+    assert download_deadline_s(0, 0.001, t) == t.deadline_floor_s
+    assert download_deadline_s(700, 0.1, t) > 700 * 0.1 * 4          # a clean radio link has room to spare
+    assert download_deadline_s(700, 0.2, t) > download_deadline_s(700, 0.1, t)
+    # a slow answer to the list request earns no more than the spec's per-item time per round trip
+    assert download_deadline_s(65535, 5.0, t) == download_deadline_s(65535, t.item_s, t)
+    assert download_deadline_s(65535, 5.0, t) <= t.deadline_floor_s + 65535 * worst_item_s(t)
+    # the finding's hostile vehicle on a fast link (every 6th request answered, ~0.62 s per item) gets far less
+    assert download_deadline_s(65535, 0.001, t) < 65535 * 0.62 / 5

@@ -331,3 +331,71 @@ def test_plan_numbers_beyond_float32_are_located(path, value):
     with pytest.raises(PlanError) as err:
         read_plan(json.dumps(doc), "x.plan")
     assert err.value.where == f"x.plan: {path}" and "float32" in err.value.message and err.value.hint
+
+
+def test_download_deadline_ends_a_vehicle_that_answers_rarely(tmp_path):
+    from raw_peers import rarely_answering_vehicle, timed_call
+
+    out = tmp_path / "vehicle.plan"
+    veh, seen = rarely_answering_vehicle(65535)
+    try:
+        call = timed_call(lambda: run("mission", "download", "--connect", f"udpout:127.0.0.1:{veh.local_port}",
+                                      "-o", str(out), "--deadline", "1.5"), limit_s=120)
+    finally:
+        veh.close()
+    assert call.finished, "the download did not end"
+    r = call.value
+    assert r.exit_code == 1 and "Traceback" not in r.output, r.output
+    assert "did not finish within its deadline of 1.5 s (given)" in r.output and "of 65535 items had arrived" in r.output
+    assert "hint: a slow or lossy link may need longer: raise it with --deadline SECONDS" in r.output
+    assert list(tmp_path.iterdir()) == [] and seen["requests"] > 0
+
+
+@pytest.mark.parametrize("value", ["0", "nan", "-3"])
+def test_download_deadline_must_be_a_positive_number(value):
+    r = run("mission", "download", "--connect", "udpout:127.0.0.1:9", "-o", "x.plan", "--deadline", value)
+    assert r.exit_code == 2 and "--deadline" in r.output
+
+
+@pytest.mark.parametrize("suffix", [".plan", ".waypoints"])
+@pytest.mark.parametrize("hostile,text", [
+    (MissionItem(command=65535, frame=255, x=2**31 - 1, y=85456075, z=3.4e38, autocontinue=255),
+     "mission item 2 (command 65535): frame 255 is not a MAV_FRAME"),
+    (MissionItem(command=16, x=2**31 - 1, y=85456075, z=50), "mission item 2 (MAV_CMD_NAV_WAYPOINT): latitude "
+                                                             "214.7483647 is outside -90..90"),
+    (MissionItem(command=16, x=473977507, y=85456075, z=3.4e38),
+     "mission item 2 (MAV_CMD_NAV_WAYPOINT): altitude 3.4e+38 is not a real altitude"),
+    (MissionItem(command=16, x=473977507, y=85456075, z=50, autocontinue=255),
+     "mission item 2 (MAV_CMD_NAV_WAYPOINT): autocontinue 255 is neither 0 nor 1"),
+])
+def test_download_of_a_hostile_mission_names_the_item_and_writes_nothing(tmp_path, suffix, hostile, text):
+    # what a download would write, upload must read: a vehicle's impossible values are refused before writing
+    out = tmp_path / f"got{suffix}"
+    with VehicleSim(flavour="px4") as sim:
+        sim.set_items([ITEMS[1], hostile, ITEMS[3]])
+        r = run("mission", "download", "--connect", f"udpout:127.0.0.1:{sim.port}", "-o", str(out))
+    assert r.exit_code == 1 and "Traceback" not in r.output, r.output
+    assert f"{out}: {text}" in r.output and "file should not hold" in r.output and "hint: " in r.output, r.output
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_download_of_a_hostile_home_writes_nothing(tmp_path):
+    out = tmp_path / "got.plan"
+    with VehicleSim(flavour="ardupilot") as sim:   # item 0 is ArduPilot's home
+        sim.set_items([MissionItem(command=16, frame=0, x=-2**31, y=85456075, z=488.9), *ITEMS])
+        r = run("mission", "download", "--connect", f"udpout:127.0.0.1:{sim.port}", "-o", str(out))
+    assert r.exit_code == 1 and f"{out}: home latitude -214.748 is outside -90..90" in r.output, r.output
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_upload_of_an_impossible_position_is_refused_before_connecting(tmp_path):
+    doc = json.loads(write_plan(ITEMS, HOME, firmware="px4", vehicle="copter"))
+    doc["mission"]["items"][1]["params"][4:6] = [95, 200]
+    f = tmp_path / "far.plan"
+    f.write_text(json.dumps(doc))
+    with VehicleSim(flavour="px4") as sim:
+        r = run("mission", "upload", str(f), "--connect", f"udpout:127.0.0.1:{sim.port}")
+        assert sim.stats["requests"] == 0 and sim.link.stats.get("received", 0) == 0
+    assert r.exit_code == 1 and f"{f}: mission.items[1].params[4]: MAV_CMD_NAV_WAYPOINT: latitude 95.0000000 is " \
+                                "outside -90..90" in r.output, r.output
+    assert "hint: a MAV_CMD_NAV_WAYPOINT needs a real position" in r.output

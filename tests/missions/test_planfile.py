@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 
 from missions.formats import planfile, wpl
 from missions.errors import PlanError
+from missions.formats.itemcheck import item_problem
 from missions.emit.items import MISSION_TYPE_FENCE, MISSION_TYPE_RALLY, MissionItem
 from missions.formats.planfile import load_plan, read_plan, write_plan
 from missions.formats.wpl import load_wpl, read_wpl, write_wpl
@@ -377,6 +378,11 @@ items_st = st.lists(st.builds(
 @settings(max_examples=150, deadline=None)
 @given(items_st)
 def test_property_round_trip(items):
+    # what the writer writes reads back the same; what the reader would refuse the writer refuses
+    if any(item_problem(x) for x in items):
+        with pytest.raises(PlanError, match=r"mission item \d+ \(.*\): .*, which a .plan file should not hold"):
+            write_plan(items, None, firmware="px4", vehicle="copter")
+        return
     assert same(read_plan(write_plan(items, None, firmware="px4", vehicle="copter"))[0], items)
 
 
@@ -415,3 +421,87 @@ def test_compiled_example_plan_imports_in_mavsdk(tmp_path):
     assert res["ok"], res.get("error")
     mission = res["mission"][1:] if compiled.firmware == "ardupilot" else res["mission"]
     assert same(mission, list(compiled.items))
+
+
+# -- positions must be real ones, and values no vehicle takes are refused (itemcheck) --------------------
+
+def _simple(command: int, params: list, frame: int = 3, auto=True) -> dict:
+    return {"type": "SimpleItem", "command": command, "frame": frame, "params": params, "autoContinue": auto,
+            "doJumpId": 1}
+
+
+def _plan_with(*simple) -> str:
+    return _plan(lambda d: d["mission"].__setitem__("items", list(simple)))
+
+
+@pytest.mark.parametrize("item,where,message,hint", [
+    (_simple(16, [0, 0, 0, None, 95, 8.5, 50]), "params[4]", "MAV_CMD_NAV_WAYPOINT: latitude 95.0000000 is outside "
+     "-90..90", "latitude -90..90, longitude -180..180"),
+    (_simple(16, [0, 0, 0, None, 47, 200, 50]), "params[5]", "longitude 200.0000000 is outside -180..180",
+     "longitude -180..180"),
+    (_simple(16, [0, 0, 0, None, None, 8.5, 50]), "params[4]", "MAV_CMD_NAV_WAYPOINT: latitude is not set (null or "
+     "NaN)", "needs a position"),
+    (_simple(5100, [0, 0, 0, 0, 47, None, 50]), "params[5]", "longitude is not set", "needs a position"),
+    (_simple(16, [0, 0, 0, None, 47, 8.5, 3.4e38]), "params[6]", "altitude 3.4e+38 is not a real altitude",
+     "altitude in metres"),
+    (_simple(16, [0, 0, 0, None, 47, 8.5, None]), "params[6]", "altitude nan is not a real altitude",
+     "altitude in metres"),
+    (_simple(16, [0, 0, 0, None, 47, 8.5, 50], frame=255), "frame", "frame 255 is not a MAV_FRAME", "MAV_FRAME"),
+    (_simple(201, [3, 0, 0, 0, -91, 8.5, 50]), "params[4]", "MAV_CMD_DO_SET_ROI: latitude -91.0000000 is outside",
+     "real position"),
+])
+def test_plan_positions_must_be_real(item, where, message, hint):
+    with pytest.raises(PlanError) as err:
+        read_plan(_plan_with(item), "x.plan")
+    assert err.value.where == f"x.plan: mission.items[0].{where}", str(err.value)
+    assert message in err.value.message and hint in err.value.hint, str(err.value)
+
+
+def test_plan_items_without_a_position_keep_null_as_zero():
+    # QGC writes 0 (or null) where a command has no position; a takeoff's 0, 0 is "where the vehicle is"
+    # (ArduCopter takes off straight up), DO_SET_HOME with param1 = 1 uses the current position
+    items, *_ = read_plan(_plan_with(_simple(178, [1, 5, -1, 0, None, None, None], frame=2),
+                                     _simple(22, [15, 0, 0, None, None, None, 30]),
+                                     _simple(179, [1, 0, 0, 0, None, None, 0], frame=0),
+                                     _simple(16, [0, 0, 0, None, 0, 0, 50])), "x.plan")
+    assert [(it.command, it.x, it.y) for it in items] == [(178, 0, 0), (22, 0, 0), (179, 0, 0), (16, 0, 0)]
+
+
+@pytest.mark.parametrize("mutate,where,message", [
+    (lambda d: d["rallyPoints"]["points"][0].__setitem__(2, 3.4e38), "rallyPoints.points[0][2]",
+     "altitude 3.4e+38 is not a real altitude"),
+    (lambda d: d["mission"]["plannedHomePosition"].__setitem__(2, -3.4e38), "mission.plannedHomePosition[2]",
+     "home altitude -3.4e+38 is not a real altitude"),
+])
+def test_plan_rally_and_home_altitudes_must_be_real(mutate, where, message):
+    with pytest.raises(PlanError) as err:
+        read_plan(_plan(mutate), "x.plan")
+    assert err.value.where == f"x.plan: {where}" and message in err.value.message and err.value.hint
+
+
+@pytest.mark.parametrize("write", [
+    lambda items, home: write_plan(items, home, firmware="px4", vehicle="copter"),
+    lambda items, home: write_wpl(items, home)], ids=["plan", "wpl"])
+@pytest.mark.parametrize("item,home,message", [
+    (MissionItem(command=16, x=2**31 - 1, y=85456075, z=50), None,
+     "mission item 1 (MAV_CMD_NAV_WAYPOINT): latitude 214.7483647 is outside -90..90"),
+    (MissionItem(command=16, x=473977507, y=85456075, z=3.4e38), None, "altitude 3.4e+38 is not a real altitude"),
+    (MissionItem(command=65535, frame=255, x=473977507, y=85456075), None,
+     "mission item 1 (command 65535): frame 255 is not a MAV_FRAME"),
+    (MissionItem(command=16, x=473977507, y=85456075, z=50, autocontinue=255), None,
+     "autocontinue 255 is neither 0 nor 1"),
+    (MissionItem(command=16, x=473977507, y=85456075, z=50), (95.0, 8.0, 0.0), "home latitude 95 is outside -90..90"),
+])
+def test_writers_refuse_what_their_readers_would(write, item, home, message):
+    with pytest.raises(PlanError) as err:
+        write([item], home)
+    assert message in err.value.message and "file should not hold" in err.value.message and err.value.hint
+
+
+def test_a_fence_circle_without_a_radius_is_not_written():
+    # a vehicle's NaN radius would be written as "radius": null, which read_plan (and QGC) refuse
+    circle = MissionItem(command=5003, frame=0, param1=math.nan, x=470000000, y=80000000, mission_type=MISSION_TYPE_FENCE)
+    with pytest.raises(PlanError, match=r"fence item 0 \(MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION\): radius nan is not a "
+                                        "positive number of metres") as err:
+        write_plan([], None, firmware="px4", vehicle="copter", fence=[circle])
+    assert "radius in metres" in err.value.hint

@@ -12,6 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from missions.errors import PlanError
+from missions.formats.itemcheck import item_problem
 from missions.emit.items import MissionItem
 from missions.formats.wpl import load_wpl, read_wpl, write_wpl
 
@@ -116,5 +117,40 @@ finite = st.floats(allow_nan=True, allow_infinity=False, width=32)
                           x=st.integers(-900000000, 900000000), y=st.integers(-1800000000, 1800000000),
                           z=finite, autocontinue=st.integers(0, 1)), max_size=8))
 def test_property_round_trip(xs):
+    # what the writer writes reads back the same; what the reader would refuse the writer refuses
+    if any(item_problem(x) for x in xs):
+        with pytest.raises(PlanError, match=r"mission item \d+ \(.*\): .*, which a waypoint file should not hold"):
+            write_wpl(xs, (1.0, 2.0, 3.0))
+        return
     got, _ = read_wpl(write_wpl(xs, (1.0, 2.0, 3.0)))
     assert same(got, xs)
+
+
+def _one_row(row: str) -> str:
+    return "QGC WPL 110\n0\t1\t0\t16\t0\t0\t0\t0\t47.1\t8.2\t488.5\t1\n" + row + "\n"
+
+
+@pytest.mark.parametrize("row,message,hint", [
+    ("1\t0\t3\t16\t0\t0\t0\t0\tnan\t8.5\t50\t1", "MAV_CMD_NAV_WAYPOINT: latitude is not set (null or NaN)",
+     "needs a position"),
+    ("1\t0\t3\t16\t0\t0\t0\t0\t95\t8.5\t50\t1", "latitude 95.0000000 is outside -90..90", "latitude -90..90"),
+    ("1\t0\t3\t16\t0\t0\t0\t0\t47\t8.5\tNaN\t1", "altitude nan is not a real altitude", "altitude in metres"),
+    ("1\t0\t255\t16\t0\t0\t0\t0\t47\t8.5\t50\t1", "frame 255 is not a MAV_FRAME", "MAV_FRAME number"),
+    # the whole number 255 is not "not a whole number": it is out of the flag's range
+    ("1\t0\t3\t16\t0\t0\t0\t0\t47\t8.5\t50\t255", "autocontinue 255 is outside 0..1", "0 or 1"),
+])
+def test_rows_must_hold_real_positions_and_values(row, message, hint):
+    with pytest.raises(PlanError) as err:
+        read_wpl(_one_row(row), "w")
+    assert err.value.where == "w:3" and message in err.value.message and hint in err.value.hint, str(err.value)
+
+
+def test_rows_without_a_position_and_a_home_without_altitude_are_read():
+    # NaN lat/lon where a command takes no position is QGC's and Mission Planner's 0; a home altitude NaN is
+    # ArduPilot's home before a fix (write_wpl writes it so)
+    items, home = read_wpl(write_wpl([MissionItem(command=178, frame=2, param2=5)], (47.1, 8.2, math.nan)), "w")
+    assert items[0].command == 178 and home[:2] == (47.1, 8.2) and math.isnan(home[2])
+    items, _ = read_wpl(_one_row("1\t0\t3\t22\t0\t0\t0\t0\tnan\tnan\t30\t1"), "w")   # takeoff: 0, 0 = here
+    assert (items[0].x, items[0].y) == (0, 0)
+    with pytest.raises(PlanError, match="home latitude nan"):
+        read_wpl("QGC WPL 110\n0\t1\t0\t16\t0\t0\t0\t0\tnan\t8.2\t488.5\t1\n", "w")

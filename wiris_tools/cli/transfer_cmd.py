@@ -114,9 +114,12 @@ def upload(file: str, kind: str, verify: bool, part: int | None, firmware: str |
 @click.command("download")
 @click.option("-o", "--output", "out", required=True, type=click.Path(dir_okay=False),
               help="FILE.plan (mission, fence and rally) or FILE.waypoints (mission)")
+@click.option("--deadline", "deadline_s", type=FiniteRange(0.1, 7 * 24 * 3600), default=None, metavar="SECONDS",
+              help="give up when one list (mission, fence or rally) takes longer than this to download "
+                   "(default: 30 s plus 8 round trips, as measured on the link, for each item the vehicle reports)")
 @_connect_options
-def download(out: str, url: str, signing_key: str | None, target_system: int | None, target_component: int,
-             timeout: float, as_json: bool) -> None:
+def download(out: str, deadline_s: float | None, url: str, signing_key: str | None, target_system: int | None,
+             target_component: int, timeout: float, as_json: bool) -> None:
     """Save what the vehicle at --connect holds (.plan or .waypoints by suffix, written atomically)."""
     from wiris_tools.transfer import download_file
 
@@ -124,7 +127,7 @@ def download(out: str, url: str, signing_key: str | None, target_system: int | N
         raise click.BadParameter("the output must end in .plan or .waypoints", param_hint="-o/--output")
     with _link(url, signing_key) as link, _progress("download mission", as_json) as progress:
         summary = download_file(link, out, target_system=target_system, target_component=target_component,
-                                timeout=timeout, progress=progress)
+                                timeout=timeout, progress=progress, deadline_s=deadline_s)
     if as_json:
         echo_json(summary, indent=1)
         return
