@@ -22,6 +22,7 @@ from typing import Any, Iterable, Sequence
 
 import numpy as np
 
+from cdf.userfile import UserFile, read_user_file
 from missions.errors import PlanError
 from missions.geo import LocalProjection, leaf_parts
 
@@ -90,16 +91,13 @@ class Area:
 
 # ----------------------------------------------------------------------------------------------- readers
 
+AREA_FILE = UserFile("area file", MAX_AREA_FILE_BYTES, PlanError,
+                     hint="paths in a plan are relative to the plan file",
+                     size_hint="simplify the boundary (e.g. ogr2ogr -simplify 0.5)")
+
+
 def _read_bytes(path: Path) -> bytes:
-    try:
-        size = path.stat().st_size
-        if size > MAX_AREA_FILE_BYTES:
-            raise PlanError(f"area file is {size} bytes, more than the {MAX_AREA_FILE_BYTES} byte limit",
-                            where=str(path), hint="simplify the boundary (e.g. ogr2ogr -simplify 0.5)")
-        return path.read_bytes()  # a directory or an unreadable file passes stat() and fails here
-    except OSError as e:
-        raise PlanError(f"cannot read area file: {e.strerror}", where=str(path),
-                        hint="paths in a plan are relative to the plan file") from None
+    return read_user_file(path, AREA_FILE)
 
 
 def read_area_source(source: Any, base_dir: str | Path | None = None, where: str = "area") -> list[LatLonPolygon]:

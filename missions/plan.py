@@ -26,6 +26,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Iterable, Mapping
 
+from cdf.userfile import STDIN_LABEL, UserFile, names_stdin, not_a_file, read_user_file
 from missions.errors import PlanError
 from missions.schema import COMPONENT_IDS, MAX_ALTITUDE_M, MIN_ALTITUDE_M, STEPS, plan_schema
 
@@ -547,12 +548,15 @@ def _num(v: Any) -> bool:
 
 
 def _is_file(p: Path) -> tuple[bool, str]:
-    """Whether p is a readable-looking file, and if not, why in a few words. Path.is_file() raises for a
-    name the system refuses (longer than NAME_MAX, a NUL byte) instead of answering False."""
+    """Whether p is a regular file, and if not, why in a few words. Path.is_file() raises for a name the
+    system refuses (longer than NAME_MAX, a NUL byte) instead of answering False."""
     try:
-        return (True, "") if p.is_file() else (False, "not found")
+        other = not_a_file(p.stat().st_mode)
+    except FileNotFoundError:
+        return False, "not found"
     except (OSError, ValueError) as e:
         return False, f"cannot be looked up ({getattr(e, 'strerror', None) or e})"
+    return (False, f"{other}, not a file") if other else (True, "")
 
 
 def _check_settings(camera: Any, settings: Any, path: tuple, conv: _Yaml, problems: list[Problem],
@@ -898,21 +902,20 @@ def parse_plan(text: str, path: str = "<plan>", base_dir: str | Path | None = No
                         where=path, hint="please report this with the plan") from None
 
 
+PLAN_FILE = UserFile("plan", MAX_PLAN_BYTES, PlanError, stdin_ok=True,
+                     hint="check the path and that you may read the file",
+                     size_hint="put large areas in KML/GeoJSON files next to the plan")
+
+
 def load_plan(path: str | Path) -> Plan:
-    """Read and parse a plan file (size-capped, UTF-8)."""
-    p = Path(path)
-    try:
-        size = p.stat().st_size
-        if size > MAX_PLAN_BYTES:
-            raise PlanError(f"the plan is {size} bytes, more than {MAX_PLAN_BYTES}", where=str(p),
-                            hint="put large areas in KML/GeoJSON files next to the plan")
-        raw = p.read_bytes()
-    except OSError as e:
-        raise PlanError(f"cannot read the plan: {e.strerror}", where=str(p),
-                        hint="check the path and that you may read the file") from None
+    """Read and parse a plan file (size-capped, UTF-8); "-" or /dev/stdin reads standard input, whose
+    relative area paths are then relative to the current directory."""
+    raw = read_user_file(path, PLAN_FILE)
+    stdin = names_stdin(path, PLAN_FILE)
+    name = STDIN_LABEL if stdin else str(path)
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as e:
-        raise PlanError(f"the plan is not UTF-8 text (byte {e.start})", where=str(p),
+        raise PlanError(f"the plan is not UTF-8 text (byte {e.start})", where=name,
                         hint="save the plan as UTF-8 (the default of every current editor)") from None
-    return parse_plan(text, str(p), p.resolve().parent)
+    return parse_plan(text, name, Path.cwd() if stdin else Path(path).resolve().parent)

@@ -133,17 +133,20 @@ def test_missing_and_unknown_files(tmp_path: Path) -> None:
     with pytest.raises(PlanError, match="unknown area file type"):
         load_area(tmp_path / "a.shp")
     (tmp_path / "dir.geojson").mkdir()  # passes stat(), fails to read
-    with pytest.raises(PlanError, match="cannot read area file: Is a directory"):
+    with pytest.raises(PlanError, match="is a directory, not a file"):
         load_area(tmp_path / "dir.geojson")
 
 
 def test_oversized_file_is_refused(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import dataclasses
+
     import missions.area as area_mod
-    monkeypatch.setattr(area_mod, "MAX_AREA_FILE_BYTES", 100)
+    monkeypatch.setattr(area_mod, "AREA_FILE", dataclasses.replace(area_mod.AREA_FILE, cap=100))
     big = tmp_path / "big.geojson"
     big.write_text(" " * 200 + "{}")
-    with pytest.raises(PlanError, match="limit"):
+    with pytest.raises(PlanError, match="area file is larger than 100 bytes") as e:
         load_area(big)
+    assert "simplify" in e.value.hint
 
 
 def test_swapped_inline_coordinates_get_a_hint() -> None:
