@@ -183,6 +183,14 @@ def test_holes_that_touch_are_placed_in_lat_lon(tmp_path: Path) -> None:
     assert e.value.message == "polygon is invalid: Self-intersection near lat 50.1020000, lon 14.5030000"
 
 
+def test_a_five_megabyte_coordinate_token_is_not_echoed_whole(tmp_path: Path) -> None:
+    f = tmp_path / "big.kml"
+    f.write_text(_kml_ring("14.5,50.1 14.6,50.1 " + "7" * 5_000_000))
+    with pytest.raises(PlanError) as e:
+        load_area(f)
+    assert e.value.message == f"bad KML coordinate '{'7' * 59}… (5000002 characters); expected lon,lat[,alt]"
+
+
 def test_an_entity_bomb_kml_is_refused_as_one(tmp_path: Path) -> None:
     ring = "<coordinates>&l9;</coordinates>"
     entities = '<!ENTITY l0 "lol">' + "".join(f'<!ENTITY l{i} "{f"&l{i - 1};" * 10}">' for i in range(1, 10))
