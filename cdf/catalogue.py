@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
-from cdf.errors import CdfError
+from cdf.errors import CdfError, clip, shown
 
 TABLES_DIR = Path(__file__).resolve().parent / "tables"
 
@@ -133,32 +133,32 @@ class Setting:
                 allowed = {o.key for o in self.enum.options} if self.enum else set()
                 bad = [k for k in keys if k not in allowed]
                 if bad or not keys:
-                    raise CdfError(f"{self.key}: {bad[0] if bad else 'an empty list'} is not a choice",
+                    raise CdfError(f"{self.key}: {clip(bad[0]) if bad else 'an empty list'} is not a choice",
                                    hint=f"choose one or more of {', '.join(sorted(allowed))}")
                 option = self.option_by_key("+".join(o.key for o in self.enum.options if o.key in keys))
                 if option is None:
-                    raise CdfError(f"{self.key}: {' + '.join(keys)} cannot be combined",
+                    raise CdfError(f"{self.key}: {clip(' + '.join(keys))} cannot be combined",
                                    hint=self.enum.note or "see the camera manual")
                 return option.value
             if isinstance(value, str):
                 option = self.option_by_key(value)
                 if option is None:
-                    raise CdfError(f"{self.key}: {value!r} is not a choice",
+                    raise CdfError(f"{self.key}: {shown(value)} is not a choice",
                                    hint=f"choose one of {', '.join(o.key for o in self.options)}")
                 return option.value
             if isinstance(value, (int, float)) and not isinstance(value, bool):
                 if any(o.value == value for o in self.options):
                     return int(value)
-            raise CdfError(f"{self.key}: {value!r} is not a choice",
+            raise CdfError(f"{self.key}: {shown(value)} is not a choice",
                            hint=f"choose one of {', '.join(o.key for o in self.options)}")
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise CdfError(f"{self.key}: expected a number{f' in {self.unit}' if self.unit else ''}, got {value!r}",
+            raise CdfError(f"{self.key}: expected a number{f' in {self.unit}' if self.unit else ''}, got {shown(value)}",
                            hint=self.range_text())
         if (self.min is not None and value < self.min) or (self.max is not None and value > self.max):
-            raise CdfError(f"{self.key}: {value} is out of range", hint=self.range_text())
+            raise CdfError(f"{self.key}: {shown(value)} is out of range", hint=self.range_text())
         if self.is_integer:
             if value != int(value):
-                raise CdfError(f"{self.key}: {value} is not a whole number", hint=self.range_text())
+                raise CdfError(f"{self.key}: {shown(value)} is not a whole number", hint=self.range_text())
             return int(value)
         return float(value)
 

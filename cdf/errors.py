@@ -23,3 +23,25 @@ class WirisError(Exception):
 
 class CdfError(WirisError):
     """A camera catalogue or camera definition problem."""
+
+
+# How much of a value from untrusted input a message repeats: enough to recognise it, never the whole
+# thing (a 5 MB KML coordinate token would otherwise become a 5 MB message).
+ECHO_CHARS = 60
+
+
+def clip(text: str, limit: int = ECHO_CHARS) -> str:
+    """`text` as a message repeats it: the first `limit` characters and the length when it is longer."""
+    return text if len(text) <= limit else f"{text[:limit]}… ({len(text)} characters)"
+
+
+def shown(value: object, limit: int = ECHO_CHARS) -> str:
+    """repr(value) as a message repeats it (clipped); an integer too long for Python to print (over 4300
+    digits) is described by its size."""
+    try:
+        text = repr(value)
+    except ValueError:
+        if isinstance(value, int):
+            return f"a whole number of about {int(abs(value).bit_length() * 0.30103) + 1} digits"
+        return f"a {type(value).__name__} holding a number too long to print"
+    return clip(text, limit)

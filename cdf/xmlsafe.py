@@ -30,6 +30,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from cdf.errors import CdfError
+from cdf.userfile import UserFile, read_user_file
 
 MAX_BYTES = 4 * 1024 * 1024
 MAX_INFLATED_BYTES = 4 * 1024 * 1024
@@ -87,21 +88,15 @@ def inflate(raw: bytes, name: str) -> Loaded:
     return Loaded(name, len(raw), out, True)
 
 
+# A local definition file: more than MAX_BYTES is read as MAX_BYTES + 1 and reported as finding CDF002.
+DEFINITION_FILE = UserFile("camera definition file", MAX_BYTES, CdfError, size_hint=None,
+                           hint="name the .xml or .xml.xz file itself (a bundle lists its files in "
+                                "manifest.json) and check the path")
+
+
 def read_file(path: str | Path) -> bytes:
-    """Read at most MAX_BYTES + 1 bytes of a local file (the size check then reports the excess)."""
-    p = Path(path)
-    try:
-        with p.open("rb") as fh:
-            return fh.read(MAX_BYTES + 1)
-    except FileNotFoundError:
-        raise CdfError("no such file", where=str(path), hint="check the path") from None
-    except IsADirectoryError:
-        raise CdfError("is a directory, not a camera definition file", where=str(path),
-                       hint="name the .xml or .xml.xz file itself (a bundle lists its files in manifest.json)"
-                       ) from None
-    except OSError as err:
-        raise CdfError(f"cannot read: {err.strerror or err}", where=str(path),
-                       hint="check the path and that you may read the file") from None
+    """At most MAX_BYTES + 1 bytes of a local file (the size check then reports the excess)."""
+    return read_user_file(path, DEFINITION_FILE)
 
 
 class _HttpOnlyRedirects(urllib.request.HTTPRedirectHandler):

@@ -30,6 +30,7 @@ from typing import Any
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from cdf.errors import CdfError
+from cdf.userfile import UserFile, read_user_file
 from wiris_tools.emulate import paramext
 from wiris_tools.emulate.definition import Definition, DefParam, parse_definition
 from wiris_tools.errors import LinkError
@@ -37,6 +38,10 @@ from wiris_tools.link import IN_PROGRESS_TIMEOUTS, Link, command_name, result_na
 
 CAMERA_COMPONENTS = range(mavlink2.MAV_COMP_ID_CAMERA, mavlink2.MAV_COMP_ID_CAMERA6 + 1)
 MAX_SETUP_BYTES = 1024 * 1024
+SETUP_FILE = UserFile("setup file", MAX_SETUP_BYTES, LinkError,
+                      hint="check the path and its permissions; `wiris mission compile PLAN -o DIR` writes "
+                           "DIR/NAME.setup.json",
+                      size_hint="give the NAME.setup.json that `wiris mission compile` wrote, not another file")
 MAX_STEPS = 1000
 
 
@@ -791,19 +796,9 @@ def _classic_type_name(ptype: str) -> str:
 
 
 def load_setup(path: str | Path) -> list[Step]:
-    p = Path(path)
-    try:
-        with p.open("rb") as fh:
-            raw = fh.read(MAX_SETUP_BYTES + 1)
-    except OSError as err:
-        raise LinkError(f"cannot read: {err.strerror or err}", where=str(path),
-                        hint="check the path and its permissions; `wiris mission compile PLAN -o DIR` writes "
-                             "DIR/NAME.setup.json") from None
-    if len(raw) > MAX_SETUP_BYTES:
-        raise LinkError(f"file is larger than {MAX_SETUP_BYTES} bytes", where=str(path),
-                        hint="give the NAME.setup.json that `wiris mission compile` wrote, not another file")
+    raw = read_user_file(path, SETUP_FILE)
     from missions.formats.outputs import check_output
-    check_output(p, raw)        # only the last complete compile's NAME.setup.json (PlanError otherwise)
+    check_output(Path(path), raw)        # only the last complete compile's NAME.setup.json (PlanError otherwise)
     try:
         data = json.loads(raw.decode("utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as err:

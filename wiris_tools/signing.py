@@ -21,6 +21,7 @@ import string
 from pathlib import Path
 from typing import NamedTuple
 
+from cdf.userfile import UserFile, read_user_file
 from wiris_tools.errors import LinkError
 
 KEY_BYTES = 32
@@ -28,6 +29,9 @@ KEY_BYTES = 32
 TIMESTAMP_EPOCH_UNIX_S = 1420070400
 TIMESTAMP_UNITS_PER_S = 100_000
 MAX_KEY_FILE_BYTES = 4096  # a key file is a line of text; anything bigger is the wrong file
+KEY_FILE = UserFile("signing key file", MAX_KEY_FILE_BYTES, LinkError,
+                    hint="give a file holding 64 hex characters or a passphrase",
+                    size_hint="a key file holds one line: 64 hex characters or a passphrase")
 
 
 def signing_timestamp(unix_s: float) -> int:
@@ -105,15 +109,7 @@ def key_from_text(text: str, *, where: str = "signing key") -> bytes:
 def load_signing_key(path: str | Path) -> bytes:
     """Read a key file (see module docstring); LinkError if it is missing, huge or empty."""
     p = Path(path)
-    try:
-        with p.open("rb") as fh:
-            raw = fh.read(MAX_KEY_FILE_BYTES + 1)
-    except OSError as err:
-        raise LinkError(f"cannot read the signing key file: {err.strerror}", where=str(p),
-                        hint="give a file holding 64 hex characters or a passphrase") from None
-    if len(raw) > MAX_KEY_FILE_BYTES:
-        raise LinkError(f"the signing key file is larger than {MAX_KEY_FILE_BYTES} bytes", where=str(p),
-                        hint="a key file holds one line: 64 hex characters or a passphrase")
+    raw = read_user_file(p, KEY_FILE)
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:

@@ -654,15 +654,10 @@ def read_plan(text: str | bytes, name: str = "<plan>") -> tuple[list[MissionItem
 
 
 def load_plan(path: str | Path) -> tuple[list[MissionItem], list[MissionItem], list[MissionItem], Home | None]:
-    """read_plan on a file, with the size limit applied before reading it all."""
-    p = Path(path)
-    try:
-        size = p.stat().st_size
-        if size > MAX_PLAN_BYTES:
-            raise PlanError(f"the file is larger than {MAX_PLAN_BYTES // 2**20} MB", where=str(p), hint=SIZE_HINT)
-        data = p.read_bytes()
-    except OSError as err:
-        raise PlanError(f"cannot read the file: {err.strerror}", where=str(p), hint=READ_HINT) from None
+    """read_plan on a file, reading at most the size limit of it."""
+    from cdf.userfile import UserFile, read_user_file
+
+    data = read_user_file(path, UserFile(".plan file", MAX_PLAN_BYTES, PlanError, READ_HINT, SIZE_HINT))
     from missions.formats.outputs import check_output
-    check_output(p, data)       # a compiled NAME.plan: only the last complete compile's
-    return read_plan(data, str(p))
+    check_output(Path(path), data)       # a compiled NAME.plan: only the last complete compile's
+    return read_plan(data, str(path))

@@ -217,13 +217,9 @@ def _check_row(row: _Row, problem) -> None:
 
 
 def load_wpl(path: str | Path, *, home_row: bool | None = None) -> tuple[list[MissionItem], Home | None]:
-    p = Path(path)
-    try:
-        if p.stat().st_size > MAX_WPL_BYTES:
-            raise PlanError(f"the file is larger than {MAX_WPL_BYTES // 2**20} MB", where=str(p), hint=SIZE_HINT)
-        data = p.read_bytes()
-    except OSError as err:
-        raise PlanError(f"cannot read the file: {err.strerror}", where=str(p), hint=READ_HINT) from None
+    from cdf.userfile import UserFile, read_user_file
+
+    data = read_user_file(path, UserFile("waypoint file", MAX_WPL_BYTES, PlanError, READ_HINT, SIZE_HINT))
     from missions.formats.outputs import check_output
-    check_output(p, data)       # a compiled NAME.waypoints: only the last complete compile's
-    return read_wpl(data, str(p), home_row=home_row)
+    check_output(Path(path), data)       # a compiled NAME.waypoints: only the last complete compile's
+    return read_wpl(data, str(path), home_row=home_row)

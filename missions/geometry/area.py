@@ -22,6 +22,8 @@ from typing import Any, Iterable, Sequence
 
 import numpy as np
 
+from cdf.errors import ECHO_CHARS, clip, shown
+from cdf.userfile import UserFile, read_user_file
 from missions.errors import PlanError
 from missions.geometry.geo import LocalProjection, leaf_parts
 
@@ -90,16 +92,13 @@ class Area:
 
 # ----------------------------------------------------------------------------------------------- readers
 
+AREA_FILE = UserFile("area file", MAX_AREA_FILE_BYTES, PlanError,
+                     hint="paths in a plan are relative to the plan file",
+                     size_hint="simplify the boundary (e.g. ogr2ogr -simplify 0.5)")
+
+
 def _read_bytes(path: Path) -> bytes:
-    try:
-        size = path.stat().st_size
-        if size > MAX_AREA_FILE_BYTES:
-            raise PlanError(f"area file is {size} bytes, more than the {MAX_AREA_FILE_BYTES} byte limit",
-                            where=str(path), hint="simplify the boundary (e.g. ogr2ogr -simplify 0.5)")
-        return path.read_bytes()  # a directory or an unreadable file passes stat() and fails here
-    except OSError as e:
-        raise PlanError(f"cannot read area file: {e.strerror}", where=str(path),
-                        hint="paths in a plan are relative to the plan file") from None
+    return read_user_file(path, AREA_FILE)
 
 
 def read_area_source(source: Any, base_dir: str | Path | None = None, where: str = "area") -> list[LatLonPolygon]:
@@ -131,7 +130,7 @@ def _inline_polygon(points: Sequence[Any], where: str) -> LatLonPolygon:
         here = f"{where}[{i}]"
         if not (isinstance(p, (list, tuple)) and len(p) in (2, 3)
                 and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in p)):
-            raise PlanError(f"point must be [lat, lon], got {p!r}", where=here,
+            raise PlanError(f"point must be [lat, lon], got {shown(p)}", where=here,
                             hint="each point is two numbers, latitude then longitude in degrees, "
                                  "e.g. [50.0696, 14.7263]")
         lat, lon = float(p[0]), float(p[1])
@@ -141,7 +140,7 @@ def _inline_polygon(points: Sequence[Any], where: str) -> LatLonPolygon:
         if abs(lat) > 90 or abs(lon) > 180:
             hint = ("inline points are [lat, lon]; this looks like [lon, lat]"
                     if abs(lat) <= 180 and abs(lon) <= 90 else "coordinates must be WGS84 degrees")
-            raise PlanError(f"point {p!r} is outside ±90° latitude / ±180° longitude", where=here, hint=hint)
+            raise PlanError(f"point {shown(p)} is outside ±90° latitude / ±180° longitude", where=here, hint=hint)
         pts.append((lat, lon))
     return LatLonPolygon(tuple(pts), (), where)
 
@@ -151,13 +150,15 @@ def _inline_polygon(points: Sequence[Any], where: str) -> LatLonPolygon:
 def read_geojson(path: Path) -> list[LatLonPolygon]:
     data = _read_bytes(path)
     try:
-        doc = json.loads(data.decode("utf-8-sig"))
+        # every number as a float: coordinates are floats, and an integer of 5000 digits would stop
+        # Python's int() (ValueError) or float(int) (OverflowError); as a float it is inf, reported below
+        doc = json.loads(data.decode("utf-8-sig"), parse_int=float)
     except UnicodeDecodeError as e:
         raise PlanError(f"GeoJSON is not UTF-8 ({e.reason})", where=str(path),
                         hint="save it as UTF-8 (not UTF-16 or a legacy code page): RFC 7946 GeoJSON is "
                              "UTF-8") from None
     except json.JSONDecodeError as e:
-        raise PlanError(f"invalid JSON: {e.msg}", where=f"{path}:{e.lineno}:{e.colno}",
+        raise PlanError(f"invalid JSON: {clip(e.msg, 2 * ECHO_CHARS)}", where=f"{path}:{e.lineno}:{e.colno}",
                         hint="fix the JSON there (a missing comma, bracket or quote?) or export the area "
                              "again") from None
     except RecursionError:
@@ -187,7 +188,7 @@ def _check_geojson_crs(doc: dict, where: str) -> None:
         if isinstance(props, dict):
             name = str(props.get("name") or props.get("href") or "")
     if not any(w.lower() in name.lower() for w in _WGS84_NAMES):
-        raise PlanError(f"GeoJSON declares the coordinate system {name or crs!r}; only WGS84 longitude/latitude is read",
+        raise PlanError(f"GeoJSON declares the coordinate system {clip(name) if name else shown(crs)}; only WGS84 longitude/latitude is read",
                         where=f"{where}: crs",
                         hint="reproject it to WGS84, e.g. `ogr2ogr -t_srs EPSG:4326 out.geojson in.geojson`")
 
@@ -212,7 +213,11 @@ def _collect_geojson(obj: Any, file: str, jpath: str, out: list[LatLonPolygon], 
         if g is not None:
             _collect_geojson(g, file, f"{jpath}.geometry", out, depth + 1)
     elif kind == "GeometryCollection":
-        for i, g in enumerate(obj.get("geometries") or []):
+        geoms = obj.get("geometries")
+        if not isinstance(geoms, list):
+            raise PlanError("GeometryCollection without a 'geometries' list", where=f"{file}: {jpath}",
+                            hint='give it "geometries": [...], a list of geometry objects (RFC 7946 §3.1.8)')
+        for i, g in enumerate(geoms):
             _collect_geojson(g, file, f"{jpath}.geometries[{i}]", out, depth + 1)
     elif kind == "Polygon":
         out.append(_geojson_polygon(obj.get("coordinates"), file, f"{jpath}.coordinates"))
@@ -226,7 +231,7 @@ def _collect_geojson(obj: Any, file: str, jpath: str, out: list[LatLonPolygon], 
     elif kind in ("Point", "MultiPoint", "LineString", "MultiLineString"):
         return
     else:
-        raise PlanError(f"unknown GeoJSON type {kind!r}", where=f"{file}: {jpath}",
+        raise PlanError(f"unknown GeoJSON type {shown(kind)}", where=f"{file}: {jpath}",
                         hint="supported: Polygon, MultiPolygon, Feature, FeatureCollection, GeometryCollection "
                              "(case matters)")
 
@@ -246,12 +251,16 @@ def _geojson_polygon(coords: Any, file: str, jpath: str) -> LatLonPolygon:
             here = f"{file}: {jpath}[{r}][{i}]"
             if not (isinstance(p, list) and len(p) >= 2
                     and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in p[:2])):
-                raise PlanError(f"position must be [lon, lat], got {p!r}", where=here,
+                raise PlanError(f"position must be [lon, lat], got {shown(p)}", where=here,
                                 hint="each position is [lon, lat] in degrees (GeoJSON order), "
                                      "e.g. [14.7263, 50.0696]")
             lon, lat = float(p[0]), float(p[1])
-            if not (math.isfinite(lat) and math.isfinite(lon)) or abs(lat) > 90 or abs(lon) > 180:
-                raise PlanError(f"position {p[:2]!r} is not a longitude/latitude in degrees", where=here,
+            if not (math.isfinite(lat) and math.isfinite(lon)):
+                raise PlanError(f"position {shown(p[:2])} holds a number that is not finite (or too long to read)",
+                                where=here, hint="each position is [lon, lat] in degrees (GeoJSON order), "
+                                                 "e.g. [14.7263, 50.0696]")
+            if abs(lat) > 90 or abs(lon) > 180:
+                raise PlanError(f"position {shown(p[:2])} is not a longitude/latitude in degrees", where=here,
                                 hint="the file looks like it uses a projected CRS (metres); reproject it to "
                                      "WGS84: `ogr2ogr -t_srs EPSG:4326 out.geojson in.geojson`")
             pts.append((lat, lon))
@@ -273,17 +282,21 @@ def read_kml(path: Path) -> list[LatLonPolygon]:
     try:
         root = etree.fromstring(data, parser)
     except etree.XMLSyntaxError as e:
+        # libxml2 refuses an entity bomb (billion laughs, a reference loop) while parsing, before the
+        # DOCTYPE check below can run: these are its messages
+        if "entity amplification" in e.msg or "entity reference loop" in e.msg:
+            raise _dtd_refused(path) from None
         line = e.position[0] if e.position else None
-        raise PlanError(f"KML is not well-formed XML: {e.msg}", where=f"{path}:{line}" if line else str(path),
-                        hint="fix the XML at that line (an unclosed or misspelt tag?) or export the KML "
-                             "again") from None
+        hint = ("write a literal & in text as &amp;" if "Entity '" in e.msg and "not defined" in e.msg else
+                "fix the XML at that line (an unclosed or misspelt tag?) or export the KML again")
+        raise PlanError(f"KML is not well-formed XML: {clip(e.msg, 2 * ECHO_CHARS)}",
+                        where=f"{path}:{line}" if line else str(path), hint=hint) from None
     if root is None:
         raise PlanError("KML is empty", where=str(path),
                         hint="export the area again as KML from Google Earth or QGIS")
     doc = root.getroottree().docinfo
     if doc.doctype or doc.internalDTD is not None:
-        raise PlanError("KML with a DOCTYPE/DTD is refused", where=str(path),
-                        hint="KML needs no DTD; remove the <!DOCTYPE ...> declaration")
+        raise _dtd_refused(path)
     polys: list[LatLonPolygon] = []
     for el in root.iter():
         if isinstance(el.tag, str) and etree.QName(el).localname == "Polygon":
@@ -293,6 +306,11 @@ def read_kml(path: Path) -> list[LatLonPolygon]:
                         hint="draw the survey area as a polygon (Google Earth: 'Add Polygon'); "
                              "paths and placemarks cannot be surveyed")
     return polys
+
+
+def _dtd_refused(path: Path) -> PlanError:
+    return PlanError("KML with a DTD or entities is refused (entity expansion)", where=str(path),
+                     hint="KML needs no DTD: remove the <!DOCTYPE ...> declaration and its <!ENTITY ...> lines")
 
 
 def _kml_children(el: Any, name: str) -> list[Any]:
@@ -326,11 +344,14 @@ def _kml_ring(boundary: Any, path: Path) -> tuple[tuple[float, float], ...]:
         try:
             lon, lat = float(parts[0]), float(parts[1])
         except (ValueError, IndexError):
-            raise PlanError(f"bad KML coordinate {tok!r}; expected lon,lat[,alt]", where=where,
+            raise PlanError(f"bad KML coordinate {shown(tok)}; expected lon,lat[,alt]", where=where,
                             hint="no spaces inside a tuple, one between tuples: 14.7263,50.0696,0 "
                                  "14.7281,50.0696,0") from None
-        if not (math.isfinite(lat) and math.isfinite(lon)) or abs(lat) > 90 or abs(lon) > 180:
-            raise PlanError(f"KML coordinate {tok!r} is not lon,lat in degrees", where=where,
+        if not (math.isfinite(lat) and math.isfinite(lon)):
+            raise PlanError(f"KML coordinate {shown(tok)} holds a number that is not finite", where=where,
+                            hint="longitude first, in WGS84 degrees: 14.7263,50.0696")
+        if abs(lat) > 90 or abs(lon) > 180:
+            raise PlanError(f"KML coordinate {shown(tok)} is not lon,lat in degrees", where=where,
                             hint="longitude first, in WGS84 degrees (14.7263,50.0696); reproject a file in "
                                  "metres to EPSG:4326")
         pts.append((lat, lon))
@@ -426,11 +447,41 @@ def _project_polygon(p: LatLonPolygon, proj: LocalProjection):
 
     outer = ring_of(p.outer, "polygon", 0)
     holes = [ring_of(h, f"hole {k}", k + 1) for k, h in enumerate(p.holes)]
+    shell = Polygon(outer)
+    for k, hole in enumerate(holes):
+        if not shell.covers(Polygon(hole)):
+            where = p.ring_wheres[k + 1] if k + 1 < len(p.ring_wheres) else p.where
+            lat, lon = proj.point_to_latlon(*_outside_point(shell, hole))
+            raise PlanError(f"hole {k} is not inside the polygon's outer boundary (it reaches out near lat "
+                            f"{lat:.7f}, lon {lon:.7f})", where=where,
+                            hint="a hole (inner boundary) cuts an area out of its polygon and must lie within "
+                                 "it; to leave out ground elsewhere, use exclude:")
     poly = Polygon(outer, holes)
     if not poly.is_valid:
-        raise PlanError(f"polygon is invalid: {explain_validity(poly)}", where=p.where,
+        raise PlanError(f"polygon is invalid: {_in_latlon(explain_validity(poly), proj)}", where=p.where,
                         hint="holes must lie inside the outer boundary and must not touch each other")
     return orient(poly, 1.0)
+
+
+def _outside_point(shell: Any, hole: Any) -> tuple[float, float]:
+    """A vertex of `hole` outside `shell` (x, y), or where the two boundaries cross when none is."""
+    from shapely.geometry import Point
+
+    for x, y in hole.coords:
+        if not shell.covers(Point(x, y)):
+            return x, y
+    c = shell.exterior.intersection(hole).representative_point()
+    return c.x, c.y
+
+
+def _in_latlon(reason: str, proj: LocalProjection) -> str:
+    """shapely's validity reason ("Self-intersection[x y]", local metres) with the place in lat/lon."""
+    import re
+
+    def latlon(m: re.Match) -> str:
+        lat, lon = proj.point_to_latlon(float(m[1]), float(m[2]))
+        return f" near lat {lat:.7f}, lon {lon:.7f}"
+    return re.sub(r"\[(\S+) (\S+)\]", latlon, reason)
 
 
 def _polygonal(g: Any) -> Any:

@@ -22,10 +22,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 import difflib
 import math
+import re
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Iterable, Mapping
 
+from cdf.errors import ECHO_CHARS, clip, shown
+from cdf.userfile import STDIN_LABEL, UserFile, names_stdin, not_a_file, read_user_file
 from missions.errors import PlanError, Problem
 from missions.plan.schema import COMPONENT_IDS, MAX_ALTITUDE_M, MIN_ALTITUDE_M, STEPS, plan_schema
 
@@ -193,6 +196,7 @@ class _Yaml:
         # values already reported here and read as None (.inf, a YAML tag): the schema pass skips them,
         # or `name: .inf` would also be "name must be text, got nothing"
         self.reported: set[tuple] = set()
+        self.quoted: set[tuple] = set()     # values written in quotes: "remove the quotes" is a fix only there
         self.nodes = 0
 
     def loc(self, mark: Any) -> str:
@@ -217,7 +221,7 @@ class _Yaml:
                     continue
                 key = knode.value
                 if key in out:
-                    self.problems.append(Problem(self.loc(knode.start_mark), f"duplicate key {key!r}",
+                    self.problems.append(Problem(self.loc(knode.start_mark), f"duplicate key {shown(key)}",
                                                  "YAML keeps only the last one; remove one of them"))
                     continue
                 self.keys[path + (key,)] = (knode.start_mark.line, knode.start_mark.column)
@@ -231,6 +235,12 @@ class _Yaml:
         import yaml
 
         tag, text = node.tag, node.value
+        if node.style in ("'", '"'):
+            self.quoted.add(path)
+        if node.style is None and tag == "tag:yaml.org,2002:str" and _EXPONENT_NUMBER.fullmatch(text):
+            # YAML 1.1 reads 1e-9 and 1.0e308 (no dot, or no sign in the exponent) as text, YAML 1.2 and
+            # every editor as numbers: read them as numbers, as booleans are read the YAML 1.2 way
+            return self.number(float(text), text, node, path)
         if tag == "tag:yaml.org,2002:str" or node.style in ("'", '"', "|", ">"):
             return text
         if tag == "tag:yaml.org,2002:null":
@@ -242,22 +252,36 @@ class _Yaml:
             try:
                 c = yaml.constructor.SafeConstructor()
                 value = c.construct_yaml_int(node) if tag.endswith("int") else c.construct_yaml_float(node)
-            except (ValueError, TypeError, OverflowError, yaml.YAMLError):
-                return text
-            if isinstance(value, float) and not math.isfinite(value):
-                self.problems.append(Problem(self.loc(node.start_mark), f"{text!r} is not a finite number",
-                                             "YAML reads .inf and .nan as numbers: give a finite one, or quote "
-                                             "the text if that is what you meant"))
+            except ValueError:      # more digits than Python converts (4300)
+                self.problems.append(Problem(self.loc(node.start_mark),
+                                             f"a number of {len(text)} characters is too long to read",
+                                             "write the value with a few digits (a plan's quantities are metres, "
+                                             "seconds, percent: small numbers)"))
                 self.reported.add(path)
                 return None
-            return value
+            except (TypeError, OverflowError, yaml.YAMLError):
+                return text
+            return self.number(value, text, node, path)
         if tag == "tag:yaml.org,2002:timestamp":
             return text
-        self.problems.append(Problem(self.loc(node.start_mark), f"YAML tag {tag!r} is not allowed in a plan",
+        self.problems.append(Problem(self.loc(node.start_mark), f"YAML tag {shown(tag)} is not allowed in a plan",
                                      "remove the tag"))
         self.reported.add(path)
         return None
 
+    def number(self, value: int | float, text: str, node: Any, path: tuple) -> int | float | None:
+        """A number read from the YAML, or None and a problem when it is not finite."""
+        if isinstance(value, float) and not math.isfinite(value):
+            self.problems.append(Problem(self.loc(node.start_mark), f"{shown(text)} is not a finite number",
+                                         "YAML reads .inf and .nan (and 1e999) as numbers: give a finite one, or "
+                                         "quote the text if that is what you meant"))
+            self.reported.add(path)
+            return None
+        return value
+
+
+# A number with an exponent as YAML 1.2 writes it (1e-9, 2E5, 1.0e308), which YAML 1.1 resolves as text.
+_EXPONENT_NUMBER = re.compile(r"[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)[eE][-+]?[0-9]+")
 
 _TOO_DEEP_HINT = "a plan nests a few levels deep; look for unclosed brackets or runaway indentation"
 
@@ -275,7 +299,7 @@ def _parse_yaml(text: str, file: str, problems: list[Problem]) -> tuple[Any, _Ya
         problems.append(Problem(where, f"invalid YAML: {msg}", "check indentation, colons and quotes"))
         return None, conv
     except yaml.YAMLError as e:
-        problems.append(Problem(file, f"invalid YAML: {e}", "check indentation, colons and quotes"))
+        problems.append(Problem(file, f"invalid YAML: {clip(str(e), 2 * ECHO_CHARS)}", "check indentation, colons and quotes"))
         return None, conv
     except RecursionError:
         problems.append(Problem(file, "the YAML is nested too deeply", _TOO_DEEP_HINT))
@@ -381,9 +405,26 @@ def _fallback_hint(err: Any) -> str:
             "required") and "null" in (sub.get("type") or []) else "")
     elif isinstance(expected, str):
         form = _FORMS.get(expected)
+    if err.validator in _BOUNDS:
+        span = _range_text(sub)
+        return f"{desc}: {span}" if desc else span
     if desc and (err.validator == "type" or form is None):
         return f"{desc}: {form}" if err.validator == "type" and form else desc
     return form or "see `wiris mission schema` for the plan format"
+
+
+_BOUNDS = ("minimum", "maximum", "exclusiveMinimum", "exclusiveMaximum")
+
+
+def _range_text(sub: dict) -> str:
+    """The range a number schema allows, in words: "from 0 to 500", "above 0 and at most 1000"."""
+    low = (f"from {sub['minimum']:g}" if "minimum" in sub else
+           f"above {sub['exclusiveMinimum']:g}" if "exclusiveMinimum" in sub else "")
+    high = (f"to {sub['maximum']:g}" if "maximum" in sub and "minimum" in sub else
+            f"at most {sub['maximum']:g}" if "maximum" in sub else
+            f"below {sub['exclusiveMaximum']:g}" if "exclusiveMaximum" in sub else "")
+    joint = " and " if low.startswith("above") and high else " "
+    return (low + joint + high).strip() or "a number"
 
 
 def _already_reported(err: Any, reported: set[tuple]) -> bool:
@@ -426,9 +467,9 @@ def _translate(err: Any, conv: _Yaml) -> list[Problem]:
         for k in inst:
             if k not in allowed:
                 if path and path[0] == "mission" and len(path) == 2:
-                    msg, h = f"unknown mission step {k!r}", _unknown_key_hint(k, STEPS)
+                    msg, h = f"unknown mission step {shown(k)}", _unknown_key_hint(k, STEPS)
                 else:
-                    msg, h = f"unknown key {k!r} in {name}", _unknown_key_hint(k, allowed)
+                    msg, h = f"unknown key {shown(k)} in {name}", _unknown_key_hint(k, allowed)
                 out.append(Problem(_at(conv, path + (k,), key=True), msg, h))
         return out
     if v == "required":
@@ -436,35 +477,31 @@ def _translate(err: Any, conv: _Yaml) -> list[Problem]:
         return [Problem(where, f"{name} needs {m!r}", _schema_at(plan_schema(), path + (m,)).get("description"))
                 for m in missing]
     if v in ("minimum", "maximum", "exclusiveMinimum", "exclusiveMaximum"):
-        rel = {"minimum": "below the minimum", "maximum": "above the maximum",
-               "exclusiveMinimum": "must be greater than", "exclusiveMaximum": "must be less than"}[v]
         if last in ("altitude_m", "alt_m"):
             low = v.startswith("min") or v == "exclusiveMinimum"
-            msg = (f"altitude {inst} m is {'below' if low else 'above'} the "
+            msg = (f"altitude {shown(inst)} m is {'below' if low else 'above'} the "
                    f"{MIN_ALTITUDE_M if low else MAX_ALTITUDE_M:g} m {'minimum' if low else 'maximum'}")
             return [Problem(where, msg, hint)]
         if path and path[-2:-1] == ("overlap",) and v == "exclusiveMaximum":
-            return [Problem(where, f"{last} overlap {inst} %: overlap must be below 100 % (at 100 % the photos "
+            return [Problem(where, f"{last} overlap {shown(inst)} %: overlap must be below 100 % (at 100 % the photos "
                             "never move on)", hint or "overlap in percent, e.g. 80")]
-        if "minimum" in v.lower() or "maximum" in v.lower():
-            sep = " of" if v in ("minimum", "maximum") else ""
-            return [Problem(where, f"{name} {inst} is {rel}{sep} {err.validator_value}", hint)]
+        return [Problem(where, _out_of_range(name, shown(inst), v, err.validator_value), hint)]
     if v == "type":
         expected = err.validator_value
         exp = " or ".join(map(_article, expected)) if isinstance(expected, list) else _article(expected)
         if expected == "object" and path and path[0] == "mission" and len(path) == 2 and isinstance(inst, str):
-            return [Problem(where, f"mission step {inst!r} needs a colon and a body",
+            return [Problem(where, f"mission step {shown(inst)} needs a colon and a body",
                             f"write `- {inst}: {{}}`" if inst in STEPS else _unknown_key_hint(inst, STEPS))]
         if expected in ("number", "integer") and isinstance(inst, str):
-            hint = _number_in_text_hint(inst) or hint
+            hint = _number_in_text_hint(inst, quoted=path in conv.quoted) or hint
         return [Problem(where, f"{name} must be {exp}, got {_describe(inst)}", hint)]
     if v == "enum":
         opts = ", ".join(str(o) for o in err.validator_value)
         close = difflib.get_close_matches(str(inst), [str(o) for o in err.validator_value], n=1)
-        return [Problem(where, f"{name}: {inst!r} is not one of {opts}",
+        return [Problem(where, f"{name}: {shown(inst)} is not one of {opts}",
                         f"did you mean {close[0]!r}?" if close else hint)]
     if v == "const":
-        return [Problem(where, f"{name} must be {err.validator_value!r}, got {inst!r}",
+        return [Problem(where, f"{name} must be {err.validator_value!r}, got {shown(inst)}",
                         "this tool reads capture-plan format version 1" if last == "version" else hint)]
     if v in ("minItems", "maxItems"):
         if last == "line":
@@ -473,7 +510,7 @@ def _translate(err: Any, conv: _Yaml) -> list[Problem]:
             return [Problem(where, "an inline area needs at least 3 [lat, lon] points", _AREA_HINT)]
         if isinstance(inst, list) and len(inst) in (2, 3) or schema.get("description", "").startswith("[lat"):
             return [Problem(where, f"{name} must be [lat, lon], got {_describe(inst)}", _LATLON_HINT)]
-        return [Problem(where, f"{name}: {err.message}")]
+        return [Problem(where, f"{name}: {clip(err.message, 2 * ECHO_CHARS)}")]
     if v == "minProperties" or v == "maxProperties":
         if path and path[0] == "mission" and len(path) == 2:
             return [Problem(where, "each mission step is one of " + ", ".join(STEPS) +
@@ -484,19 +521,28 @@ def _translate(err: Any, conv: _Yaml) -> list[Problem]:
             return [Problem(where, f"{name} must be a file path or a list of at least 3 [lat, lon] points, got "
                             f"{_describe(inst)}", _AREA_HINT)]
         if last == "angle_deg":
-            return [Problem(where, f"angle_deg must be 'auto' or a number of degrees -360..360, got {inst!r}",
+            return [Problem(where, f"angle_deg must be 'auto' or a number of degrees -360..360, got {shown(inst)}",
                             "degrees clockwise from north, e.g. angle_deg: 30 (0 = north-south lines)")]
     if v == "uniqueItems":
         return [Problem(where, f"{name} lists a name twice", "name each payload once")]
     if v == "pattern":
         if last == "name":
-            return [Problem(where, f"name {inst!r} must be a file-name-safe word (letters, digits, . _ -), at most 64",
+            return [Problem(where, f"name {shown(inst)} must be a file-name-safe word (letters, digits, . _ -), at most 64",
                             "output files are named after it")]
-        return [Problem(where, f"{name}: {inst!r} is not allowed here ({err.message})")]
+        return [Problem(where, f"{name}: {shown(inst)} is not allowed here ({clip(err.message, 2 * ECHO_CHARS)})")]
     if v == "propertyNames":
-        return [Problem(where, f"payload name {err.instance!r} must be a word (letters, digits, _ -)",
+        return [Problem(where, f"payload name {shown(err.instance)} must be a word (letters, digits, _ -)",
                         "start with a letter or _, at most 32 characters, e.g. thermal")]
-    return [Problem(where, f"{name}: {err.message}", hint)]
+    return [Problem(where, f"{name}: {clip(err.message, 2 * ECHO_CHARS)}", hint)]
+
+
+def _out_of_range(name: str, value: str, bound: str, limit: float) -> str:
+    """The message of a value beyond a schema bound (minimum, maximum, exclusiveMinimum, exclusiveMaximum)."""
+    if bound == "minimum":
+        return f"{name} {value} is below the minimum of {limit:g}"
+    if bound == "maximum":
+        return f"{name} {value} is above the maximum of {limit:g}"
+    return f"{name} must be {'greater' if bound == 'exclusiveMinimum' else 'less'} than {limit:g}, got {value}"
 
 
 def _article(t: str) -> str:
@@ -504,16 +550,14 @@ def _article(t: str) -> str:
             "string": "text", "boolean": "true or false", "null": "nothing"}.get(t, t)
 
 
-def _number_in_text_hint(text: str) -> str | None:
+def _number_in_text_hint(text: str, quoted: bool) -> str | None:
     """For a number written as text: '40' (quoted) or '40 m' / '40m' (with a unit)."""
-    import re
-
     m = re.fullmatch(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\d\s].*)?", text)
     if m is None:
         return None
     if m.group(2):
-        return f"write the number alone ({m.group(1)}): the unit is fixed by the key's name"
-    return f"remove the quotes: {m.group(1)}"
+        return f"write the number alone ({clip(m.group(1))}): the unit is fixed by the key's name"
+    return f"remove the quotes: {clip(m.group(1))}" if quoted else None
 
 
 def _describe(v: Any) -> str:
@@ -525,9 +569,7 @@ def _describe(v: Any) -> str:
         return "a mapping"
     if isinstance(v, list):
         return f"a list of {len(v)}"
-    if isinstance(v, str):
-        return repr(v) if len(v) < 40 else repr(v[:37] + "...")
-    return repr(v)
+    return shown(v)
 
 
 # ----------------------------------------------------------------------------------------- meaning pass
@@ -537,12 +579,15 @@ def _num(v: Any) -> bool:
 
 
 def _is_file(p: Path) -> tuple[bool, str]:
-    """Whether p is a readable-looking file, and if not, why in a few words. Path.is_file() raises for a
-    name the system refuses (longer than NAME_MAX, a NUL byte) instead of answering False."""
+    """Whether p is a regular file, and if not, why in a few words. Path.is_file() raises for a name the
+    system refuses (longer than NAME_MAX, a NUL byte) instead of answering False."""
     try:
-        return (True, "") if p.is_file() else (False, "not found")
+        other = not_a_file(p.stat().st_mode)
+    except FileNotFoundError:
+        return False, "not found"
     except (OSError, ValueError) as e:
         return False, f"cannot be looked up ({getattr(e, 'strerror', None) or e})"
+    return (False, f"{other}, not a file") if other else (True, "")
 
 
 def _check_settings(camera: Any, settings: Any, path: tuple, conv: _Yaml, problems: list[Problem],
@@ -559,7 +604,7 @@ def _check_settings(camera: Any, settings: Any, path: tuple, conv: _Yaml, proble
             keys = [x.key for x in camera.settings]
             close = difflib.get_close_matches(key, keys, n=1)
             problems.append(Problem(_at(conv, path + (key,), key=True),
-                                    f"{camera.id} has no setting {key!r}",
+                                    f"{camera.id} has no setting {shown(key)}",
                                     (f"did you mean {close[0]!r}? " if close else "") + "settings: " + ", ".join(keys)))
             continue
         try:
@@ -619,7 +664,7 @@ def _meaning(data: dict, conv: _Yaml, problems: list[Problem], base_dir: Path) -
         imager = p.get("imager")
         if isinstance(imager, str) and cam.imager(imager) is None:
             problems.append(Problem(_at(conv, ("payloads", name, "imager")),
-                                    f"{cam.id} has no imager {imager!r}",
+                                    f"{cam.id} has no imager {shown(imager)}",
                                     "imagers: " + ", ".join(i.id for i in cam.imagers)))
         cid = p.get("component_id")
         if isinstance(cid, int) and not isinstance(cid, bool) and cid not in cam.component_ids:
@@ -696,7 +741,7 @@ def _meaning(data: dict, conv: _Yaml, problems: list[Problem], base_dir: Path) -
         def payload_ref(ref: Any, path: tuple) -> None:
             if isinstance(ref, str) and ref not in payloads:
                 close = difflib.get_close_matches(ref, defined, n=1)
-                problems.append(Problem(_at(conv, path), f"unknown payload {ref!r}",
+                problems.append(Problem(_at(conv, path), f"unknown payload {shown(ref)}",
                                         (f"did you mean {close[0]!r}? " if close else "")
                                         + f"payloads defined: {', '.join(defined) or 'none'}"))
 
@@ -737,7 +782,7 @@ def _meaning(data: dict, conv: _Yaml, problems: list[Problem], base_dir: Path) -
                     found, why = _is_file(p)
                     if not found:
                         at = base + ("area",) if j == 0 else base + ("exclude", j - 1)
-                        problems.append(Problem(_at(conv, at), f"area file {src!r} {why} (looked at {p})",
+                        problems.append(Problem(_at(conv, at), f"area file {shown(src)} {why} (looked at {clip(str(p), 2 * ECHO_CHARS)})",
                                                 "paths in a plan are relative to the plan file"))
         elif kind == "waypoint":
             payload_ref(body.get("capture"), base + ("capture",))
@@ -897,21 +942,20 @@ def input_files(plan: Plan) -> tuple[str, ...]:
     return tuple(dict.fromkeys(files))
 
 
+PLAN_FILE = UserFile("plan", MAX_PLAN_BYTES, PlanError, stdin_ok=True,
+                     hint="check the path and that you may read the file",
+                     size_hint="put large areas in KML/GeoJSON files next to the plan")
+
+
 def load_plan(path: str | Path) -> Plan:
-    """Read and parse a plan file (size-capped, UTF-8)."""
-    p = Path(path)
-    try:
-        size = p.stat().st_size
-        if size > MAX_PLAN_BYTES:
-            raise PlanError(f"the plan is {size} bytes, more than {MAX_PLAN_BYTES}", where=str(p),
-                            hint="put large areas in KML/GeoJSON files next to the plan")
-        raw = p.read_bytes()
-    except OSError as e:
-        raise PlanError(f"cannot read the plan: {e.strerror}", where=str(p),
-                        hint="check the path and that you may read the file") from None
+    """Read and parse a plan file (size-capped, UTF-8); "-" or /dev/stdin reads standard input, whose
+    relative area paths are then relative to the current directory."""
+    raw = read_user_file(path, PLAN_FILE)
+    stdin = names_stdin(path, PLAN_FILE)
+    name = STDIN_LABEL if stdin else str(path)
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as e:
-        raise PlanError(f"the plan is not UTF-8 text (byte {e.start})", where=str(p),
+        raise PlanError(f"the plan is not UTF-8 text (byte {e.start})", where=name,
                         hint="save the plan as UTF-8 (the default of every current editor)") from None
-    return parse_plan(text, str(p), p.resolve().parent)
+    return parse_plan(text, name, Path.cwd() if stdin else Path(path).resolve().parent)

@@ -26,7 +26,12 @@ MAX_ALTITUDE_M = 500.0
 # Most of the world's drone rules (EU 2019/947 open category, FAA part 107) cap flights at 120 m / 400 ft above
 # ground without a permit: above it the compiler and the report warn, they do not refuse.
 MAX_AGL_M = 120.0
-MAX_SPEED_MPS = 50.0
+# Plausible survey speeds per airframe, m/s, as (lowest, highest). A copter slower than 0.5 m/s hardly moves
+# (1e-9 m/s would be a flight of days); ArduCopter's WPNAV_SPEED and PX4's MPC_XY_VEL_MAX stop at 20 m/s
+# and the fastest survey copters fly about 23. A plane, and a VTOL (which flies the mission in fixed-wing
+# flight), below 8 m/s is under ArduPlane's default minimum airspeed (9 m/s), near stall for small survey
+# planes; above 40 m/s is beyond their cruise.
+SPEED_RANGE_MPS = {"copter": (0.5, 25.0), "plane": (8.0, 40.0), "vtol": (8.0, 40.0)}
 COMPONENT_IDS = (100, 101, 102, 103, 104, 105)   # MAV_COMP_ID_CAMERA..CAMERA6 (common.xml)
 
 _LAT, _LON = "latitude, WGS84 degrees", "longitude, WGS84 degrees"
@@ -103,7 +108,8 @@ STEPS: dict[str, dict] = {
     }, required=("area", "payloads", "overlap"), desc="area survey (exactly one of altitude_m and gsd_cm)"),
     "corridor": _obj({
         "line": {"type": "array", "minItems": 2, "items": LATLON, "description": "centre line, [lat, lon] points"},
-        "width_m": _num(exclusive_min=0, maximum=5000, desc="corridor width, metres"),
+        "width_m": _num(1, 5000, desc="corridor width, metres",
+                        hint="the width of the strip photographed along the line, 1 to 5000 m"),
         "payloads": PAYLOAD_LIST,
         "altitude_m": ALTITUDE,
         "gsd_cm": GSD,
@@ -136,6 +142,17 @@ PAYLOAD = _obj({
 }, required=("camera",), desc="a camera on board (camera ids: `wiris cdf models`)")
 
 
+_FRAME_NAMES = {"copter": "copter", "plane": "plane", "vtol": "VTOL"}
+_SPEEDS_TEXT = ", ".join(f"{lo:g} to {hi:g} for a {_FRAME_NAMES[f]}" for f, (lo, hi) in SPEED_RANGE_MPS.items())
+
+
+def _speed_ranges() -> list[dict]:
+    """speed_mps's range for each frame, as JSON Schema if/then (editors check it while typing)."""
+    return [{"if": {"properties": {"frame": {"const": frame}}, "required": ["frame"]},
+             "then": {"properties": {"speed_mps": _num(lo, hi, hint=f"a {_FRAME_NAMES[frame]} surveys at {lo:g} to {hi:g} m/s")}}}
+            for frame, (lo, hi) in SPEED_RANGE_MPS.items()]
+
+
 def _build() -> dict:
     return {
         "$schema": "https://json-schema.org/draft/2020-12/schema",
@@ -151,10 +168,10 @@ def _build() -> dict:
             "vehicle": _obj({
                 "firmware": {"enum": ["ardupilot", "px4"], "description": "autopilot firmware: ardupilot or px4"},
                 "frame": {"enum": ["copter", "plane", "vtol"], "description": "airframe: copter, plane or vtol"},
-                "speed_mps": _num(exclusive_min=0, maximum=MAX_SPEED_MPS, desc="ground speed while surveying"),
+                "speed_mps": _num(desc="ground speed while surveying, m/s: " + _SPEEDS_TEXT),
                 "max_mission_items": _num(10, 65535, integer=True,
                                           desc="item limit of the vehicle (default per firmware)"),
-            }, required=("firmware", "frame", "speed_mps"), desc="the aircraft"),
+            }, required=("firmware", "frame", "speed_mps"), desc="the aircraft") | {"allOf": _speed_ranges()},
             "home": _obj({"lat": _num(-90, 90, desc=_LAT), "lon": _num(-180, 180, desc=_LON),
                           "alt_amsl_m": _num(-500, 9000, desc="home altitude above mean sea level")},
                          required=("lat", "lon", "alt_amsl_m"), desc="the take-off point"),

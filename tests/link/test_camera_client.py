@@ -295,9 +295,9 @@ BAD_SETUP_FILES = {
     "unknown-field": (_steps(_message(fields={"shutter": 60})), ": step 1", "no field 'shutter'", "shutter_speed"),
     "unknown-message": (_steps(_message(message="DIGICAM_CONTROL")), ": step 1", "cannot send message",
                         "DIGICAM_CONFIGURE"),
-    "too-large": (b" " * (1024 * 1024) + b"{}", "", "larger than 1048576 bytes", "wiris mission compile"),
-    "missing": (None, "", "cannot read: No such file or directory", "check the path"),
-    "a-directory": ("directory", "", "cannot read", "check the path"),
+    "too-large": (b" " * (1024 * 1024) + b"{}", "", "larger than 1 MiB (1048576 bytes)", "wiris mission compile"),
+    "missing": (None, "", "cannot read the setup file: no such file", "check the path"),
+    "a-directory": ("directory", "", "is a directory, not a file", "check the path"),
 }
 
 

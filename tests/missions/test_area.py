@@ -109,7 +109,7 @@ def test_geojson_in_a_projected_crs(name: str) -> None:
 
 
 def test_kml_with_doctype_is_refused_and_entity_not_expanded() -> None:
-    with pytest.raises(PlanError, match="DOCTYPE"):
+    with pytest.raises(PlanError, match="DTD or entities is refused"):
         load_area(DATA / "doctype_entity.kml")
 
 
@@ -133,17 +133,20 @@ def test_missing_and_unknown_files(tmp_path: Path) -> None:
     with pytest.raises(PlanError, match="unknown area file type"):
         load_area(tmp_path / "a.shp")
     (tmp_path / "dir.geojson").mkdir()  # passes stat(), fails to read
-    with pytest.raises(PlanError, match="cannot read area file: Is a directory"):
+    with pytest.raises(PlanError, match="is a directory, not a file"):
         load_area(tmp_path / "dir.geojson")
 
 
 def test_oversized_file_is_refused(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import dataclasses
+
     import missions.geometry.area as area_mod
-    monkeypatch.setattr(area_mod, "MAX_AREA_FILE_BYTES", 100)
+    monkeypatch.setattr(area_mod, "AREA_FILE", dataclasses.replace(area_mod.AREA_FILE, cap=100))
     big = tmp_path / "big.geojson"
     big.write_text(" " * 200 + "{}")
-    with pytest.raises(PlanError, match="limit"):
+    with pytest.raises(PlanError, match="area file is larger than 100 bytes") as e:
         load_area(big)
+    assert "simplify" in e.value.hint
 
 
 def test_swapped_inline_coordinates_get_a_hint() -> None:
@@ -162,9 +165,44 @@ def test_hole_outside_the_outer_ring(tmp_path: Path) -> None:
     f = tmp_path / "h.geojson"
     f.write_text('{"type": "Polygon", "coordinates": [[[14.5, 50.1], [14.501, 50.1], [14.501, 50.101], [14.5, 50.1]],'
                  ' [[14.6, 50.1], [14.601, 50.1], [14.601, 50.101], [14.6, 50.1]]]}')
-    with pytest.raises(PlanError, match="invalid") as e:
+    with pytest.raises(PlanError) as e:
         load_area(f)
-    assert "holes must lie inside" in e.value.hint
+    # named by the hole and placed in lat/lon (not in the local metres of the projection)
+    assert e.value.message == ("hole 0 is not inside the polygon's outer boundary (it reaches out near lat "
+                               "50.1000000, lon 14.6000000)")
+    assert e.value.where == f"{f}: $.coordinates[1]" and "must lie within it" in e.value.hint
+
+
+def test_holes_that_touch_are_placed_in_lat_lon(tmp_path: Path) -> None:
+    f = tmp_path / "h.geojson"
+    f.write_text('{"type": "Polygon", "coordinates": [[[14.5, 50.1], [14.506, 50.1], [14.506, 50.104], [14.5, 50.104]],'
+                 ' [[14.501, 50.101], [14.503, 50.101], [14.503, 50.103], [14.501, 50.103]],'
+                 ' [[14.502, 50.102], [14.505, 50.102], [14.505, 50.1035], [14.502, 50.1035]]]}')
+    with pytest.raises(PlanError) as e:
+        load_area(f)
+    assert e.value.message == "polygon is invalid: Self-intersection near lat 50.1020000, lon 14.5030000"
+
+
+def test_a_five_megabyte_coordinate_token_is_not_echoed_whole(tmp_path: Path) -> None:
+    f = tmp_path / "big.kml"
+    f.write_text(_kml_ring("14.5,50.1 14.6,50.1 " + "7" * 5_000_000))
+    with pytest.raises(PlanError) as e:
+        load_area(f)
+    assert e.value.message == f"bad KML coordinate '{'7' * 59}… (5000002 characters); expected lon,lat[,alt]"
+
+
+def test_an_entity_bomb_kml_is_refused_as_one(tmp_path: Path) -> None:
+    ring = "<coordinates>&l9;</coordinates>"
+    entities = '<!ENTITY l0 "lol">' + "".join(f'<!ENTITY l{i} "{f"&l{i - 1};" * 10}">' for i in range(1, 10))
+    bombs = {"laughs": f'<?xml version="1.0"?><!DOCTYPE kml [{entities}]><kml>{ring}</kml>',
+             "loop": '<?xml version="1.0"?><!DOCTYPE kml [<!ENTITY a "&b;"><!ENTITY b "&a;">]><kml>&a;</kml>'}
+    for name, text in bombs.items():
+        f = tmp_path / f"{name}.kml"
+        f.write_text(text)
+        with pytest.raises(PlanError) as e:
+            load_area(f)
+        assert e.value.message == "KML with a DTD or entities is refused (entity expansion)", name
+        assert "remove the <!DOCTYPE" in e.value.hint
 
 
 # ------------------------------------------------------------------------------------ fuzzed inputs
@@ -288,7 +326,24 @@ BAD_AREA_FILES = [
     ("metres.kml", _kml_ring("458000,5550000 458500,5550000 458500,5550400"), "not lon,lat in degrees",
      "longitude first"),
     ("doctype.kml", '<?xml version="1.0"?>\n<!DOCTYPE kml>\n' + _kml_ring("14.5,50.1 14.6,50.1 14.6,50.2"),
-     "DOCTYPE", "remove the <!DOCTYPE"),
+     "DTD or entities is refused", "remove the <!DOCTYPE"),
+    ("undefined_entity.kml", _kml_ring("14.5,50.1 14.6,50.1 &nope;"), "Entity 'nope' not defined", "&amp;"),
+    ("inf.kml", _kml_ring("14.5,50.1 14.6,50.1 14.6,1e999"), "holds a number that is not finite", "14.7263,50.0696"),
+    ("geometries_number.geojson", '{"type": "GeometryCollection", "geometries": 5}',
+     "GeometryCollection without a 'geometries' list", '"geometries": [...]'),
+    ("geometries_object.geojson", '{"type": "GeometryCollection", "geometries": {"type": "Polygon"}}',
+     "GeometryCollection without a 'geometries' list", "RFC 7946"),
+    ("huge_integer.geojson", '{"type": "Polygon", "coordinates": [[[1' + "0" * 5000 + ', 50.1], [14.6, 50.1], '
+                             '[14.6, 50.2]]]}', r"position \[inf, 50.1\] holds a number that is not finite", "[lon, lat]"),
+    ("long_integer.geojson", '{"type": "Polygon", "coordinates": [[[14.5, 50.1], [14.6, 1' + "0" * 400 + '], '
+                             '[14.6, 50.2]]]}', "not finite", "GeoJSON order"),
+    ("null_ring.geojson", '{"type": "Polygon", "coordinates": [null]}', "a ring must be a list", "three levels"),
+    ("null_position.geojson", '{"type": "Polygon", "coordinates": [[null, null, null]]}', "position must be",
+     "[lon, lat]"),
+    ("too_deep_position.geojson", '{"type": "Polygon", "coordinates": [[[[14.5, 50.1]], [14.6, 50.1], '
+                                  '[14.6, 50.2]]]}', "position must be", "[lon, lat]"),
+    ("multi_nulls.geojson", '{"type": "MultiPolygon", "coordinates": [null, [null]]}', "Polygon without rings",
+     "outer one first"),
     ("two_points.kml", _kml_ring("14.500,50.100 14.505,50.100 14.500,50.100"), "fewer than 3 distinct points",
      "3 corners"),
     ("area.kmz", b"PK\x03\x04", "KMZ", "doc.kml"),

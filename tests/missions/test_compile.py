@@ -45,6 +45,20 @@ BASE = {
 }
 
 
+# a survey speed within each frame's plausible range (missions.plan.schema.SPEED_RANGE_MPS)
+SPEED_MPS = {"copter": 5, "plane": 12, "vtol": 12}
+
+
+def flown_by(frame: str):
+    """The change that makes BASE a plan for `frame`: its speed, and for a fixed wing a front overlap that
+    keeps the photos the camera's 1 s apart at that speed."""
+    def change(doc):
+        doc["vehicle"].update(frame=frame, speed_mps=SPEED_MPS[frame])
+        if frame != "copter":
+            survey(doc)["overlap"]["front"] = 50
+    return change
+
+
 def build(tmp_path: Path, changes=None, firmware=None):
     doc = copy.deepcopy(BASE)
     if changes:
@@ -283,7 +297,7 @@ def test_a_high_waypoint_is_warned_about_once(tmp_path):
 @pytest.mark.parametrize("frame,first,p1", [("plane", "NAV_TAKEOFF", 15.0), ("vtol", "NAV_VTOL_TAKEOFF", 0.0),
                                             ("copter", "NAV_TAKEOFF", 0.0)])
 def test_takeoff_per_frame(tmp_path, frame, first, p1):
-    c = build(tmp_path, lambda d: d["vehicle"].update(frame=frame))
+    c = build(tmp_path, flown_by(frame))
     assert names(c.items)[0] == first and c.items[0].param1 == p1 and c.items[0].z == 30
 
 
@@ -292,11 +306,11 @@ def test_takeoff_per_frame(tmp_path, frame, first, p1):
 def test_speed_type_per_firmware_and_frame(tmp_path, frame, fw):
     """ArduPlane reads a ground-speed DO_CHANGE_SPEED as its minimum ground speed (Plane::do_change_speed:
     `case 1: aparm.min_gndspeed_cm.set(...)`), so a plane's or VTOL's speed is sent as airspeed there."""
-    c = build(tmp_path, lambda d: d["vehicle"].update(frame=frame), firmware=fw)
+    c = build(tmp_path, flown_by(frame), firmware=fw)
     speeds = [it for it in c.items if it.command == m.MAV_CMD_DO_CHANGE_SPEED]
     air = fw == "ardupilot" and frame != "copter"
-    assert speeds and all(it.param1 == (m.SPEED_TYPE_AIRSPEED if air else m.SPEED_TYPE_GROUNDSPEED) and it.param2 == 5
-                          for it in speeds)
+    assert speeds and all(it.param1 == (m.SPEED_TYPE_AIRSPEED if air else m.SPEED_TYPE_GROUNDSPEED)
+                          and it.param2 == SPEED_MPS[frame] for it in speeds)
     assert any(w.code == "speed_is_airspeed" for w in c.warnings) == air
 
 
@@ -305,7 +319,7 @@ def test_plane_landing_needs_a_glide_slope(tmp_path, fw):
     """A fixed-wing NAV_LAND straight under the last waypoint: PX4 refuses the mission (FW_LND_ANG, 5° by
     default) and ArduPlane would dive; an approach of 40 m over 460 m (5°) or more is accepted."""
     def under(doc):
-        doc["vehicle"]["frame"] = "plane"
+        flown_by("plane")(doc)
         doc["mission"][-1] = {"land": {}}
     with pytest.raises(PlanError) as ei:
         build(tmp_path, under, firmware=fw)

@@ -34,11 +34,12 @@ CAMERA_CHANGES = [{"layout": "blended", "blend_opacity": 40}, {"palette": 2}, {"
 
 @st.composite
 def plans(draw):
+    frame = draw(st.sampled_from(["copter", "plane", "vtol"]))
     doc = {
         "version": 1, "name": "prop",
-        "vehicle": {"firmware": draw(st.sampled_from(["ardupilot", "px4"])),
-                    "frame": draw(st.sampled_from(["copter", "plane", "vtol"])),
-                    "speed_mps": draw(st.floats(1, 12)),
+        "vehicle": {"firmware": draw(st.sampled_from(["ardupilot", "px4"])), "frame": frame,
+                    # within the frame's plausible range (missions.plan.schema.SPEED_RANGE_MPS)
+                    "speed_mps": draw(st.floats(1, 12) if frame == "copter" else st.floats(8, 16)),
                     "max_mission_items": draw(st.sampled_from([None, 30, 80, 500]))},
         "home": {"lat": 50.1098, "lon": 14.5002, "alt_amsl_m": 262},
         "payloads": {"thermal": {"camera": draw(st.sampled_from(["wiris-pro", "wiris-security"])),

@@ -305,3 +305,98 @@ def test_hover_refused_for_fixed_wing_flight(tmp_path, frame, needle):
                                                                       "overlap: {front: 80, side: 70}\n      trigger: hover")
     p = one(text, tmp_path, needle)
     assert "trigger: distance" in p.hint
+
+
+# ------------------------------------------------------------------ physical ranges, numbers, echoed values
+
+@pytest.mark.parametrize("frame,speed,message", [
+    ("copter", "1e-9", "vehicle.speed_mps 1e-09 is below the minimum of 0.5"),     # YAML 1.2 reads it as a number
+    ("copter", "1.0e-9", "vehicle.speed_mps 1e-09 is below the minimum of 0.5"),
+    ("copter", "0", "vehicle.speed_mps 0 is below the minimum of 0.5"),
+    ("copter", "30", "vehicle.speed_mps 30 is above the maximum of 25"),
+    ("copter", "1e308", "vehicle.speed_mps 1e+308 is above the maximum of 25"),
+    ("plane", "5", "vehicle.speed_mps 5 is below the minimum of 8"),
+    ("vtol", "41", "vehicle.speed_mps 41 is above the maximum of 40"),
+])
+def test_speed_has_a_plausible_range_per_frame(tmp_path, frame, speed, message):
+    from missions.plan.schema import SPEED_RANGE_MPS
+
+    probs = problems_of(BASE.replace("frame: copter, speed_mps: 5", f"frame: {frame}, speed_mps: {speed}"), tmp_path)
+    assert [p.message for p in probs] == [message]
+    lo, hi = SPEED_RANGE_MPS[frame]
+    assert probs[0].hint == f"a {'VTOL' if frame == 'vtol' else frame} surveys at {lo:g} to {hi:g} m/s"
+
+
+def test_speeds_in_range_load_for_each_frame(tmp_path):
+    for frame, speed in (("copter", 0.5), ("copter", 25), ("plane", 30), ("vtol", 8)):
+        text = BASE.replace("frame: copter, speed_mps: 5", f"frame: {frame}, speed_mps: {speed}")
+        assert parse_plan(text, "p.yaml", tmp_path).vehicle.speed_mps == speed
+
+
+def test_the_schema_carries_the_speed_ranges_editors_check():
+    import jsonschema
+
+    from missions.plan.schema import SPEED_RANGE_MPS
+
+    validator = jsonschema.Draft202012Validator(plan_schema()["properties"]["vehicle"])
+    for frame, (lo, hi) in SPEED_RANGE_MPS.items():
+        for speed, ok in ((lo, True), (hi, True), (lo * 0.99, False), (hi * 1.01, False)):
+            v = {"firmware": "px4", "frame": frame, "speed_mps": speed}
+            assert validator.is_valid(v) is ok, (frame, speed)
+
+
+def test_a_bound_that_excludes_its_limit_reads_as_english(tmp_path):
+    p = one(BASE.replace("lens_mm: 13", "lens_mm: 0"), tmp_path, "lens_mm")
+    assert p.message == "payloads.thermal.lens_mm must be greater than 0, got 0"
+    assert "focal length" in p.hint and "above 0 and at most 1000" in p.hint     # the range, not "write a number"
+    p = one(BASE.replace("  - rtl: {}", "  - corridor: {line: [[50.11, 14.50], [50.12, 14.52]], width_m: 0.2, "
+                                        "payloads: [thermal], altitude_m: 50, overlap: {front: 80, side: 60}}\n"
+                                        "  - rtl: {}"), tmp_path, "width_m")
+    assert p.message == "mission[2].corridor.width_m 0.2 is below the minimum of 1" and "1 to 5000 m" in p.hint
+
+
+@pytest.mark.parametrize("written,quoted", [('"40"', True), ("'40'", True), ("1e308x", False), ("forty", False)])
+def test_remove_the_quotes_only_where_there_are_quotes(tmp_path, written, quoted):
+    p = one(BASE.replace("altitude_m: 40", f"altitude_m: {written}"), tmp_path, "must be a number")
+    assert p.hint.startswith("remove the quotes") is quoted, p.hint
+
+
+def test_a_number_too_long_to_read_is_one_short_problem(tmp_path):
+    probs = problems_of(BASE.replace("altitude_m: 40", "altitude_m: " + "9" * 5000), tmp_path)
+    assert [p.message for p in probs] == ["a number of 5000 characters is too long to read"]
+    assert "99999" not in probs[0].hint and len(probs[0].message) + len(probs[0].hint) < 200
+    assert line_col(probs[0].where) == (16, 19)
+
+
+def test_an_infinite_exponent_is_not_a_finite_number(tmp_path):
+    one(BASE.replace("altitude_m: 40", "altitude_m: 1e999"), tmp_path, "'1e999' is not a finite number")
+
+
+@pytest.mark.parametrize("edit", [("name: t", "name: " + "n" * 5000), ("layout: fullscreen", "layout: " + "l" * 5000),
+                                  ("  - rtl: {}", "  - " + "s" * 1000 + ": {}"),
+                                  ("firmware: ardupilot", "firmware: " + "f" * 5000),
+                                  ("overlap: {front: 80,", "overlap: {" + "k" * 1000 + ": 1, front: 80,"),
+                                  ("payloads: [thermal]", "payloads: [" + "p" * 5000 + "]"),
+                                  ("altitude_m: 40", "altitude_m: " + "9" * 4000)])
+def test_echoed_values_are_cut(tmp_path, edit):
+    probs = problems_of(BASE.replace(*edit), tmp_path)
+    for p in probs:
+        assert len(p.message) < 250 and len(p.hint or "") < 400, p
+    assert any(" characters)" in p.message or "digits" in p.message for p in probs), probs
+
+
+def test_a_directory_named_as_an_area_is_a_directory(tmp_path):
+    (tmp_path / "areas").mkdir()
+    (tmp_path / "areas" / "field.geojson").mkdir()
+    text = BASE.replace("area: [[50.1100, 14.5000], [50.1100, 14.5030], [50.1120, 14.5030], [50.1120, 14.5000]]",
+                        "area: areas/field.geojson")
+    p = one(text, tmp_path, "area file 'areas/field.geojson' is a directory, not a file")
+    assert "relative to the plan file" in p.hint
+
+
+def test_a_plan_that_is_a_device_or_a_directory_is_refused(tmp_path):
+    with pytest.raises(PlanError) as err:
+        load_plan("/dev/zero")
+    assert err.value.message == "is a character device, not a file" and "give -" in err.value.hint
+    with pytest.raises(PlanError, match="is a directory, not a file"):
+        load_plan(tmp_path)

@@ -121,3 +121,89 @@ def test_example_with_one_part_replaced_or_removed(where, value):
             assert p.hint, p
         return
     assert isinstance(result, Plan)
+
+
+# ------------------------------------------------------------------------------------------------ area files
+# Property: any GeoJSON or KML area file yields an Area or a PlanError naming the file, with a hint — never
+# another exception ("internal error" at the CLI). The documents are GeoJSON- and KML-shaped, with every member
+# free to hold any JSON value (`"geometries": 5`), positions of any depth, and numbers of any length.
+
+import json  # noqa: E402
+import tempfile  # noqa: E402
+
+from missions.geometry.area import Area, load_area  # noqa: E402
+
+GEOJSON_TYPES = ["Polygon", "MultiPolygon", "Feature", "FeatureCollection", "GeometryCollection", "Point",
+                 "LineString", "polygon", ""]
+MEMBERS = ["type", "coordinates", "geometries", "features", "geometry", "crs", "properties", "bbox"]
+
+numbers = st.one_of(st.floats(-200, 200), st.integers(-200, 200), st.sampled_from([1e308, -1e308, 0, 90, 180]),
+                    st.integers(1, 5000).map(lambda n: _BigNumber("9" * n)))
+positions = st.lists(numbers, min_size=0, max_size=4)
+rings = st.lists(positions, min_size=0, max_size=6)
+json_values = st.recursive(st.none() | st.booleans() | numbers | st.text(max_size=6) | st.sampled_from(GEOJSON_TYPES),
+                           lambda kids: st.lists(kids, max_size=4) | st.dictionaries(st.sampled_from(MEMBERS), kids,
+                                                                                     max_size=4), max_leaves=20)
+
+
+class _BigNumber(str):
+    """A number literal written as digits into the JSON text (json.dumps cannot write an int of 5000 digits
+    without Python refusing to convert it)."""
+
+
+def _geojson_objects(depth: int):
+    inner = (st.deferred(lambda: _geojson_objects(depth - 1)) if depth > 0 else json_values)
+    member_values = st.one_of(json_values, rings, st.lists(rings, max_size=3), st.lists(st.lists(rings, max_size=2),
+                                                                                           max_size=2),
+                              st.lists(inner, max_size=3), inner)
+    return st.builds(lambda kind, members: {"type": kind, **members}, st.sampled_from(GEOJSON_TYPES),
+                     st.dictionaries(st.sampled_from(MEMBERS[1:]), member_values, max_size=4))
+
+
+def _dumps(value) -> str:
+    if isinstance(value, _BigNumber):
+        return str(value)
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{json.dumps(k)}: {_dumps(v)}" for k, v in value.items()) + "}"
+    if isinstance(value, list):
+        return "[" + ", ".join(_dumps(v) for v in value) + "]"
+    return json.dumps(value)
+
+
+def check_area(name: str, content: str) -> None:
+    with tempfile.TemporaryDirectory() as d:
+        path = Path(d) / name
+        path.write_text(content, encoding="utf-8")
+        try:
+            result = load_area(path)
+        except PlanError as e:
+            assert "internal" not in e.message, e.message
+            assert e.where and str(path) in e.where, e
+            assert e.hint, e
+            assert len(e.message) < 400, e.message       # echoed values are cut, whatever the input's size
+            return
+    assert isinstance(result, Area)
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(_geojson_objects(2))
+def test_any_geojson_area_file(doc):
+    check_area("area.geojson", _dumps(doc))
+
+
+KML_TOKENS = st.one_of(st.builds(lambda a, b: f"{a},{b}", numbers.map(str), numbers.map(str)),
+                       st.sampled_from(["14.5,50.1", "14.6,50.1,0", "14.6,50.2", "x", ",", "1e999,1", "nan,nan",
+                                        "&amp;", "&lt;", " "]),
+                       st.text(alphabet="0123456789.,-e ", max_size=12))
+KML_ELEMENTS = ["Placemark", "Polygon", "MultiGeometry", "outerBoundaryIs", "innerBoundaryIs", "LinearRing",
+                "coordinates", "Document", "Folder"]
+kml_trees = st.recursive(st.lists(KML_TOKENS, max_size=6).map(" ".join),
+                         lambda kids: st.builds(lambda tag, body: f"<{tag}>{''.join(body)}</{tag}>",
+                                                st.sampled_from(KML_ELEMENTS), st.lists(kids, max_size=3)),
+                         max_leaves=15)
+
+
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(kml_trees)
+def test_any_kml_area_file(body):
+    check_area("area.kml", f'<kml xmlns="http://www.opengis.net/kml/2.2">{body}</kml>')
