@@ -3,11 +3,13 @@
     compiled = compile_plan("plan.yaml")                 # the plan's firmware
     compiled = compile_plan(plan, firmware="px4")        # a loaded Plan, another firmware
 
-Pipeline: load (schema, locations) -> per step: area -> survey/corridor geometry (missions.geometry.survey,
+Pipeline, as `compile_plan` reads: load (schema, locations) -> the payloads' cameras and optics -> per step, the
+function `_STEPS` names for its type: a survey or corridor goes area -> geometry (missions.geometry.survey,
 missions.geometry.corridor) -> items (missions.emit.emitter, firmware × camera) -> firmware check
-(missions.emit.firmware) -> item limit / parts -> setup sequence (missions.emit.setup) -> Lua bridge (missions.emit.lua) -> autopilot params
-(missions.emit.params) -> warnings. Pure: no sockets, no files written; errors are PlanError with the plan's
-file:line:col.
+(missions.emit.firmware) -> item limit / parts -> setup sequence (missions.emit.setup) -> Lua bridge
+(missions.emit.lua) -> autopilot params (missions.emit.params) -> warnings. What the steps add up as they go
+(warnings, areas, altitudes, what the RedEdges fly) is one `_State`, local to the compile. Pure: no sockets, no
+files written; errors are PlanError with the plan's file:line:col.
 
 Warnings are `PlanWarning(code, message)` values. Codes: altitude_above_120m, assumed_optics, trigger_interval_near_min,
 area_smaller_than_footprint (and the survey planner's own codes), no_takeoff, component_id_chosen,
@@ -16,22 +18,126 @@ no_optics, mission_split, px4_single_capture_all.
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 import math
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, Callable, NamedTuple
 
-from missions.compiled import AreaInfo, Compiled, PayloadInfo, PlanWarning
-from missions.emit.emitter import Emitter, Track, TrackPoint, HOVER_HOLD_S
+from missions.compiled import AreaInfo, Compiled, PayloadInfo, PlanWarning, SetupStep
+from missions.emit.emitter import Emitted, Emitter, Track, TrackPoint, HOVER_HOLD_S
+from missions.emit.firmware import FirmwareProfile, check_items, profile, split_parts
+from missions.emit.items import MissionItem
 from missions.errors import PlanError
-from missions.emit.firmware import check_items, profile, split_parts
+from missions.geometry import optics
+from missions.geometry.footprint import Footprint
 from missions.plan.load import (CameraStep, CorridorStep, LandStep, Plan, RtlStep, SurveyStep, TakeoffStep,
                                 WaypointStep, input_files, load_plan)
 from missions.plan.schema import MAX_AGL_M, MAX_ALTITUDE_M, MIN_ALTITUDE_M
-from missions.geometry import optics
+
+if TYPE_CHECKING:   # shapely and pyproj load only when a plan has an area
+    from missions.emit.params import Param
+    from missions.emit.setup import RedEdgeSurvey
+    from missions.geometry.area import Area
+    from missions.geometry.corridor import CorridorPlan
+    from missions.geometry.survey import SurveyPlan
 
 NEAR_MIN_INTERVAL = 1.2      # warn when photos come less than 20 % slower than the camera's minimum
 TURNAROUND_DEFAULT_M = {"copter": 10.0, "plane": 30.0, "vtol": 30.0}   # QGC's defaults (survey-planners §1.4)
 
+
+# ------------------------------------------------------------------------------------------------ values
+
+class _Altitude(NamedTuple):
+    """An altitude the mission flies at, and where the plan sets it."""
+
+    altitude_m: float
+    where: str
+
+
+class _RedEdgeFlight(NamedTuple):
+    """A survey or corridor a RedEdge flies: its one overlap mode must cover them all (`_rededge_survey`)."""
+
+    altitude_m: float
+    front_pct: float
+    side_pct: float
+
+
+class _RedEdgeCheck(NamedTuple):
+    """A RedEdge flying beside another payload's lines: it captures by its own footprint and front overlap, so
+    its interval at this altitude is checked once its overlap (the most demanding of its surveys) is known."""
+
+    payload: str
+    altitude_m: float
+    where: str
+
+
+@dataclass(frozen=True)
+class _Payloads:
+    """The plan's payloads as the catalogue resolves them, by payload name."""
+
+    cameras: dict[str, Any]                  # catalogue Camera
+    instances: dict[str, int]                # ArduPilot CAMn instance (WIRIS only)
+    optics: dict[str, PayloadInfo]           # payloads whose optics are known
+    optics_errors: dict[str, PlanError]      # the others: an error only where a footprint is needed
+
+    def is_rededge(self, name: str) -> bool:
+        """A RedEdge triggers itself (overlap mode): no trigger items, no AP_Camera instance."""
+        return self.cameras[name].protocol == "rededge-serial"
+
+
+@dataclass
+class _State:
+    """Mutable bookkeeping of one compile (local to `compile_plan`, never shared), added to step by step."""
+
+    warnings: list[PlanWarning | str]
+    areas: list[AreaInfo] = field(default_factory=list)
+    intent: list[SurveyPlan | CorridorPlan] = field(default_factory=list)
+    altitudes: list[_Altitude] = field(default_factory=list)
+    rededge_flights: dict[str, list[_RedEdgeFlight]] = field(default_factory=dict)
+    rededge_checks: list[_RedEdgeCheck] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class _Compile:
+    """One compile: what every step reads (plan, firmware, payloads) and what it adds to (emitter, state)."""
+
+    plan: Plan
+    profile: FirmwareProfile
+    payloads: _Payloads
+    emitter: Emitter
+    state: _State
+
+    @property
+    def speed_mps(self) -> float:
+        return self.plan.vehicle.speed_mps
+
+    def warn(self, code: str, message: str) -> None:
+        self.state.warnings.append(PlanWarning(code, message))
+
+
+class _LineInputs(NamedTuple):
+    """What the survey and corridor planners take beside the step's own fields."""
+
+    footprint: Footprint
+    turnaround_m: float
+    start_latlon: tuple[float, float]        # where the vehicle is when the lines begin
+    photos_left: int                         # of MAX_PHOTOS, after the plan's earlier lines
+    min_interval_s: float | None
+
+
+class _Lines(NamedTuple):
+    """A planned survey or corridor and the area it covers (what the report measures against)."""
+
+    route: SurveyPlan | CorridorPlan
+    area: Area
+
+
+class _Parts(NamedTuple):
+    limit: int                               # items per part
+    parts: tuple[tuple[MissionItem, ...], ...]
+
+
+# ----------------------------------------------------------------------------------------------- helpers
 
 def _relocate(err: PlanError, where: str) -> PlanError:
     """Geometry errors name a field ("overlap.front") or nothing; give them the plan's file:line:col."""
@@ -56,7 +162,7 @@ def _check_reach(home: Any, lat: float, lon: float, what: str, where: str) -> No
                         hint="check the coordinates of home and of this step (latitude and longitude swapped?)")
 
 
-def _rededge_survey(alts: list[float], overlaps: list[tuple[float, float]]):
+def _rededge_survey(flights: list[_RedEdgeFlight]) -> RedEdgeSurvey:
     """The RedEdge overlap-mode parameters covering every survey it flies, in the camera's integers: it captures
     from operatingAlt - opAltTolerance up, so the target is the lowest survey altitude (rounded down: were the
     camera to space its captures by the target altitude's footprint, higher surveys only gain overlap) and the
@@ -64,221 +170,340 @@ def _rededge_survey(alts: list[float], overlaps: list[tuple[float, float]]):
     least 10 m: our choice, not MicaSense's). The overlaps are the most demanding of the surveys (rounded up)."""
     from missions.emit.setup import RedEdgeSurvey
 
-    lowest = min(alts)
+    lowest = min(f.altitude_m for f in flights)
     target = max(int(math.floor(lowest)), 1)
     threshold = lowest - max(10.0, 0.25 * lowest)
     return RedEdgeSurvey(target, max(int(math.ceil(target - threshold)), 0),
-                         int(math.ceil(max(f for f, _s in overlaps))), int(math.ceil(max(s for _f, s in overlaps))))
+                         int(math.ceil(max(f.front_pct for f in flights))),
+                         int(math.ceil(max(f.side_pct for f in flights))))
 
 
-def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -> Compiled:
+# -------------------------------------------------------------------------------------- before the steps
+
+def _resolve_payloads(plan: Plan, prof: FirmwareProfile, state: _State) -> _Payloads:
+    """Each payload's catalogue camera, ArduPilot instance and optics (their warnings go to `state`)."""
     from cdf.catalogue import catalogue
-    from missions.emit.lua import render_script
-    from missions.emit.params import autopilot_params
-    from missions.emit.setup import setup_steps
-    from missions.geometry.survey import MAX_PHOTOS
 
-    plan = path_or_plan if isinstance(path_or_plan, Plan) else load_plan(path_or_plan)
-    fw = firmware or plan.vehicle.firmware
-    prof = profile(fw)
     cat = catalogue()
     cameras = {p.name: cat.get(p.camera) for p in plan.payloads}
-    components = {p.name: p.component_id for p in plan.payloads}
-    warnings: list[str] = [f"component_id_chosen: {n}" for n in plan.notes]
-
     # ArduPilot drives each WIRIS as an AP_Camera instance (CAMn_TYPE 6); the RedEdge is not one (it triggers
     # itself). PX4 addresses cameras by component id instead.
     wiris = [p.name for p in plan.payloads if cameras[p.name].protocol != "rededge-serial"]
-    instances = {name: i + 1 for i, name in enumerate(wiris)}
     if len(wiris) > prof.max_camera_instances:
         raise PlanError(f"{prof.title} drives at most {prof.max_camera_instances} MAVLink cameras (CAM1..CAM"
                         f"{prof.max_camera_instances}); the plan has {len(wiris)}", where=plan.where("payloads"),
                         hint="fly fewer WIRIS payloads")
-
-    # optics, per payload; an unknown imager is an error only where a footprint is needed
-    infos: dict[str, PayloadInfo] = {}
-    optics_errors: dict[str, PlanError] = {}
+    known: dict[str, PayloadInfo] = {}
+    unknown: dict[str, PlanError] = {}
     for p in plan.payloads:
         try:
             info, warn = optics.payload_info(p, cameras[p.name], where=plan.where("payloads", p.name))
-            infos[p.name] = info
-            warnings.extend(warn)
+            known[p.name] = info
+            state.warnings.extend(warn)
         except PlanError as e:
-            optics_errors[p.name] = e
+            unknown[p.name] = e
+    return _Payloads(cameras, {name: i + 1 for i, name in enumerate(wiris)}, known, unknown)
 
-    em = Emitter(prof, plan.vehicle.frame, plan.vehicle.speed_mps, (plan.home.lat, plan.home.lon), cameras,
-                 components, instances, {p.name: dict(p.values) for p in plan.payloads})
-    areas: list[AreaInfo] = []
-    intent: list[Any] = []
-    rededge_alts: dict[str, list[float]] = {}
-    rededge_overlap: dict[str, list[tuple[float, float]]] = {}
-    rededge_speeds: list[tuple[str, float, float, Any]] = []   # (payload, altitude, speed, where) per survey
-    altitudes: list[tuple[float, str]] = []
-    speed = plan.vehicle.speed_mps
-    if em.speed_is_airspeed:
-        warnings.append(PlanWarning(
-            "speed_is_airspeed", f"ArduPilot flies a {plan.vehicle.frame}'s vehicle.speed_mps ({speed:g} m/s) as "
-            "airspeed (a ground-speed DO_CHANGE_SPEED would set its minimum ground speed instead); with wind the "
-            "ground speed differs, so photo intervals and flight time vary (distance triggering keeps its spacing)"))
-    if not any(isinstance(s, TakeoffStep) for s in plan.mission):
-        warnings.append(PlanWarning("no_takeoff", "the mission has no takeoff step; it must be started with the "
-                                                  "vehicle in the air"))
 
-    for step in plan.mission:
-        here = plan.step_where(step)
-        if isinstance(step, TakeoffStep):
-            em.takeoff(step.alt_m)
-            altitudes.append((step.alt_m, plan.step_where(step, "alt_m")))
-        elif isinstance(step, (SurveyStep, CorridorStep)):
-            kind = "survey" if isinstance(step, SurveyStep) else "corridor"
-            lead = step.payloads[0]
-            if lead in optics_errors:
-                e = optics_errors[lead]
-                raise PlanError(f"{kind} lines need {lead}'s footprint: {e.message}",
-                                where=plan.step_where(step, "payloads", 0), hint=e.hint)
-            info = infos[lead]
-            if step.altitude_m is not None:
-                alt = step.altitude_m
-            else:
-                alt = optics.altitude_for_gsd(info, step.gsd_cm)
-                if not MIN_ALTITUDE_M <= alt <= MAX_ALTITUDE_M:
-                    raise PlanError(f"gsd_cm {step.gsd_cm:g} needs {alt:.1f} m above ground with {lead}'s optics, "
-                                    f"outside {MIN_ALTITUDE_M:g}..{MAX_ALTITUDE_M:g} m",
-                                    where=plan.step_where(step, "gsd_cm"), hint="choose another GSD")
-            altitudes.append((alt, plan.step_where(step, "altitude_m" if step.altitude_m is not None else "gsd_cm")))
-            fp = optics.footprint(info, alt)
-            trig = optics.trigger_m(info, alt, step.front_pct)
-            where_speed = plan.step_where(step, "overlap", "front")
-            triggered = [n for n in step.payloads if cameras[n].protocol != "rededge-serial"]
-            if step.trigger == "distance" and len(triggered) > 1 and not prof.distance_trigger_all:
-                raise PlanError(f"{prof.title} distance-triggers only its primary camera: {', '.join(triggered[1:])} "
-                                f"would take just the first photo of each line",
-                                where=plan.step_where(step, "payloads"),
-                                hint="AP_Camera::set_trigger_distance() drives the primary instance only. Use "
-                                     "trigger: hover (one IMAGE_START_CAPTURE reaches every instance), one WIRIS "
-                                     "per survey with that camera as CAM1, or PX4 (camera_trigger addresses "
-                                     "components 100..105)")
-            moving = step.trigger != "hover"
-            interval = optics.check_interval(info, trig, speed, where=where_speed) if moving else None
-            for other in step.payloads:
-                if cameras[other].protocol == "rededge-serial":
-                    # its own overlap mode: its own footprint and front overlap (checked once all surveys are
-                    # known: the camera holds one overlap, the most demanding), at the same speed
-                    if other in infos and other != lead:
-                        rededge_speeds.append((other, alt, speed, where_speed))
-                    rededge_alts.setdefault(other, []).append(alt)
-                    rededge_overlap.setdefault(other, []).append((step.front_pct, step.side_pct))
-                elif other == lead:
-                    continue
-                elif other not in infos:
-                    warnings.append(PlanWarning("no_optics", f"{other} triggers alongside {lead} but its optics are "
-                                                             "unknown, so its coverage cannot be measured"))
-                elif moving:
-                    optics.check_interval(infos[other], trig, speed, where=where_speed)
-            if moving:
-                if info.min_interval_s and interval < NEAR_MIN_INTERVAL * info.min_interval_s:
-                    warnings.append(PlanWarning(
-                        "trigger_interval_near_min", f"{lead} shoots every {interval:.2f} s at {here}, close to its "
-                        f"minimum of {info.min_interval_s:g} s; a gust of tail wind loses photos"))
-            turnaround = step.turnaround_m if step.turnaround_m is not None else TURNAROUND_DEFAULT_M[plan.vehicle.frame]
-            start = em.s.last_pos[:2] if em.s.last_pos else (plan.home.lat, plan.home.lon)
-            photos_left = max(0, MAX_PHOTOS - sum(len(g.photos) for g in intent))
-            try:
-                if kind == "survey":
-                    from missions.geometry.area import load_area
-                    from missions.geometry.survey import plan_survey
+def _emitter(plan: Plan, prof: FirmwareProfile, payloads: _Payloads) -> Emitter:
+    return Emitter(prof, plan.vehicle.frame, plan.vehicle.speed_mps, (plan.home.lat, plan.home.lon),
+                   payloads.cameras, {p.name: p.component_id for p in plan.payloads}, payloads.instances,
+                   {p.name: dict(p.values) for p in plan.payloads})
 
-                    area = load_area(step.area, exclude=step.exclude, base_dir=plan.base_dir,
-                                     where=plan.step_where(step, "area"))
-                    _check_reach(plan.home, area.projection.lat0, area.projection.lon0, "area", here)
-                    geo = plan_survey(area, fp, step.front_pct, step.side_pct, angle_deg=step.angle_deg,
-                                      turnaround_m=turnaround, speed_mps=speed,
-                                      min_interval_s=info.min_interval_s, refly_90=step.refly_90,
-                                      hover=step.trigger == "hover", start_latlon=start, photos_left=photos_left)
-                else:
-                    from missions.geometry.corridor import plan_corridor
 
-                    if step.trigger == "hover":
-                        raise PlanError("corridors are flown with distance or interval triggering",
-                                        where=plan.step_where(step, "trigger"), hint="use trigger: distance")
-                    _check_reach(plan.home, *step.line[0], "corridor", here)
-                    geo = plan_corridor(step.line, step.width_m, fp, step.front_pct, step.side_pct,
-                                        turnaround_m=turnaround, speed_mps=speed, min_interval_s=info.min_interval_s,
-                                        where=plan.step_where(step, "line"), photos_left=photos_left)
-                    area = geo.area
-            except PlanError as e:
-                raise _relocate(e, here) from None
-            hold = max(HOVER_HOLD_S, info.min_interval_s or 0.0)
-            track = Track(points=tuple(TrackPoint(w.lat, w.lon, w.kind, w.yaw_deg) for w in geo.waypoints),
-                          spans=tuple((s.start_index, s.stop_index) for s in geo.camera_spans),
-                          altitude_m=alt, trigger=step.trigger, trigger_distance_m=geo.trigger_distance_m,
-                          interval_s=(geo.trigger_distance_m / speed), hold_s=hold,
-                          autopilot_triggers=any(cameras[n].protocol != "rededge-serial" for n in step.payloads))
-            first = em.item_count
-            em.track(track, where=plan.step_where(step, "trigger"))
-            for w in geo.warnings:
-                warnings.append(PlanWarning(w.code, f"{kind} at {here}: {w.message}"))
-            areas.append(AreaInfo(step=step.index, kind=kind, payloads=step.payloads, area=area, altitude_m=alt,
-                                  front_overlap=step.front_pct / 100.0, side_overlap=step.side_pct / 100.0,
-                                  trigger=step.trigger, trigger_distance_m=geo.trigger_distance_m,
-                                  items=(first, em.item_count)))
-            intent.append(geo)
-        elif isinstance(step, WaypointStep):
-            _check_reach(plan.home, step.lat, step.lon, "waypoint", here)
-            em.waypoint(step.lat, step.lon, step.alt_m, step.hold_s, step.capture,
-                        where=plan.step_where(step, "capture"))
-            altitudes.append((step.alt_m, plan.step_where(step, "alt_m")))
-        elif isinstance(step, CameraStep):
-            em.camera_change(step.payload, step.values, where=plan.step_where(step, "settings"))
-        elif isinstance(step, RtlStep):
-            em.rtl()
-        elif isinstance(step, LandStep):
-            if step.lat is not None:
-                _check_reach(plan.home, step.lat, step.lon, "landing point", here)
-            em.land(step.lat, step.lon, where=here)
+def _warn_about_the_start(c: _Compile) -> None:
+    if c.emitter.speed_is_airspeed:
+        c.warn("speed_is_airspeed", f"ArduPilot flies a {c.plan.vehicle.frame}'s vehicle.speed_mps "
+               f"({c.speed_mps:g} m/s) as airspeed (a ground-speed DO_CHANGE_SPEED would set its minimum ground "
+               "speed instead); with wind the ground speed differs, so photo intervals and flight time vary "
+               "(distance triggering keeps its spacing)")
+    if not any(isinstance(s, TakeoffStep) for s in c.plan.mission):
+        c.warn("no_takeoff", "the mission has no takeoff step; it must be started with the vehicle in the air")
 
-    emitted = em.result()
-    warnings.extend(emitted.warnings)
-    items = emitted.items
-    check_items(items, prof)
-    limit = plan.vehicle.max_mission_items or prof.default_item_limit
+
+# ------------------------------------------------------------------------------------------------- steps
+
+def _takeoff(c: _Compile, step: TakeoffStep) -> None:
+    c.emitter.takeoff(step.alt_m)
+    c.state.altitudes.append(_Altitude(step.alt_m, c.plan.step_where(step, "alt_m")))
+
+
+def _waypoint(c: _Compile, step: WaypointStep) -> None:
+    _check_reach(c.plan.home, step.lat, step.lon, "waypoint", c.plan.step_where(step))
+    c.emitter.waypoint(step.lat, step.lon, step.alt_m, step.hold_s, step.capture,
+                       where=c.plan.step_where(step, "capture"))
+    c.state.altitudes.append(_Altitude(step.alt_m, c.plan.step_where(step, "alt_m")))
+
+
+def _camera(c: _Compile, step: CameraStep) -> None:
+    c.emitter.camera_change(step.payload, step.values, where=c.plan.step_where(step, "settings"))
+
+
+def _rtl(c: _Compile, step: RtlStep) -> None:
+    c.emitter.rtl()
+
+
+def _land(c: _Compile, step: LandStep) -> None:
+    here = c.plan.step_where(step)
+    if step.lat is not None:
+        _check_reach(c.plan.home, step.lat, step.lon, "landing point", here)
+    c.emitter.land(step.lat, step.lon, where=here)
+
+
+def _survey(c: _Compile, step: SurveyStep) -> None:
+    _lines_step(c, step, "survey", _plan_survey_lines)
+
+
+def _corridor(c: _Compile, step: CorridorStep) -> None:
+    _lines_step(c, step, "corridor", _plan_corridor_lines)
+
+
+# ------------------------------------------------------------------------------------ survey or corridor
+
+def _lines_step(c: _Compile, step: SurveyStep | CorridorStep, kind: str,
+                plan_lines: Callable[[_Compile, Any, _LineInputs], _Lines]) -> None:
+    """A survey or corridor: its first payload's optics set the altitude, footprint and trigger distance, every
+    payload must keep up with the trigger, and the planned lines become the emitter's track."""
+    here = c.plan.step_where(step)
+    lead = _lead_optics(c, step, kind)
+    alt = _line_altitude(c, step, lead)
+    c.state.altitudes.append(_Altitude(alt, c.plan.step_where(
+        step, "altitude_m" if step.altitude_m is not None else "gsd_cm")))
+    footprint = optics.footprint(lead, alt)
+    trig = optics.trigger_m(lead, alt, step.front_pct)
+    _check_triggering(c, step, lead, trig)
+    _record_rededges(c, step, lead, alt)
+    try:
+        lines = plan_lines(c, step, _line_inputs(c, step, lead, footprint))
+    except PlanError as e:
+        raise _relocate(e, here) from None
+    first = c.emitter.item_count
+    c.emitter.track(_track(c, step, lines.route, alt, lead), where=c.plan.step_where(step, "trigger"))
+    for w in lines.route.warnings:
+        c.warn(w.code, f"{kind} at {here}: {w.message}")
+    c.state.areas.append(AreaInfo(
+        step=step.index, kind=kind, payloads=step.payloads, area=lines.area, altitude_m=alt,
+        front_overlap=step.front_pct / 100.0, side_overlap=step.side_pct / 100.0, trigger=step.trigger,
+        trigger_distance_m=lines.route.trigger_distance_m, items=(first, c.emitter.item_count)))
+    c.state.intent.append(lines.route)
+
+
+def _lead_optics(c: _Compile, step: SurveyStep | CorridorStep, kind: str) -> PayloadInfo:
+    """The optics of the step's first payload, which sets the lines: without them there is no footprint."""
+    lead = step.payloads[0]
+    if lead in c.payloads.optics_errors:
+        e = c.payloads.optics_errors[lead]
+        raise PlanError(f"{kind} lines need {lead}'s footprint: {e.message}",
+                        where=c.plan.step_where(step, "payloads", 0), hint=e.hint)
+    return c.payloads.optics[lead]
+
+
+def _line_altitude(c: _Compile, step: SurveyStep | CorridorStep, lead: PayloadInfo) -> float:
+    """The step's altitude, or the one at which the lead payload images with the step's GSD."""
+    if step.altitude_m is not None:
+        return step.altitude_m
+    alt = optics.altitude_for_gsd(lead, step.gsd_cm)
+    if not MIN_ALTITUDE_M <= alt <= MAX_ALTITUDE_M:
+        raise PlanError(f"gsd_cm {step.gsd_cm:g} needs {alt:.1f} m above ground with {lead.name}'s optics, "
+                        f"outside {MIN_ALTITUDE_M:g}..{MAX_ALTITUDE_M:g} m",
+                        where=c.plan.step_where(step, "gsd_cm"), hint="choose another GSD")
+    return alt
+
+
+def _check_triggering(c: _Compile, step: SurveyStep | CorridorStep, lead: PayloadInfo, trig: float) -> None:
+    """Every payload the autopilot triggers must be reached by the trigger and keep up with its interval; a
+    payload of unknown optics flies along unmeasured (warned). RedEdges are checked in `_setup`."""
+    _check_distance_trigger_reach(c, step)
+    moving = step.trigger != "hover"
+    where = c.plan.step_where(step, "overlap", "front")
+    interval = optics.check_interval(lead, trig, c.speed_mps, where=where) if moving else None
+    for other in step.payloads:
+        if other == lead.name or c.payloads.is_rededge(other):
+            continue
+        if other not in c.payloads.optics:
+            c.warn("no_optics", f"{other} triggers alongside {lead.name} but its optics are unknown, so its "
+                                "coverage cannot be measured")
+        elif moving:
+            optics.check_interval(c.payloads.optics[other], trig, c.speed_mps, where=where)
+    if moving and lead.min_interval_s and interval < NEAR_MIN_INTERVAL * lead.min_interval_s:
+        c.warn("trigger_interval_near_min", f"{lead.name} shoots every {interval:.2f} s at "
+               f"{c.plan.step_where(step)}, close to its minimum of {lead.min_interval_s:g} s; a gust of tail "
+               "wind loses photos")
+
+
+def _check_distance_trigger_reach(c: _Compile, step: SurveyStep | CorridorStep) -> None:
+    prof = c.profile
+    triggered = [n for n in step.payloads if not c.payloads.is_rededge(n)]
+    if step.trigger == "distance" and len(triggered) > 1 and not prof.distance_trigger_all:
+        raise PlanError(f"{prof.title} distance-triggers only its primary camera: {', '.join(triggered[1:])} "
+                        f"would take just the first photo of each line",
+                        where=c.plan.step_where(step, "payloads"),
+                        hint="AP_Camera::set_trigger_distance() drives the primary instance only. Use "
+                             "trigger: hover (one IMAGE_START_CAPTURE reaches every instance), one WIRIS "
+                             "per survey with that camera as CAM1, or PX4 (camera_trigger addresses "
+                             "components 100..105)")
+
+
+def _record_rededges(c: _Compile, step: SurveyStep | CorridorStep, lead: PayloadInfo, alt: float) -> None:
+    """What each RedEdge of the step flies: its overlap mode (set once, in `_setup`) must cover it."""
+    where = c.plan.step_where(step, "overlap", "front")
+    for name in step.payloads:
+        if not c.payloads.is_rededge(name):
+            continue
+        if name in c.payloads.optics and name != lead.name:
+            c.state.rededge_checks.append(_RedEdgeCheck(name, alt, where))
+        c.state.rededge_flights.setdefault(name, []).append(_RedEdgeFlight(alt, step.front_pct, step.side_pct))
+
+
+def _line_inputs(c: _Compile, step: SurveyStep | CorridorStep, lead: PayloadInfo,
+                 footprint: Footprint) -> _LineInputs:
+    from missions.geometry.survey import MAX_PHOTOS
+
+    last = c.emitter.s.last_pos
+    return _LineInputs(
+        footprint=footprint,
+        turnaround_m=step.turnaround_m if step.turnaround_m is not None
+        else TURNAROUND_DEFAULT_M[c.plan.vehicle.frame],
+        start_latlon=last[:2] if last else (c.plan.home.lat, c.plan.home.lon),
+        photos_left=max(0, MAX_PHOTOS - sum(len(g.photos) for g in c.state.intent)),
+        min_interval_s=lead.min_interval_s)
+
+
+def _plan_survey_lines(c: _Compile, step: SurveyStep, inputs: _LineInputs) -> _Lines:
+    from missions.geometry.area import load_area
+    from missions.geometry.survey import plan_survey
+
+    area = load_area(step.area, exclude=step.exclude, base_dir=c.plan.base_dir,
+                     where=c.plan.step_where(step, "area"))
+    _check_reach(c.plan.home, area.projection.lat0, area.projection.lon0, "area", c.plan.step_where(step))
+    route = plan_survey(area, inputs.footprint, step.front_pct, step.side_pct, angle_deg=step.angle_deg,
+                        turnaround_m=inputs.turnaround_m, speed_mps=c.speed_mps,
+                        min_interval_s=inputs.min_interval_s, refly_90=step.refly_90,
+                        hover=step.trigger == "hover", start_latlon=inputs.start_latlon,
+                        photos_left=inputs.photos_left)
+    return _Lines(route, area)
+
+
+def _plan_corridor_lines(c: _Compile, step: CorridorStep, inputs: _LineInputs) -> _Lines:
+    from missions.geometry.corridor import plan_corridor
+
+    if step.trigger == "hover":
+        raise PlanError("corridors are flown with distance or interval triggering",
+                        where=c.plan.step_where(step, "trigger"), hint="use trigger: distance")
+    _check_reach(c.plan.home, *step.line[0], "corridor", c.plan.step_where(step))
+    route = plan_corridor(step.line, step.width_m, inputs.footprint, step.front_pct, step.side_pct,
+                          turnaround_m=inputs.turnaround_m, speed_mps=c.speed_mps,
+                          min_interval_s=inputs.min_interval_s, where=c.plan.step_where(step, "line"),
+                          photos_left=inputs.photos_left)
+    return _Lines(route, route.area)
+
+
+def _track(c: _Compile, step: SurveyStep | CorridorStep, route: SurveyPlan | CorridorPlan, alt: float,
+           lead: PayloadInfo) -> Track:
+    """The planned lines as the emitter flies them; a hover photo holds at least the camera's interval."""
+    return Track(points=tuple(TrackPoint(w.lat, w.lon, w.kind, w.yaw_deg) for w in route.waypoints),
+                 spans=tuple((s.start_index, s.stop_index) for s in route.camera_spans),
+                 altitude_m=alt, trigger=step.trigger, trigger_distance_m=route.trigger_distance_m,
+                 interval_s=(route.trigger_distance_m / c.speed_mps),
+                 hold_s=max(HOVER_HOLD_S, lead.min_interval_s or 0.0),
+                 autopilot_triggers=any(not c.payloads.is_rededge(n) for n in step.payloads))
+
+
+_STEPS: dict[type, Callable[[_Compile, Any], None]] = {
+    TakeoffStep: _takeoff, SurveyStep: _survey, CorridorStep: _corridor, WaypointStep: _waypoint,
+    CameraStep: _camera, RtlStep: _rtl, LandStep: _land}
+
+
+# --------------------------------------------------------------------------------------- after the steps
+
+def _split_into_parts(c: _Compile, items: tuple[MissionItem, ...]) -> _Parts:
+    """The items as missions within the vehicle's item limit, each part checked against the firmware."""
+    prof = c.profile
+    limit = c.plan.vehicle.max_mission_items or prof.default_item_limit
     parts = split_parts(items, limit, prof)
     for k, part in enumerate(parts):
         check_items(part, prof, where=f"part {k + 1}")
     if len(parts) > 1:
-        warnings.append(PlanWarning(
-            "mission_split", f"{len(items)} items exceed {prof.title}'s limit of {limit} "
-            f"({prof.item_limit_why if not plan.vehicle.max_mission_items else 'vehicle.max_mission_items'})"
-            f"; split into {len(parts)} parts: each part ends holding position (NAV_LOITER_UNLIM), upload "
-            "the next and switch to AUTO again; it resumes at that position with speed and camera trigger restored"))
+        c.warn("mission_split", f"{len(items)} items exceed {prof.title}'s limit of {limit} "
+               f"({prof.item_limit_why if not c.plan.vehicle.max_mission_items else 'vehicle.max_mission_items'})"
+               f"; split into {len(parts)} parts: each part ends holding position (NAV_LOITER_UNLIM), upload "
+               "the next and switch to AUTO again; it resumes at that position with speed and camera trigger "
+               "restored")
+    return _Parts(limit, parts)
 
-    for alt, where in altitudes:
+
+def _warn_about_altitudes(c: _Compile) -> None:
+    for alt, where in c.state.altitudes:
         if alt > MAX_AGL_M:
-            warnings.append(PlanWarning("altitude_above_120m", f"{alt:g} m above home at {where}; most rules allow "
-                            f"{MAX_AGL_M:g} m above ground without a permit (ground assumed flat at home's height)"))
+            c.warn("altitude_above_120m", f"{alt:g} m above home at {where}; most rules allow {MAX_AGL_M:g} m "
+                   "above ground without a permit (ground assumed flat at home's height)")
 
-    rededge = {name: _rededge_survey(alts, rededge_overlap[name]) for name, alts in rededge_alts.items()}
-    for name, alt, step_speed, where_speed in rededge_speeds:
-        own = dict(next(p.values for p in plan.payloads if p.name == name))   # the plan's setting wins
-        front = own.get("overlap_along_pct", rededge[name].front_pct)
-        optics.check_interval(infos[name], optics.trigger_m(infos[name], alt, front), step_speed, where=where_speed)
+
+def _setup(c: _Compile) -> tuple[SetupStep, ...]:
+    """The pre-flight sequence, with each RedEdge's overlap mode covering what it flies."""
+    from missions.emit.setup import setup_steps
+
+    rededge = {name: _rededge_survey(flights) for name, flights in c.state.rededge_flights.items()}
+    for check in c.state.rededge_checks:
+        info = c.payloads.optics[check.payload]
+        own = dict(c.plan.payload(check.payload).values)   # the plan's setting wins
+        front = own.get("overlap_along_pct", rededge[check.payload].front_pct)
+        optics.check_interval(info, optics.trigger_m(info, check.altitude_m, front), c.speed_mps, where=check.where)
     try:
-        setup = setup_steps(plan.payloads, cameras, rededge)
+        return setup_steps(c.plan.payloads, c.payloads.cameras, rededge)
     except PlanError as e:
-        raise _relocate(e, plan.where("payloads")) from None
-    lua = render_script(plan.name) if emitted.needs_lua else None
+        raise _relocate(e, c.plan.where("payloads")) from None
+
+
+def _lua_bridge(c: _Compile, emitted: Emitted) -> str | None:
+    from missions.emit.lua import render_script
+
+    return render_script(c.plan.name) if emitted.needs_lua else None
+
+
+def _params(c: _Compile, emitted: Emitted) -> tuple[Param, ...]:
+    from missions.emit.params import autopilot_params
+
     try:
-        params = autopilot_params(prof, plan.payloads, cameras, infos, instances, needs_lua=emitted.needs_lua,
-                                  triggers={a.trigger for a in areas})
+        return autopilot_params(c.profile, c.plan.payloads, c.payloads.cameras, c.payloads.optics,
+                                c.payloads.instances, needs_lua=emitted.needs_lua,
+                                triggers={a.trigger for a in c.state.areas})
     except PlanError as e:
-        raise _relocate(e, plan.where("mission")) from None
-    # PayloadInfo only for payloads whose optics are known: the report measures coverage with them
-    payloads = tuple(infos[p.name] for p in plan.payloads if p.name in infos)
-    for name, e in optics_errors.items():
-        if not any(name in a.payloads[:1] for a in areas):
-            warnings.append(PlanWarning("no_optics", f"{name}: {e.message}"))
+        raise _relocate(e, c.plan.where("mission")) from None
+
+
+def _warn_about_unknown_optics(c: _Compile) -> None:
+    """A payload of unknown optics that sets no lines is only unmeasured (one that does is an error)."""
+    for name, e in c.payloads.optics_errors.items():
+        if not any(name in a.payloads[:1] for a in c.state.areas):
+            c.warn("no_optics", f"{name}: {e.message}")
+
+
+# -------------------------------------------------------------------------------------------- the driver
+
+def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -> Compiled:
+    plan = path_or_plan if isinstance(path_or_plan, Plan) else load_plan(path_or_plan)
+    prof = profile(firmware or plan.vehicle.firmware)
+    state = _State(warnings=[f"component_id_chosen: {n}" for n in plan.notes])
+    payloads = _resolve_payloads(plan, prof, state)
+    c = _Compile(plan, prof, payloads, _emitter(plan, prof, payloads), state)
+    _warn_about_the_start(c)
+    for step in plan.mission:
+        _STEPS[type(step)](c, step)
+    emitted = c.emitter.result()
+    state.warnings.extend(emitted.warnings)
+    check_items(emitted.items, prof)
+    parts = _split_into_parts(c, emitted.items)
+    _warn_about_altitudes(c)
+    setup = _setup(c)
+    lua = _lua_bridge(c, emitted)
+    params = _params(c, emitted)
+    _warn_about_unknown_optics(c)
     return Compiled(
         name=plan.name, firmware=prof.name, frame=plan.vehicle.frame,
-        home=(plan.home.lat, plan.home.lon, plan.home.alt_amsl_m), speed_mps=speed, items=items, parts=parts,
-        item_limit=limit, payloads=payloads, areas=tuple(areas), setup=setup, lua=lua, params=params,
-        warnings=tuple(dict.fromkeys(warnings)), intent=tuple(intent), inputs=input_files(plan))
+        home=(plan.home.lat, plan.home.lon, plan.home.alt_amsl_m), speed_mps=c.speed_mps, items=emitted.items,
+        parts=parts.parts, item_limit=parts.limit,
+        # PayloadInfo only for payloads whose optics are known: the report measures coverage with them
+        payloads=tuple(payloads.optics[p.name] for p in plan.payloads if p.name in payloads.optics),
+        areas=tuple(state.areas), setup=setup, lua=lua, params=params,
+        warnings=tuple(dict.fromkeys(state.warnings)), intent=tuple(state.intent), inputs=input_files(plan))

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Any, Sequence
+from typing import Any, NamedTuple, Sequence
 
 import numpy as np
 
@@ -146,13 +146,36 @@ def _extend_end(xy: np.ndarray, extra: float) -> np.ndarray:
     return np.vstack([xy, xy[-1] + d * extra])
 
 
-def plan_corridor(line: Sequence[Sequence[float]], width_m: float, footprint: Footprint, front_pct: float,
-                  side_pct: float, turnaround_m: float = 10.0, speed_mps: float = 5.0,
-                  min_interval_s: float | None = None, where: str = "corridor.line",
-                  exit_margin_m: float = DEFAULT_EXIT_MARGIN_M, photos_left: int = MAX_PHOTOS) -> CorridorPlan:
-    from shapely.geometry import LineString
-    from shapely.geometry.polygon import orient
+class _CentreLine(NamedTuple):
+    """The corridor's centre line in its own local projection."""
 
+    projection: LocalProjection
+    xy: np.ndarray                 # vertices, points under 1 cm apart merged; a loop's last is its first
+    closed: bool                   # a loop (see the module docstring)
+    line: Any                      # shapely LineString of xy
+
+    @property
+    def left(self) -> np.ndarray:
+        """Unit normal to the left of the first segment: where a line at a positive offset starts."""
+        d = self.xy[1] - self.xy[0]
+        return np.array([-d[1], d[0]]) / np.hypot(*d)
+
+
+class _Spacing(NamedTuple):
+    spacing_m: float               # between lines
+    trigger_m: float               # between photos on a line
+    interval_s: float              # between photos at the planned speed
+
+
+class _PathPoint(NamedTuple):
+    x: float
+    y: float
+    kind: str                      # KIND_TURN_IN | KIND_ENTRY | "line" | KIND_EXIT
+    line: int                      # index of the flight line it belongs to
+
+
+def _checked_points(line: Sequence[Sequence[float]], width_m: float, where: str) -> Sequence[Any]:
+    """The centre line's [lat, lon] points, with the width checked."""
     poly_in: LatLonPolygon = _inline_polygon(line, where)      # reuses the [lat, lon] checks
     pts = poly_in.outer
     if len(pts) < 2:
@@ -161,6 +184,12 @@ def plan_corridor(line: Sequence[Sequence[float]], width_m: float, footprint: Fo
     if not (isinstance(width_m, (int, float)) and math.isfinite(width_m) and width_m > 0):
         raise PlanError(f"corridor width {width_m!r} m must be positive", where="corridor.width_m",
                         hint="width_m is the full width in metres, centred on the line, e.g. width_m: 60")
+    return pts
+
+
+def _spacing(footprint: Footprint, front_pct: float, side_pct: float, speed_mps: float,
+             min_interval_s: float | None) -> _Spacing:
+    """Line spacing and trigger distance from the overlaps; photos may not come faster than the camera shoots."""
     spacing = transect_spacing_m(footprint, side_pct)
     trig = trigger_distance_m(footprint, front_pct)
     interval = trig / speed_mps
@@ -168,6 +197,15 @@ def plan_corridor(line: Sequence[Sequence[float]], width_m: float, footprint: Fo
         raise PlanError(f"photos would be {interval:.2f} s apart, faster than the camera's minimum of "
                         f"{min_interval_s:g} s", where="overlap.front",
                         hint=f"fly at most {trig / min_interval_s:.1f} m/s, lower the front overlap or fly higher")
+    return _Spacing(spacing, trig, interval)
+
+
+def _centre_line(pts: Sequence[Any], where: str) -> _CentreLine:
+    """The points projected, refused when they have no length, span more than a plan holds or cross."""
+    from shapely.geometry import LineString
+
+    from missions.geometry.geo import MAX_EXTENT_M  # the limit areas have: the local projection's accuracy
+
     proj = LocalProjection.centred_on([p[0] for p in pts], [p[1] for p in pts])
     x, y = proj.to_xy([p[0] for p in pts], [p[1] for p in pts])
     xy = np.column_stack([x, y])
@@ -176,11 +214,9 @@ def plan_corridor(line: Sequence[Sequence[float]], width_m: float, footprint: Fo
     if len(xy) < 2:
         raise PlanError("the corridor line has no length (all points coincide)", where=where,
                         hint="give its start and end as different points (points under 1 cm apart count as one)")
-    closed = len(xy) >= 4 and float(np.hypot(*(xy[-1] - xy[0]))) <= 0.01     # a loop (see the module docstring)
+    closed = len(xy) >= 4 and float(np.hypot(*(xy[-1] - xy[0]))) <= 0.01
     if closed:
         xy[-1] = xy[0]
-    from missions.geometry.geo import MAX_EXTENT_M  # the limit areas have: the local projection's accuracy
-
     size = float(max(np.ptp(xy[:, 0]), np.ptp(xy[:, 1])))
     if not size <= MAX_EXTENT_M:
         raise PlanError(f"the corridor line spans {size / 1000:.0f} km, more than the {MAX_EXTENT_M / 1000:.0f} km "
@@ -189,67 +225,117 @@ def plan_corridor(line: Sequence[Sequence[float]], width_m: float, footprint: Fo
     if not centre.is_simple:
         raise PlanError("the corridor line crosses itself", where=where,
                         hint="split it into two corridors")
-    corridor = centre.buffer(width_m / 2.0, cap_style="flat", join_style="round")
-    corridor = orient(corridor, 1.0) if corridor.geom_type == "Polygon" else corridor
-    area = Area(corridor, proj, where)
+    return _CentreLine(proj, xy, closed, centre)
 
-    offsets = line_offsets(width_m, footprint.across_m, spacing, DEFAULT_EDGE_MARGIN_M) - width_m / 2.0
-    check_photo_budget(centre.length * len(offsets) / trig, "corridor", photos_left)
-    lines: list[np.ndarray] = []
-    left = np.array([-(xy[1] - xy[0])[1], (xy[1] - xy[0])[0]]) / np.hypot(*(xy[1] - xy[0]))
-    for o in offsets:
-        if closed:
-            # each ring starts level with the first point: where an open line's offset would start
-            pieces = [xy] if abs(o) < 1e-9 else _ring_offsets(xy, float(o), xy[0] + float(o) * left)
-        else:
-            g = centre if abs(o) < 1e-9 else centre.offset_curve(float(o), quad_segs=4, join_style="round")
-            lxy = _offset_line(centre, g)
-            pieces = [] if lxy is None else [lxy]
-        for lxy in pieces:
-            lxy = np.asarray(LineString(lxy).simplify(0.25).coords, dtype=float)
-            L = float(np.hypot(*np.diff(lxy, axis=0).T).sum())
-            extra = math.ceil(L / trig - 1e-9) * trig - L
-            lines.append(_extend_along(lxy, extra) if closed else _extend_end(lxy, extra))
+
+def _corridor_area(centre: _CentreLine, width_m: float, where: str) -> Area:
+    """The centre line buffered by width/2 with flat ends (a ring for a loop)."""
+    from shapely.geometry.polygon import orient
+
+    corridor = centre.line.buffer(width_m / 2.0, cap_style="flat", join_style="round")
+    corridor = orient(corridor, 1.0) if corridor.geom_type == "Polygon" else corridor
+    return Area(corridor, centre.projection, where)
+
+
+def _offset_pieces(centre: _CentreLine, o: float) -> list[np.ndarray]:
+    """The line(s) at offset o from the centre line: one as a rule (see `_ring_offsets` for a loop's)."""
+    if centre.closed:
+        # each ring starts level with the first point: where an open line's offset would start
+        if abs(o) < 1e-9:
+            return [centre.xy]
+        return _ring_offsets(centre.xy, float(o), centre.xy[0] + float(o) * centre.left)
+    g = centre.line if abs(o) < 1e-9 else centre.line.offset_curve(float(o), quad_segs=4, join_style="round")
+    lxy = _offset_line(centre.line, g)
+    return [] if lxy is None else [lxy]
+
+
+def _whole_triggers(lxy: np.ndarray, trig: float, closed: bool) -> np.ndarray:
+    """A flight line simplified to 25 cm and extended to a whole number of trigger distances (on past its start
+    round a loop, straight on past its end otherwise), so its last photo sits on or beyond the corridor's end."""
+    from shapely.geometry import LineString
+
+    lxy = np.asarray(LineString(lxy).simplify(0.25).coords, dtype=float)
+    L = float(np.hypot(*np.diff(lxy, axis=0).T).sum())
+    extra = math.ceil(L / trig - 1e-9) * trig - L
+    return _extend_along(lxy, extra) if closed else _extend_end(lxy, extra)
+
+
+def _flight_lines(centre: _CentreLine, offsets: np.ndarray, trig: float, where: str) -> list[np.ndarray]:
+    lines = [_whole_triggers(lxy, trig, centre.closed) for o in offsets for lxy in _offset_pieces(centre, o)]
     if not lines:
         raise PlanError("the corridor produced no flight lines", where=where,
                         hint="straighten the line or narrow width_m; if neither helps, please report it with "
                              "the plan")
+    return lines
 
+
+def _unit(d: np.ndarray) -> np.ndarray:
+    return d / np.hypot(*d)
+
+
+def _flight_path(lines: list[np.ndarray], trig: float, turnaround_m: float,
+                 exit_margin_m: float) -> tuple[list[_PathPoint], list[TriggerSpan]]:
+    """The lines flown alternately: each entered along its start tangent from a turnaround stub, shot from its
+    entry to an exit point just past its end (the trigger stops there), then on to a stub along its end tangent."""
     em = min(exit_margin_m, 0.45 * trig)
-    path: list[tuple[float, float, str, int]] = []
+    path: list[_PathPoint] = []
     spans: list[TriggerSpan] = []
     for k, lxy in enumerate(lines):
         seq = lxy if k % 2 == 0 else lxy[::-1]
-        d0 = seq[1] - seq[0]
-        d0 = d0 / np.hypot(*d0)
-        d1 = seq[-1] - seq[-2]
-        d1 = d1 / np.hypot(*d1)
+        d0 = _unit(seq[1] - seq[0])
+        d1 = _unit(seq[-1] - seq[-2])
         if turnaround_m > 0:
             s = seq[0] - d0 * turnaround_m
-            path.append((float(s[0]), float(s[1]), KIND_TURN_IN, k))
+            path.append(_PathPoint(float(s[0]), float(s[1]), KIND_TURN_IN, k))
         a = len(path)
         for i, p in enumerate(seq):
-            path.append((float(p[0]), float(p[1]), KIND_ENTRY if i == 0 else "line", k))
+            path.append(_PathPoint(float(p[0]), float(p[1]), KIND_ENTRY if i == 0 else "line", k))
         e = seq[-1] + d1 * em
-        path.append((float(e[0]), float(e[1]), KIND_EXIT, k))
+        path.append(_PathPoint(float(e[0]), float(e[1]), KIND_EXIT, k))
         spans.append(TriggerSpan(a, len(path) - 1, trig, True, False))
         if turnaround_m > em:
             t = seq[-1] + d1 * turnaround_m
-            path.append((float(t[0]), float(t[1]), KIND_TURN_IN, k))
-    pxy = np.array([(p[0], p[1]) for p in path])
-    lat, lon = proj.to_latlon(pxy[:, 0], pxy[:, 1])
-    wps = tuple(Waypoint(p[0], p[1], float(a), float(o), p[2], p[3]) for p, a, o in zip(path, lat, lon))
+            path.append(_PathPoint(float(t[0]), float(t[1]), KIND_TURN_IN, k))
+    return path, spans
+
+
+def _photos(pxy: np.ndarray, spans: list[TriggerSpan], proj: LocalProjection) -> tuple[PhotoPoint, ...]:
+    """Where the distance trigger shoots along the path."""
     raw = simulate_distance_trigger(pxy, spans)
     fxy = np.array([(p.x, p.y) for p in raw]).reshape(-1, 2)
     flat, flon = proj.to_latlon(fxy[:, 0], fxy[:, 1]) if len(fxy) else (np.zeros(0), np.zeros(0))
-    photos = tuple(PhotoPoint(p.x, p.y, p.heading_deg, p.span, float(a), float(o)) for p, a, o in zip(raw, flat, flon))
+    return tuple(PhotoPoint(p.x, p.y, p.heading_deg, p.span, float(a), float(o)) for p, a, o in zip(raw, flat, flon))
+
+
+def _stats(area: Area, sp: _Spacing, lines: list[np.ndarray], pxy: np.ndarray, photo_count: int,
+           speed_mps: float) -> SurveyStats:
     length = float(np.hypot(*np.diff(pxy, axis=0).T).sum())
-    warnings: list[PlanWarning] = []
-    stats = SurveyStats(area_m2=float(corridor.area), angle_deg=math.nan, spacing_m=spacing,
-                        trigger_distance_m=trig, lines=len(lines), legs=len(lines), photo_count=len(photos),
-                        path_length_m=length,
-                        leg_length_m=float(sum(np.hypot(*np.diff(l, axis=0).T).sum() for l in lines)),
-                        est_time_s=estimated_time_s(length, 2 * len(lines), speed_mps),
-                        trigger_interval_s=interval)
-    return CorridorPlan(wps, tuple(spans), False, trig, spacing, photos,
-                        tuple(tuple(map(tuple, l.tolist())) for l in lines), area, stats, tuple(warnings))
+    return SurveyStats(area_m2=area.area_m2, angle_deg=math.nan, spacing_m=sp.spacing_m,
+                       trigger_distance_m=sp.trigger_m, lines=len(lines), legs=len(lines), photo_count=photo_count,
+                       path_length_m=length,
+                       leg_length_m=float(sum(np.hypot(*np.diff(l, axis=0).T).sum() for l in lines)),
+                       est_time_s=estimated_time_s(length, 2 * len(lines), speed_mps),
+                       trigger_interval_s=sp.interval_s)
+
+
+def plan_corridor(line: Sequence[Sequence[float]], width_m: float, footprint: Footprint, front_pct: float,
+                  side_pct: float, turnaround_m: float = 10.0, speed_mps: float = 5.0,
+                  min_interval_s: float | None = None, where: str = "corridor.line",
+                  exit_margin_m: float = DEFAULT_EXIT_MARGIN_M, photos_left: int = MAX_PHOTOS) -> CorridorPlan:
+    """Plan a corridor along `line` (see module doc); `photos_left`: what the plan's earlier steps left of
+    MAX_PHOTOS."""
+    pts = _checked_points(line, width_m, where)
+    sp = _spacing(footprint, front_pct, side_pct, speed_mps, min_interval_s)
+    centre = _centre_line(pts, where)
+    area = _corridor_area(centre, width_m, where)
+    offsets = line_offsets(width_m, footprint.across_m, sp.spacing_m, DEFAULT_EDGE_MARGIN_M) - width_m / 2.0
+    check_photo_budget(centre.line.length * len(offsets) / sp.trigger_m, "corridor", photos_left)
+    lines = _flight_lines(centre, offsets, sp.trigger_m, where)
+    path, spans = _flight_path(lines, sp.trigger_m, turnaround_m, exit_margin_m)
+    pxy = np.array([(p.x, p.y) for p in path])
+    lat, lon = centre.projection.to_latlon(pxy[:, 0], pxy[:, 1])
+    waypoints = tuple(Waypoint(p.x, p.y, float(a), float(o), p.kind, p.line) for p, a, o in zip(path, lat, lon))
+    photos = _photos(pxy, spans, centre.projection)
+    return CorridorPlan(waypoints, tuple(spans), False, sp.trigger_m, sp.spacing_m, photos,
+                        tuple(tuple(map(tuple, l.tolist())) for l in lines), area,
+                        _stats(area, sp, lines, pxy, len(photos), speed_mps), ())
