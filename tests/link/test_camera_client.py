@@ -205,6 +205,21 @@ def test_apply_when_the_camera_disappears(tmp_path):
         emu.close()
 
 
+@pytest.mark.parametrize("kind,message", [("param_ext_set", "PARAM_EXT_SET"), ("param_set", "PARAM_SET")])
+def test_a_step_for_another_component_leaves_the_client_aimed_at_its_camera(client, pro, kind, message):
+    """A step naming another component is sent there with that component as the target: the client itself
+    keeps talking to its camera meanwhile (another thread asking the camera something is not redirected).
+    It used to swap its own system/component ids for the step and put them back afterwards."""
+    steps = parse_setup({"steps": [{"kind": kind, "target_component": 77, "param_id": "EMISSIVITY",
+                                    "value": 0.9, "type": "float"}]})
+    aimed_at = []
+    pro.link.subscribe(lambda m: aimed_at.append((client.system, client.component)), message,
+                       predicate=lambda m: m.target_component == 77)
+    with pytest.raises(LinkError, match="stopped the sequence"):
+        client.apply(steps)                     # nobody is component 77: no answer
+    assert aimed_at and set(aimed_at) == {(1, 100)}
+
+
 def test_no_camera_times_out():
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
         s.bind(("127.0.0.1", 0))
