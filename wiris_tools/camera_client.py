@@ -19,6 +19,7 @@ Every wait is bounded; errors are LinkError naming the step, setting or command 
 
 from __future__ import annotations
 
+import difflib
 import json
 import math
 import time
@@ -30,10 +31,14 @@ from typing import Any, NamedTuple
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from cdf.errors import CdfError
-from wiris_tools.emulate import paramext
-from wiris_tools.emulate.definition import Definition, DefParam, parse_definition
+from cdf.validation import CameraInfo as ValidationInfo
+from cdf.validation import validate_bytes
+from cdf.xmlsafe import fetch_url
+from wiris_tools import paramext
+from wiris_tools.camera_definition import Definition, DefParam, parse_definition
 from wiris_tools.errors import CommandRefused, LinkError, NoAnswer
 from wiris_tools.link import IN_PROGRESS_TIMEOUTS, Link, command_name, result_name
+from wiris_tools.mavftp import download
 
 CAMERA_COMPONENTS = range(mavlink2.MAV_COMP_ID_CAMERA, mavlink2.MAV_COMP_ID_CAMERA6 + 1)
 MAX_SETUP_BYTES = 1024 * 1024
@@ -47,7 +52,10 @@ class Target(NamedTuple):
 
 
 @dataclass(frozen=True)
-class CameraInfo:
+class CameraInformation:
+    """What the camera's CAMERA_INFORMATION says. (cdf.validation's CameraInfo, built from it, is what the
+    definition validator checks a definition against.)"""
+
     system: int
     component: int
     vendor: str
@@ -235,7 +243,7 @@ class CameraClient:
                 got.append(more)
             return got
 
-    def information(self) -> CameraInfo:
+    def information(self) -> CameraInformation:
         try:
             # 521 param1: "Request camera capabilities (MAV_BOOL_TRUE)"
             m = self.request("CAMERA_INFORMATION", fallback=mavlink2.MAV_CMD_REQUEST_CAMERA_INFORMATION,
@@ -248,7 +256,7 @@ class CameraClient:
                                 hint="a MicaSense RedEdge speaks only its serial API (no camera protocol): set its "
                                      "parameters with `wiris camera apply` param_set steps (--mavlink1)") from None
             raise
-        return CameraInfo(
+        return CameraInformation(
             system=self.system, component=self.component, vendor=_text(m.vendor_name), model=_text(m.model_name),
             firmware_version=m.firmware_version, focal_length_mm=m.focal_length,
             sensor_size_mm=(m.sensor_size_h, m.sensor_size_v), resolution_px=(m.resolution_h, m.resolution_v),
@@ -303,14 +311,10 @@ class CameraClient:
                 "image_count": m.image_count}
 
     # -- the definition ------------------------------------------------------------------------
-    def definition(self, info: CameraInfo, *, timeout_s: float = 10.0,
+    def definition(self, info: CameraInformation, *, timeout_s: float = 10.0,
                    progress: Callable[[int, int], None] | None = None) -> LoadedDefinition:
         """Download the definition the camera names and validate it (strict profile). `progress(done, total)`
         is called during a MAVLink FTP download (slow on a 57600 baud serial link)."""
-        from cdf.validation import CameraInfo as ValidationInfo
-        from cdf.validation import validate_bytes
-        from cdf.xmlsafe import fetch_url
-
         uri = info.definition_uri
         if not uri:
             raise LinkError("the camera names no camera definition (empty cam_definition_uri)",
@@ -318,8 +322,6 @@ class CameraClient:
                             hint="its settings cannot be read through PARAM_EXT without one")
         scheme = uri.split("://", 1)[0].lower() if "://" in uri else ""
         if scheme in ("mftp", "mavlinkftp"):
-            from wiris_tools.mavftp import download
-
             path = uri.split("://", 1)[1]
             # MAVLink FTP URL scheme (devguide ftp.md): an optional "comp=ID:" or QGC's "[;comp=ID]" prefix
             # names the component that serves the file; by default it is the camera itself.
@@ -394,12 +396,9 @@ class CameraClient:
         if v is not None:
             values[name] = v
 
-    def check_against_camera(self, loaded: LoadedDefinition, info: CameraInfo) -> Any:
+    def check_against_camera(self, loaded: LoadedDefinition, info: CameraInformation) -> Any:
         """Validate the definition again with what the camera answered (types, parameters it never
         answered: the validator's CDF3xx rules). Call after read_settings."""
-        from cdf.validation import CameraInfo as ValidationInfo
-        from cdf.validation import validate_bytes
-
         return validate_bytes(loaded.data, loaded.uri, "strict", camera_info=ValidationInfo(
             vendor_name=info.vendor, model_name=info.model, cam_definition_version=info.definition_version,
             cam_definition_uri=loaded.uri, param_types=dict(self.reported_types),
@@ -428,8 +427,6 @@ class CameraClient:
         """PARAM_EXT_SET with the definition's type; waits for PARAM_EXT_ACK (retries); the value now held."""
         p = definition.param(name)
         if p is None:
-            import difflib
-
             close = difflib.get_close_matches(name, [q.name for q in definition.params], n=1)
             raise LinkError(f"the camera's definition has no setting {name!r}",
                             hint=f"did you mean {close[0]}?" if close else "see `wiris camera settings`")
@@ -816,5 +813,5 @@ def load_setup(path: str | Path) -> list[Step]:
     return parse_setup(data, str(path))
 
 
-__all__ = ["CameraClient", "CameraInfo", "LoadedDefinition", "Shot", "Step", "StepResult", "Target", "load_setup",
+__all__ = ["CameraClient", "CameraInformation", "LoadedDefinition", "Shot", "Step", "StepResult", "Target", "load_setup",
            "parse_setup"]

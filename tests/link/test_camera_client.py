@@ -104,7 +104,7 @@ def test_camera_refusal_names_the_result(client):
 def test_a_definition_type_that_cannot_carry_the_value_says_what_to_check(client, pro):
     """A camera's definition may declare a type its own range does not fit (a uint8 up to 1000) or one
     without a PARAM_EXT number encoding: the value is refused before anything is sent."""
-    from wiris_tools.emulate.definition import DefParam, Definition
+    from wiris_tools.camera_definition import DefParam, Definition
 
     d = Definition("V", "M", 1, (DefParam("BIG", "uint8", None, max=1000.0), DefParam("TXT", "custom", None)))
     for name, value, text in (("BIG", "300", "does not fit uint8"), ("TXT", "1", "no PARAM_EXT number encoding")):
@@ -848,3 +848,15 @@ def test_set_gives_up_on_a_camera_that_answers_in_progress_for_ever():
     err = call.error
     assert "PARAM_ACK_IN_PROGRESS" in err.message and err.where == "EMISSIVITY" and "--timeout" in err.hint
     assert IN_PROGRESS_TIMEOUTS * 0.1 <= call.waited < IN_PROGRESS_TIMEOUTS * 0.1 + 3
+
+
+def test_the_client_loads_no_emulator():
+    """The definition reader and the PARAM_EXT codec that client and emulators share live beside both, so a
+    ground station loads no emulator code (it used to find them under wiris_tools/emulate/)."""
+    import subprocess
+    import sys
+
+    code = ("import sys, wiris_tools.camera_client\n"
+            "print(sorted(m for m in sys.modules if m.startswith('wiris_tools.emulate')))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"

@@ -50,7 +50,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from cdf.catalogue import Camera, Setting
 from cdf.errors import CdfError
 from missions.geometry.geo import great_circle_m
-from wiris_tools.emulate import paramext
+from wiris_tools import paramext
 
 Message = Any
 

@@ -170,7 +170,7 @@ def start_emulator(model: str, url: str, *, component: int | None = None, system
         emu = Emulator(camera, state, link, threading.Lock())
     else:
         from cdf.generate import definition_file_name, definition_xml
-        from wiris_tools.emulate.definition import parse_definition
+        from wiris_tools.camera_definition import parse_definition
         from wiris_tools.emulate.wiris import WirisConfig, WirisState
 
         comp = camera.default_component_id if component is None else component

@@ -43,8 +43,8 @@ from typing import Any
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from cdf.catalogue import Camera, Setting
-from wiris_tools.emulate import paramext
-from wiris_tools.emulate.definition import Definition, DefParam
+from wiris_tools import paramext
+from wiris_tools.camera_definition import Definition, DefParam
 from wiris_tools.serve import host_port
 
 Message = Any
@@ -749,7 +749,7 @@ def new_wiris(camera: Camera, config: WirisConfig | None = None, *, now: float =
               utc_offset_s: float = 0.0, definition_bytes: bytes | None = None) -> WirisState:
     """A WirisState whose parameter list is the catalogue camera's generated definition."""
     from cdf.generate import definition_xml
-    from wiris_tools.emulate.definition import parse_definition
+    from wiris_tools.camera_definition import parse_definition
 
     from cdf.generate import definition_file_name
 
