@@ -105,8 +105,9 @@ class Shot:
     time_utc_us: int
 
     def to_json(self) -> dict:
-        return {"index": self.index, "ok": self.result == 1, "file": self.file, "lat": self.lat / 1e7,
-                "lon": self.lon / 1e7, "alt_m": self.alt_mm / 1000.0, "time_utc_us": self.time_utc_us}
+        return {"index": self.index, "ok": self.result == mavlink2.MAV_BOOL_TRUE, "file": self.file,
+                "lat": self.lat / 1e7, "lon": self.lon / 1e7, "alt_m": self.alt_mm / 1000.0,
+                "time_utc_us": self.time_utc_us}
 
 
 @dataclass(frozen=True)
@@ -247,7 +248,7 @@ class CameraClient:
         try:
             # 521 param1: "Request camera capabilities (MAV_BOOL_TRUE)"
             m = self.request("CAMERA_INFORMATION", fallback=mavlink2.MAV_CMD_REQUEST_CAMERA_INFORMATION,
-                             fallback_params=(1,))[0]
+                             fallback_params=(mavlink2.MAV_BOOL_TRUE,))[0]
         except NoAnswer as err:
             hb = self.link.heartbeats().get((self.system, self.component))
             if hb is not None and hb.type != mavlink2.MAV_TYPE_CAMERA:
@@ -275,7 +276,7 @@ class CameraClient:
             try:
                 return self.request("STORAGE_INFORMATION", param2,
                                     fallback=mavlink2.MAV_CMD_REQUEST_STORAGE_INFORMATION,
-                                    fallback_params=(param2, 1), count=count, wait_s=wait_s)
+                                    fallback_params=(param2, mavlink2.MAV_BOOL_TRUE), count=count, wait_s=wait_s)
             except CommandRefused as err:
                 if err.result in _REFUSED:
                     return None
@@ -301,7 +302,7 @@ class CameraClient:
         try:
             # 527 param1: "Request camera capture status (MAV_BOOL_TRUE)"
             m = self.request("CAMERA_CAPTURE_STATUS", fallback=mavlink2.MAV_CMD_REQUEST_CAMERA_CAPTURE_STATUS,
-                             fallback_params=(1,))[0]
+                             fallback_params=(mavlink2.MAV_BOOL_TRUE,))[0]
         except CommandRefused as err:
             if err.result in _REFUSED:
                 return None
@@ -548,7 +549,7 @@ class CameraClient:
                     shot = Shot(m.image_index, m.capture_result, _text(m.file_url), m.lat, m.lon, m.alt, m.time_utc)
                     yield shot
                     got += 1
-                    if m.capture_result != 1:
+                    if m.capture_result != mavlink2.MAV_BOOL_TRUE:
                         raise LinkError(f"the camera failed to capture image {m.image_index} (capture_result "
                                         f"{m.capture_result})", where=f"component {self.component}",
                                         hint="check its storage (`wiris camera info`)")
@@ -631,7 +632,7 @@ class CameraClient:
         says so. Refused when the camera speaks MAVLink 1 (a RedEdge) and the link does not: nothing would
         show that it dropped the MAVLink 2 frames."""
         hb = self.link.heartbeats().get(target)
-        if hb is not None and not self.link.mavlink1 and hb.get_msgbuf()[:1] == b"\xfe":
+        if hb is not None and not self.link.mavlink1 and hb.get_msgbuf()[:1] == bytes([mavlink2.PROTOCOL_MARKER_V1]):
             raise LinkError(f"component {target.component} speaks MAVLink 1 and does not answer {step.message}, so a "
                             "MAVLink 2 frame it cannot read would be lost without a trace; nothing was sent",
                             where=step.label, hint="run again with --mavlink1")

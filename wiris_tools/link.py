@@ -109,6 +109,9 @@ IN_PROGRESS_TIMEOUTS = 10
 # heartbeat every second.
 UDPIN_PEER_TIMEOUT_S = 30.0
 
+# target_system 0 addresses every system (common.xml names the component one, MAV_COMP_ID_ALL, but not this)
+BROADCAST_SYSTEM = 0
+
 
 def command_name(command: int) -> str:
     """MAV_CMD_… name of a command id (or the number when the dialect does not know it)."""
@@ -147,9 +150,11 @@ class _Match:
         if self.src_component is not None and msg.get_srcComponent() != self.src_component:
             return False
         if self.to_me:
-            ts = getattr(msg, "target_system", 0)
-            tc = getattr(msg, "target_component", 0)
-            if ts not in (0, self.own_system) or tc not in (0, self.own_component):
+            ts = getattr(msg, "target_system", BROADCAST_SYSTEM)
+            tc = getattr(msg, "target_component", mavlink2.MAV_COMP_ID_ALL)
+            if ts not in (BROADCAST_SYSTEM, self.own_system):
+                return False
+            if tc not in (mavlink2.MAV_COMP_ID_ALL, self.own_component):
                 return False
         return self.predicate is None or bool(self.predicate(msg))
 
@@ -532,9 +537,9 @@ class Link:
             if target_component and ack.get_srcComponent() != target_component:
                 return False
             # MAVLink 2 acks may name who they answer; 0 (or a MAVLink 1 ack) means "not said".
-            ts = getattr(ack, "target_system", 0)
-            tc = getattr(ack, "target_component", 0)
-            return ts in (0, self.system) and tc in (0, self.component)
+            ts = getattr(ack, "target_system", BROADCAST_SYSTEM)
+            tc = getattr(ack, "target_component", mavlink2.MAV_COMP_ID_ALL)
+            return ts in (BROADCAST_SYSTEM, self.system) and tc in (mavlink2.MAV_COMP_ID_ALL, self.component)
 
         tries = retries + 1
         busy_until: float | None = None       # set by the first IN_PROGRESS: the latest we wait for the result

@@ -20,9 +20,11 @@ from __future__ import annotations
 import random
 import struct
 import time
+import zlib
 from dataclasses import dataclass
 from typing import Any, Callable
 
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from wiris_tools.errors import LinkError
 
@@ -30,12 +32,25 @@ PAYLOAD_BYTES = 251
 HEADER = struct.Struct("<HBBBBBBI")
 DATA_MAX = PAYLOAD_BYTES - HEADER.size   # 239
 
-# Opcodes and NAK error codes (devguide services/ftp.md, "OpCodes" and "NAK Error Information")
-OP_NONE, OP_TERMINATE, OP_RESET, OP_LIST, OP_OPEN_RO, OP_READ = 0, 1, 2, 3, 4, 5
-OP_CRC32, OP_BURST_READ = 14, 15
-OP_ACK, OP_NAK = 128, 129
-ERR_FAIL, ERR_INVALID_SIZE, ERR_INVALID_SESSION, ERR_NO_SESSIONS, ERR_EOF, ERR_UNKNOWN_COMMAND = 1, 3, 4, 5, 6, 7
-ERR_FILE_NOT_FOUND = 10
+# Opcodes and NAK error codes (devguide services/ftp.md, "OpCodes" and "NAK Error Information"; common.xml's
+# MAV_FTP_OPCODE and MAV_FTP_ERR)
+OP_NONE = mavlink2.MAV_FTP_OPCODE_NONE
+OP_TERMINATE = mavlink2.MAV_FTP_OPCODE_TERMINATESESSION
+OP_RESET = mavlink2.MAV_FTP_OPCODE_RESETSESSION
+OP_LIST = mavlink2.MAV_FTP_OPCODE_LISTDIRECTORY
+OP_OPEN_RO = mavlink2.MAV_FTP_OPCODE_OPENFILERO
+OP_READ = mavlink2.MAV_FTP_OPCODE_READFILE
+OP_CRC32 = mavlink2.MAV_FTP_OPCODE_CALCFILECRC
+OP_BURST_READ = mavlink2.MAV_FTP_OPCODE_BURSTREADFILE
+OP_ACK = mavlink2.MAV_FTP_OPCODE_ACK
+OP_NAK = mavlink2.MAV_FTP_OPCODE_NAK
+ERR_FAIL = mavlink2.MAV_FTP_ERR_FAIL
+ERR_INVALID_SIZE = mavlink2.MAV_FTP_ERR_INVALIDDATASIZE
+ERR_INVALID_SESSION = mavlink2.MAV_FTP_ERR_INVALIDSESSION
+ERR_NO_SESSIONS = mavlink2.MAV_FTP_ERR_NOSESSIONSAVAILABLE
+ERR_EOF = mavlink2.MAV_FTP_ERR_EOF
+ERR_UNKNOWN_COMMAND = mavlink2.MAV_FTP_ERR_UNKNOWNCOMMAND
+ERR_FILE_NOT_FOUND = mavlink2.MAV_FTP_ERR_FILENOTFOUND
 MAX_SESSIONS = 4
 MAX_DOWNLOAD_BYTES = 4 * 1024 * 1024
 TERMINATE_TRIES = 3      # TerminateSession sent at most this often, until the server answers it
@@ -193,8 +208,6 @@ class FtpServer:
                                      burst_complete=int(i == len(offsets) - 1)))
             return out
         if req.opcode == OP_CRC32:
-            import zlib
-
             path = normalise_path(req.data[:req.size].split(b"\0", 1)[0].decode("utf-8", "replace"))
             if path not in self.files:
                 return [self._nak(req, ERR_FILE_NOT_FOUND)]

@@ -60,7 +60,7 @@ DEFAULT_SYSTEM_ID = 255      # "defaults to 255 otherwise"
 ALL_SENSORS = 255            # DIGICAM_CONFIGURE extra_param: "Set to 255 for all"
 MIN_TIMER_S = 1.0
 UINT64_MAX = 2**64 - 1
-MAVLINK2_MAGIC = b"\xfd"
+MAVLINK2_MAGIC = bytes([mavlink2.PROTOCOL_MARKER_V2])
 
 
 @dataclass
@@ -163,7 +163,7 @@ class RedEdgeState:
             self.system_id = sender[0]
             self.mav.srcSystem = sender[0]
         target = getattr(msg, "target_component", None)
-        if target is not None and target not in (0, self.component):
+        if target is not None and target not in (mavlink2.MAV_COMP_ID_ALL, self.component):
             self.ignored += 1
             return []
         handler = getattr(self, "_on_" + mtype.lower(), None)
