@@ -43,8 +43,10 @@ from typing import Any
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from cdf.catalogue import Camera, Setting
+from cdf.generate import definition_file_name, definition_xml
 from wiris_tools import paramext
-from wiris_tools.camera_definition import Definition, DefParam
+from wiris_tools.camera_definition import Definition, DefParam, parse_definition
+from wiris_tools.mavftp import FtpServer
 from wiris_tools.serve import host_port
 
 Message = Any
@@ -63,6 +65,9 @@ IMAGE_STATUS_IDLE = 0
 IMAGE_STATUS_INTERVAL_CAPTURING = 3
 VIDEO_STATUS_IDLE = 0
 VIDEO_STATUS_CAPTURING = 1
+_INFO = mavlink2.MAVLink_camera_information_message
+# cam_definition_uri is char[140]: a URI of up to 139 characters keeps the NUL that ends it
+DEFINITION_URI_CHARS = _INFO.array_lengths[_INFO.ordered_fieldnames.index("cam_definition_uri")] - 1
 GPS_MESSAGES = ("GLOBAL_POSITION_INT", "GPS_STATUS")
 PARAM_EXT_MESSAGES = ("PARAM_EXT_REQUEST_LIST", "PARAM_EXT_REQUEST_READ", "PARAM_EXT_SET")
 
@@ -163,8 +168,6 @@ class WirisState:
         # the other transport common.xml allows for cam_definition_uri.
         self.ftp = None
         if ftp_files:
-            from wiris_tools.mavftp import FtpServer
-
             self.ftp = FtpServer(ftp_files, self.mav)
         self.reset_settings()
 
@@ -603,7 +606,7 @@ class WirisState:
                 focal = thermal.lenses_mm[lens]
             if thermal.resolution_px:
                 res = thermal.resolution_px
-        uri = self.config.definition_uri.encode()[:139]
+        uri = self.config.definition_uri.encode()[:DEFINITION_URI_CHARS]
         # §6.4.1: sensor size "not implemented, sends 0"; firmware version is not in the manual's table (0 =
         # unknown in common.xml).
         return self.mav.camera_information_encode(
@@ -756,11 +759,6 @@ class WirisState:
 def new_wiris(camera: Camera, config: WirisConfig | None = None, *, now: float = 0.0,
               utc_offset_s: float = 0.0, definition_bytes: bytes | None = None) -> WirisState:
     """A WirisState whose parameter list is the catalogue camera's generated definition."""
-    from cdf.generate import definition_xml
-    from wiris_tools.camera_definition import parse_definition
-
-    from cdf.generate import definition_file_name
-
     data = definition_bytes if definition_bytes is not None else definition_xml(camera)
     return WirisState(camera, parse_definition(data, camera.id), config, now=now, utc_offset_s=utc_offset_s,
                       ftp_files={definition_file_name(camera): data})
