@@ -180,7 +180,7 @@ class RedEdgeState:
     def _on_gps_raw_int(self, msg, now):
         if msg.time_usec > 0:
             self.utc_base = (msg.time_usec / 1e6, now)
-        self.fix = msg.fix_type > 2
+        self.fix = msg.fix_type >= mavlink2.GPS_FIX_TYPE_3D_FIX
         if self.fix:
             self._position(msg.lat, msg.lon, msg.alt, now)
         return []
