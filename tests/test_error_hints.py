@@ -12,7 +12,7 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 PACKAGES = ("cdf", "missions", "wiris_tools")
-ERRORS = {"WirisError", "CdfError", "PlanError", "LinkError", "UploadUnconfirmed"}
+ERRORS = {"WirisError", "CdfError", "PlanError", "LinkError", "UploadUnconfirmed", "CommandRefused", "NoAnswer"}
 
 
 def _constructions(tree: ast.AST):

@@ -19,22 +19,28 @@ Every wait is bounded; errors are LinkError naming the step, setting or command 
 
 from __future__ import annotations
 
+import difflib
 import json
 import math
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from cdf.errors import CdfError
 from cdf.userfile import UserFile, read_user_file
-from wiris_tools.emulate import paramext
-from wiris_tools.emulate.definition import Definition, DefParam, parse_definition
-from wiris_tools.errors import LinkError
+from cdf.validation import CameraInfo as ValidationInfo
+from cdf.validation import validate_bytes
+from cdf.validation.values import INT_RANGES
+from cdf.xmlsafe import fetch_url
+from wiris_tools import paramext
+from wiris_tools.camera_definition import Definition, DefParam, parse_definition
+from wiris_tools.errors import CommandRefused, LinkError, NoAnswer
 from wiris_tools.link import IN_PROGRESS_TIMEOUTS, Link, command_name, result_name
+from wiris_tools.mavftp import download
 
 CAMERA_COMPONENTS = range(mavlink2.MAV_COMP_ID_CAMERA, mavlink2.MAV_COMP_ID_CAMERA6 + 1)
 MAX_SETUP_BYTES = 1024 * 1024
@@ -45,8 +51,17 @@ SETUP_FILE = UserFile("setup file", MAX_SETUP_BYTES, LinkError,
 MAX_STEPS = 1000
 
 
+class Target(NamedTuple):
+    """The component a request goes to (and whose answers count)."""
+    system: int
+    component: int
+
+
 @dataclass(frozen=True)
-class CameraInfo:
+class CameraInformation:
+    """What the camera's CAMERA_INFORMATION says. (cdf.validation's CameraInfo, built from it, is what the
+    definition validator checks a definition against.)"""
+
     system: int
     component: int
     vendor: str
@@ -96,8 +111,9 @@ class Shot:
     time_utc_us: int
 
     def to_json(self) -> dict:
-        return {"index": self.index, "ok": self.result == 1, "file": self.file, "lat": self.lat / 1e7,
-                "lon": self.lon / 1e7, "alt_m": self.alt_mm / 1000.0, "time_utc_us": self.time_utc_us}
+        return {"index": self.index, "ok": self.result == mavlink2.MAV_BOOL_TRUE, "file": self.file,
+                "lat": self.lat / 1e7, "lon": self.lon / 1e7, "alt_m": self.alt_mm / 1000.0,
+                "time_utc_us": self.time_utc_us}
 
 
 @dataclass(frozen=True)
@@ -143,19 +159,14 @@ def _nan_params(values: list[float | None]) -> list[float]:
     return [math.nan if v is None else float(v) for v in values]
 
 
+def _stopped(err: LinkError, where: str) -> LinkError:
+    """The error that ends a command sequence at step `where`: the step's own error, its hint kept."""
+    return LinkError(f"stopped the sequence: {err.message}", where=where, hint=err.hint)
+
+
 # A camera that answers a request with these does not report that part (a camera without storage, an
 # older one without capture status): `wiris camera info` says "not reported" and carries on.
 _REFUSED = (mavlink2.MAV_RESULT_UNSUPPORTED, mavlink2.MAV_RESULT_DENIED)
-
-
-def _answered(err: LinkError) -> int | None:
-    """The MAV_RESULT a Link.command_long error reports ("... answered MAV_RESULT_DENIED"), or None when the
-    command was not answered at all."""
-    text = err.message
-    for value, entry in mavlink2.enums["MAV_RESULT"].items():
-        if text.endswith(f" answered {entry.name}"):
-            return value
-    return None
 
 
 class CameraClient:
@@ -168,6 +179,11 @@ class CameraClient:
         self.retries = retries
         self.system, self.component = self._find(component, system, find_timeout_s)
         self.reported_types: dict[str, str] = {}     # parameter -> CDF type of the PARAM_EXT type it came with
+
+    @property
+    def camera(self) -> Target:
+        """The camera this client found (a command sequence's steps may name other components)."""
+        return Target(self.system, self.component)
 
     # -- discovery -----------------------------------------------------------------------------
     def _find(self, component: int | None, system: int | None, timeout_s: float) -> tuple[int, int]:
@@ -217,8 +233,8 @@ class CameraClient:
         with self.link.inbox(message, src_system=self.system, src_component=self.component) as box:
             try:
                 self.command(mavlink2.MAV_CMD_REQUEST_MESSAGE, [msg_id, param2, 0, 0, 0, 0, 0])
-            except LinkError as err:
-                if fallback is None or _answered(err) != mavlink2.MAV_RESULT_UNSUPPORTED:
+            except CommandRefused as err:
+                if fallback is None or err.result != mavlink2.MAV_RESULT_UNSUPPORTED:
                     raise
                 self.command(fallback, [*fallback_params, *[0.0] * (7 - len(fallback_params))])
             got = []
@@ -234,20 +250,20 @@ class CameraClient:
                 got.append(more)
             return got
 
-    def information(self) -> CameraInfo:
+    def information(self) -> CameraInformation:
         try:
             # 521 param1: "Request camera capabilities (MAV_BOOL_TRUE)"
             m = self.request("CAMERA_INFORMATION", fallback=mavlink2.MAV_CMD_REQUEST_CAMERA_INFORMATION,
-                             fallback_params=(1,))[0]
-        except LinkError as err:
+                             fallback_params=(mavlink2.MAV_BOOL_TRUE,))[0]
+        except NoAnswer as err:
             hb = self.link.heartbeats().get((self.system, self.component))
-            if hb is not None and hb.type != mavlink2.MAV_TYPE_CAMERA and "no answer" in err.message:
+            if hb is not None and hb.type != mavlink2.MAV_TYPE_CAMERA:
                 raise LinkError(f"{err.message}; component {self.component} announces MAV_TYPE {hb.type}, not "
                                 "MAV_TYPE_CAMERA", where=err.where,
                                 hint="a MicaSense RedEdge speaks only its serial API (no camera protocol): set its "
                                      "parameters with `wiris camera apply` param_set steps (--mavlink1)") from None
             raise
-        return CameraInfo(
+        return CameraInformation(
             system=self.system, component=self.component, vendor=_text(m.vendor_name), model=_text(m.model_name),
             firmware_version=m.firmware_version, focal_length_mm=m.focal_length,
             sensor_size_mm=(m.sensor_size_h, m.sensor_size_v), resolution_px=(m.resolution_h, m.resolution_v),
@@ -266,9 +282,9 @@ class CameraClient:
             try:
                 return self.request("STORAGE_INFORMATION", param2,
                                     fallback=mavlink2.MAV_CMD_REQUEST_STORAGE_INFORMATION,
-                                    fallback_params=(param2, 1), count=count, wait_s=wait_s)
-            except LinkError as err:
-                if _answered(err) in _REFUSED:
+                                    fallback_params=(param2, mavlink2.MAV_BOOL_TRUE), count=count, wait_s=wait_s)
+            except CommandRefused as err:
+                if err.result in _REFUSED:
                     return None
                 raise
 
@@ -292,9 +308,9 @@ class CameraClient:
         try:
             # 527 param1: "Request camera capture status (MAV_BOOL_TRUE)"
             m = self.request("CAMERA_CAPTURE_STATUS", fallback=mavlink2.MAV_CMD_REQUEST_CAMERA_CAPTURE_STATUS,
-                             fallback_params=(1,))[0]
-        except LinkError as err:
-            if _answered(err) in _REFUSED:
+                             fallback_params=(mavlink2.MAV_BOOL_TRUE,))[0]
+        except CommandRefused as err:
+            if err.result in _REFUSED:
                 return None
             raise
         return {"image_status": m.image_status, "video_status": m.video_status, "image_interval_s": m.image_interval,
@@ -302,14 +318,10 @@ class CameraClient:
                 "image_count": m.image_count}
 
     # -- the definition ------------------------------------------------------------------------
-    def definition(self, info: CameraInfo, *, timeout_s: float = 10.0,
+    def definition(self, info: CameraInformation, *, timeout_s: float = 10.0,
                    progress: Callable[[int, int], None] | None = None) -> LoadedDefinition:
         """Download the definition the camera names and validate it (strict profile). `progress(done, total)`
         is called during a MAVLink FTP download (slow on a 57600 baud serial link)."""
-        from cdf.validation import CameraInfo as ValidationInfo
-        from cdf.validation import validate_bytes
-        from cdf.xmlsafe import fetch_url
-
         uri = info.definition_uri
         if not uri:
             raise LinkError("the camera names no camera definition (empty cam_definition_uri)",
@@ -317,8 +329,6 @@ class CameraClient:
                             hint="its settings cannot be read through PARAM_EXT without one")
         scheme = uri.split("://", 1)[0].lower() if "://" in uri else ""
         if scheme in ("mftp", "mavlinkftp"):
-            from wiris_tools.mavftp import download
-
             path = uri.split("://", 1)[1]
             # MAVLink FTP URL scheme (devguide ftp.md): an optional "comp=ID:" or QGC's "[;comp=ID]" prefix
             # names the component that serves the file; by default it is the camera itself.
@@ -393,12 +403,9 @@ class CameraClient:
         if v is not None:
             values[name] = v
 
-    def check_against_camera(self, loaded: LoadedDefinition, info: CameraInfo) -> Any:
+    def check_against_camera(self, loaded: LoadedDefinition, info: CameraInformation) -> Any:
         """Validate the definition again with what the camera answered (types, parameters it never
         answered: the validator's CDF3xx rules). Call after read_settings."""
-        from cdf.validation import CameraInfo as ValidationInfo
-        from cdf.validation import validate_bytes
-
         return validate_bytes(loaded.data, loaded.uri, "strict", camera_info=ValidationInfo(
             vendor_name=info.vendor, model_name=info.model, cam_definition_version=info.definition_version,
             cam_definition_uri=loaded.uri, param_types=dict(self.reported_types),
@@ -427,15 +434,17 @@ class CameraClient:
         """PARAM_EXT_SET with the definition's type; waits for PARAM_EXT_ACK (retries); the value now held."""
         p = definition.param(name)
         if p is None:
-            import difflib
-
             close = difflib.get_close_matches(name, [q.name for q in definition.params], n=1)
             raise LinkError(f"the camera's definition has no setting {name!r}",
                             hint=f"did you mean {close[0]}?" if close else "see `wiris camera settings`")
         value = self.parse_value(p, text)
         return self.set_param_ext(name, value, p.type)
 
-    def set_param_ext(self, name: str, value: float | int, cdf_type: str, *, where: str | None = None) -> float | int:
+    def set_param_ext(self, name: str, value: float | int, cdf_type: str, *, where: str | None = None,
+                      target: Target | None = None) -> float | int:
+        """PARAM_EXT_SET to `target` (the camera unless told); waits for PARAM_EXT_ACK (retries); the value
+        now held."""
+        to = target or self.camera
         try:
             raw = paramext.encode(value, cdf_type)
             ext = paramext.wire_type(cdf_type).ext_type
@@ -443,13 +452,13 @@ class CameraClient:
             raise LinkError(f"{name}: {err}", where=where or name,
                             hint="the definition gives this setting an unusable type or range: "
                                  "check it with `wiris cdf validate URL`") from None
-        msg = self.link.mav.param_ext_set_encode(self.system, self.component, name.encode(), raw, ext)
+        msg = self.link.mav.param_ext_set_encode(to.system, to.component, name.encode(), raw, ext)
 
         def ours(m: Any) -> bool:
             return paramext.param_id(m) == name
 
         busy_until: float | None = None    # as Link.command_long: IN_PROGRESS extends the wait, up to a cap
-        with self.link.inbox("PARAM_EXT_ACK", src_system=self.system, src_component=self.component,
+        with self.link.inbox("PARAM_EXT_ACK", src_system=to.system, src_component=to.component,
                              predicate=ours) as box:
             for _attempt in range(self.retries + 1):
                 self.link.send(msg)
@@ -487,10 +496,12 @@ class CameraClient:
                         where=where or name, hint="is the camera still connected? does it speak PARAM_EXT?")
 
     def set_param(self, name: str, value: float | int, cdf_type: str = "float", *,
-                  where: str | None = None) -> float | int:
-        """Classic PARAM_SET (a RedEdge's parameters), the value byte-wise as `cdf_type` (the camera reads the
-        4 bytes as its parameter's type: paramext.encode_classic); the camera answers PARAM_VALUE with what
-        it holds."""
+                  where: str | None = None, target: Target | None = None) -> float | int:
+        """Classic PARAM_SET (a RedEdge's parameters) to `target` (the camera unless told), the value byte-wise
+        as `cdf_type` (the camera reads the 4 bytes as its parameter's type: paramext.encode_classic); the
+        camera answers PARAM_VALUE with what it holds."""
+        to = target or self.camera
+
         def ours(m: Any) -> bool:
             return m.param_id == name
 
@@ -499,9 +510,9 @@ class CameraClient:
         except paramext.WireValueError as err:
             raise LinkError(f"{name}: {err}", where=where or name,
                             hint="a classic parameter is at most 4 bytes: uint8…int32 or float") from None
-        msg = self.link.mav.param_set_encode(self.system, self.component, name.encode(), carried,
+        msg = self.link.mav.param_set_encode(to.system, to.component, name.encode(), carried,
                                              paramext.classic_type(cdf_type))
-        with self.link.inbox("PARAM_VALUE", src_component=self.component, predicate=ours) as box:
+        with self.link.inbox("PARAM_VALUE", src_component=to.component, predicate=ours) as box:
             for _attempt in range(self.retries + 1):
                 self.link.send(msg)
                 answer = box.get(self.timeout_s)
@@ -544,7 +555,7 @@ class CameraClient:
                     shot = Shot(m.image_index, m.capture_result, _text(m.file_url), m.lat, m.lon, m.alt, m.time_utc)
                     yield shot
                     got += 1
-                    if m.capture_result != 1:
+                    if m.capture_result != mavlink2.MAV_BOOL_TRUE:
                         raise LinkError(f"the camera failed to capture image {m.image_index} (capture_result "
                                         f"{m.capture_result})", where=f"component {self.component}",
                                         hint="check its storage (`wiris camera info`)")
@@ -575,75 +586,65 @@ class CameraClient:
                 return s
         return self.system
 
-    def _run_step(self, step: Step) -> StepResult:
-        where = step.label
-        target = step.target_component or self.component
-        if target != self.component:
-            system, self.system = self.system, self._system_of(target)
-            try:
-                return self._run_step_on(step, where, target)
-            finally:
-                self.system = system
-        return self._run_step_on(step, where, target)
+    def _target_of(self, step: Step) -> Target:
+        """Whom a step is for: its target_component, on the system that component's HEARTBEAT comes from, or
+        the camera connected to (target_component 0)."""
+        component = step.target_component or self.component
+        if component == self.component:
+            return self.camera
+        return Target(self._system_of(component), component)
 
-    def _run_step_on(self, step: Step, where: str, target: int) -> StepResult:
+    def _run_step(self, step: Step) -> StepResult:
+        target = self._target_of(step)
         if step.kind == "command_long":
-            assert step.command is not None
-            expect = getattr(mavlink2, step.expect, mavlink2.MAV_RESULT_ACCEPTED)
-            try:
-                self.link.command_long(self.system, target, step.command, list(step.params),
-                                       timeout=self.timeout_s, retries=self.retries)
-                got = mavlink2.MAV_RESULT_ACCEPTED
-            except LinkError as err:
-                text = str(err)
-                got = next((r for r, e in mavlink2.enums["MAV_RESULT"].items() if e.name in text), None)
-                if got is None or got != expect:
-                    raise LinkError(f"stopped the sequence: {err.message}",
-                                    where=where, hint=getattr(err, "hint", None)) from None
-            if got != expect:
-                raise LinkError(f"{where}: {command_name(step.command)} answered {result_name(got)}, expected "
-                                f"{step.expect}", where=where,
-                                hint='the camera accepted it; if it should, set the step\'s "expect": '
-                                     '{"result": "MAV_RESULT_ACCEPTED"}')
-            return StepResult(step, result_name(got))
+            return self._run_command_step(step, target)
         if step.kind == "message":
             return self._send_message(step, target)
-        if step.kind == "param_ext_set":
-            comp = self.component
-            self.component = target
-            try:
-                held = self.set_param_ext(step.param_id, step.value, step.type, where=where)
-            except LinkError as err:
-                raise LinkError(f"stopped the sequence: {err.message}",
-                                where=where, hint=getattr(err, "hint", None)) from None
-            finally:
-                self.component = comp
-            return StepResult(step, "PARAM_ACK_ACCEPTED", f"{step.param_id} = {held:.7g}")
-        comp = self.component
-        self.component = target
         try:
-            held = self.set_param(step.param_id, step.value, step.type, where=where)
+            if step.kind == "param_ext_set":
+                held = self.set_param_ext(step.param_id, step.value, step.type, where=step.label, target=target)
+                return StepResult(step, "PARAM_ACK_ACCEPTED", f"{step.param_id} = {held:.7g}")
+            held = self.set_param(step.param_id, step.value, step.type, where=step.label, target=target)
+            return StepResult(step, "PARAM_VALUE", f"{step.param_id} = {held:g}")
         except LinkError as err:
-            raise LinkError(f"stopped the sequence: {err.message}",
-                            where=where, hint=getattr(err, "hint", None)) from None
-        finally:
-            self.component = comp
-        return StepResult(step, "PARAM_VALUE", f"{step.param_id} = {held:g}")
+            raise _stopped(err, step.label) from None
 
-    def _send_message(self, step: Step, target: int) -> StepResult:
+    def _run_command_step(self, step: Step, target: Target) -> StepResult:
+        """A COMMAND_LONG step: done when the camera answers the result the step expects (ACCEPTED unless the
+        setup file says otherwise)."""
+        assert step.command is not None
+        where = step.label
+        expect = getattr(mavlink2, step.expect, mavlink2.MAV_RESULT_ACCEPTED)
+        try:
+            self.link.command_long(target.system, target.component, step.command, list(step.params),
+                                   timeout=self.timeout_s, retries=self.retries)
+        except CommandRefused as err:
+            if err.result != expect:
+                raise _stopped(err, where) from None
+            return StepResult(step, result_name(err.result))
+        except LinkError as err:
+            raise _stopped(err, where) from None
+        if expect != mavlink2.MAV_RESULT_ACCEPTED:
+            raise LinkError(f"{where}: {command_name(step.command)} answered "
+                            f"{result_name(mavlink2.MAV_RESULT_ACCEPTED)}, expected {step.expect}", where=where,
+                            hint='the camera accepted it; if it should, set the step\'s "expect": '
+                                 '{"result": "MAV_RESULT_ACCEPTED"}')
+        return StepResult(step, result_name(mavlink2.MAV_RESULT_ACCEPTED))
+
+    def _send_message(self, step: Step, target: Target) -> StepResult:
         """A message the camera answers with nothing (a RedEdge's DIGICAM_CONFIGURE): sent as many times as a
         request is tried, MESSAGE_GAP_S apart, so that one lost frame on a radio link does not lose the step
         (it sets absolute values, so a repeat changes nothing). Arrival cannot be confirmed, and the result
         says so. Refused when the camera speaks MAVLink 1 (a RedEdge) and the link does not: nothing would
         show that it dropped the MAVLink 2 frames."""
-        hb = self.link.heartbeats().get((self.system, target))
-        if hb is not None and not self.link.mavlink1 and hb.get_msgbuf()[:1] == b"\xfe":
-            raise LinkError(f"component {target} speaks MAVLink 1 and does not answer {step.message}, so a "
+        hb = self.link.heartbeats().get(target)
+        if hb is not None and not self.link.mavlink1 and hb.get_msgbuf()[:1] == bytes([mavlink2.PROTOCOL_MARKER_V1]):
+            raise LinkError(f"component {target.component} speaks MAVLink 1 and does not answer {step.message}, so a "
                             "MAVLink 2 frame it cannot read would be lost without a trace; nothing was sent",
                             where=step.label, hint="run again with --mavlink1")
         values = dict.fromkeys(_message_fields(step.message), 0)
         values.update(step.fields)
-        msg = getattr(self.link.mav, f"{step.message.lower()}_encode")(self.system, target, **values)
+        msg = getattr(self.link.mav, f"{step.message.lower()}_encode")(target.system, target.component, **values)
         tries = self.retries + 1
         for n in range(tries):
             if n:
@@ -674,8 +675,6 @@ def _message_fields(name: str) -> dict[str, str]:
 
 
 def _parse_message_step(s: dict, loc: str) -> tuple[str, tuple[tuple[str, float | int], ...]]:
-    from cdf.validation.values import INT_RANGES  # here: the package loads the whole validator (70 ms)
-
     name = s.get("message")
     if name not in MESSAGES:
         raise LinkError(f"a setup step cannot send message {name!r}", where=loc,
@@ -809,5 +808,5 @@ def load_setup(path: str | Path) -> list[Step]:
     return parse_setup(data, str(path))
 
 
-__all__ = ["CameraClient", "CameraInfo", "LoadedDefinition", "Shot", "Step", "StepResult", "load_setup",
+__all__ = ["CameraClient", "CameraInformation", "LoadedDefinition", "Shot", "Step", "StepResult", "Target", "load_setup",
            "parse_setup"]

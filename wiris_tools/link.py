@@ -30,7 +30,8 @@ API (everything else is private):
                             the receive thread: keep them short (sending is fine, waiting is not).
   .wait_heartbeat(timeout, system=None, component=None) -> HEARTBEAT (LinkError on timeout)
   .command_long(target_system, target_component, command, params, *, timeout=1.0, retries=3,
-                progress=None) -> COMMAND_ACK (ACCEPTED); LinkError otherwise
+                progress=None) -> COMMAND_ACK (ACCEPTED); CommandRefused (.result: the MAV_RESULT) for
+                            another answer, NoAnswer after the last try (wiris_tools.errors, both LinkError)
   .command_int(...) likewise, for COMMAND_INT (frame, x/y as integers)
   .local_port               the bound UDP port (useful with udpin:127.0.0.1:0)
   .stats                    counters: received, sent, bad (CRC/signature failures), rejected_signature
@@ -77,7 +78,7 @@ _import_optional("pymavlink.quaternion", "curses.ascii")
 from pymavlink import mavutil  # noqa: E402
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2  # noqa: E402
 
-from wiris_tools.errors import LinkError  # noqa: E402
+from wiris_tools.errors import CommandRefused, LinkError, NoAnswer  # noqa: E402
 from wiris_tools.signing import check_signed_frame, signing_timestamp  # noqa: E402
 
 Message = Any  # a pymavlink MAVLink_message
@@ -107,6 +108,9 @@ IN_PROGRESS_TIMEOUTS = 10
 # silent this long is dropped while another is alive (pymavlink keeps the last one); MAVLink peers send a
 # heartbeat every second.
 UDPIN_PEER_TIMEOUT_S = 30.0
+
+# target_system 0 addresses every system (common.xml names the component one, MAV_COMP_ID_ALL, but not this)
+BROADCAST_SYSTEM = 0
 
 
 def command_name(command: int) -> str:
@@ -146,9 +150,11 @@ class _Match:
         if self.src_component is not None and msg.get_srcComponent() != self.src_component:
             return False
         if self.to_me:
-            ts = getattr(msg, "target_system", 0)
-            tc = getattr(msg, "target_component", 0)
-            if ts not in (0, self.own_system) or tc not in (0, self.own_component):
+            ts = getattr(msg, "target_system", BROADCAST_SYSTEM)
+            tc = getattr(msg, "target_component", mavlink2.MAV_COMP_ID_ALL)
+            if ts not in (BROADCAST_SYSTEM, self.own_system):
+                return False
+            if tc not in (mavlink2.MAV_COMP_ID_ALL, self.own_component):
                 return False
         return self.predicate is None or bool(self.predicate(msg))
 
@@ -486,7 +492,8 @@ class Link:
         `timeout` s. MAV_RESULT_IN_PROGRESS means "still working": we keep waiting (each report
         extends the wait by `timeout`, up to IN_PROGRESS_TIMEOUTS × `timeout` after the first report)
         and pass its progress (0-100, 255 = unknown) to `progress`.
-        Returns the ACCEPTED ack; raises LinkError naming the command, target and result otherwise.
+        Returns the ACCEPTED ack. Otherwise raises a LinkError naming the command, target and result:
+        CommandRefused (its `result` the MAV_RESULT) for any other answer, NoAnswer when none came.
         """
         p = self._params(params, command)
 
@@ -530,9 +537,9 @@ class Link:
             if target_component and ack.get_srcComponent() != target_component:
                 return False
             # MAVLink 2 acks may name who they answer; 0 (or a MAVLink 1 ack) means "not said".
-            ts = getattr(ack, "target_system", 0)
-            tc = getattr(ack, "target_component", 0)
-            return ts in (0, self.system) and tc in (0, self.component)
+            ts = getattr(ack, "target_system", BROADCAST_SYSTEM)
+            tc = getattr(ack, "target_component", mavlink2.MAV_COMP_ID_ALL)
+            return ts in (BROADCAST_SYSTEM, self.system) and tc in (mavlink2.MAV_COMP_ID_ALL, self.component)
 
         tries = retries + 1
         busy_until: float | None = None       # set by the first IN_PROGRESS: the latest we wait for the result
@@ -563,9 +570,10 @@ class Link:
                         deadline = min(now + timeout, busy_until)
                         continue
                     hint = _RESULT_HINTS.get(ack.result, _OTHER_RESULT_HINT)
-                    raise LinkError(f"{name} answered {result_name(ack.result)}", where=where, hint=hint)
-        raise LinkError(f"no answer to {name} after {tries} tries ({timeout:g} s each)", where=where,
-                        hint="check the target's system/component id, the link, and the signing key")
+                    raise CommandRefused(f"{name} answered {result_name(ack.result)}", command=command,
+                                         result=ack.result, where=where, hint=hint)
+        raise NoAnswer(f"no answer to {name} after {tries} tries ({timeout:g} s each)", command=command, where=where,
+                       hint="check the target's system/component id, the link, and the signing key")
 
     # -- closing -------------------------------------------------------------------------------
     def close(self) -> None:

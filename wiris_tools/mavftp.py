@@ -20,9 +20,11 @@ from __future__ import annotations
 import random
 import struct
 import time
+import zlib
 from dataclasses import dataclass
 from typing import Any, Callable
 
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from wiris_tools.errors import LinkError
 
@@ -30,12 +32,25 @@ PAYLOAD_BYTES = 251
 HEADER = struct.Struct("<HBBBBBBI")
 DATA_MAX = PAYLOAD_BYTES - HEADER.size   # 239
 
-# Opcodes and NAK error codes (devguide services/ftp.md, "OpCodes" and "NAK Error Information")
-OP_NONE, OP_TERMINATE, OP_RESET, OP_LIST, OP_OPEN_RO, OP_READ = 0, 1, 2, 3, 4, 5
-OP_CRC32, OP_BURST_READ = 14, 15
-OP_ACK, OP_NAK = 128, 129
-ERR_FAIL, ERR_INVALID_SIZE, ERR_INVALID_SESSION, ERR_NO_SESSIONS, ERR_EOF, ERR_UNKNOWN_COMMAND = 1, 3, 4, 5, 6, 7
-ERR_FILE_NOT_FOUND = 10
+# Opcodes and NAK error codes (devguide services/ftp.md, "OpCodes" and "NAK Error Information"; common.xml's
+# MAV_FTP_OPCODE and MAV_FTP_ERR)
+OP_NONE = mavlink2.MAV_FTP_OPCODE_NONE
+OP_TERMINATE = mavlink2.MAV_FTP_OPCODE_TERMINATESESSION
+OP_RESET = mavlink2.MAV_FTP_OPCODE_RESETSESSION
+OP_LIST = mavlink2.MAV_FTP_OPCODE_LISTDIRECTORY
+OP_OPEN_RO = mavlink2.MAV_FTP_OPCODE_OPENFILERO
+OP_READ = mavlink2.MAV_FTP_OPCODE_READFILE
+OP_CRC32 = mavlink2.MAV_FTP_OPCODE_CALCFILECRC
+OP_BURST_READ = mavlink2.MAV_FTP_OPCODE_BURSTREADFILE
+OP_ACK = mavlink2.MAV_FTP_OPCODE_ACK
+OP_NAK = mavlink2.MAV_FTP_OPCODE_NAK
+ERR_FAIL = mavlink2.MAV_FTP_ERR_FAIL
+ERR_INVALID_SIZE = mavlink2.MAV_FTP_ERR_INVALIDDATASIZE
+ERR_INVALID_SESSION = mavlink2.MAV_FTP_ERR_INVALIDSESSION
+ERR_NO_SESSIONS = mavlink2.MAV_FTP_ERR_NOSESSIONSAVAILABLE
+ERR_EOF = mavlink2.MAV_FTP_ERR_EOF
+ERR_UNKNOWN_COMMAND = mavlink2.MAV_FTP_ERR_UNKNOWNCOMMAND
+ERR_FILE_NOT_FOUND = mavlink2.MAV_FTP_ERR_FILENOTFOUND
 MAX_SESSIONS = 4
 MAX_DOWNLOAD_BYTES = 4 * 1024 * 1024
 TERMINATE_TRIES = 3      # TerminateSession sent at most this often, until the server answers it
@@ -193,8 +208,6 @@ class FtpServer:
                                      burst_complete=int(i == len(offsets) - 1)))
             return out
         if req.opcode == OP_CRC32:
-            import zlib
-
             path = normalise_path(req.data[:req.size].split(b"\0", 1)[0].decode("utf-8", "replace"))
             if path not in self.files:
                 return [self._nak(req, ERR_FILE_NOT_FOUND)]
@@ -202,78 +215,111 @@ class FtpServer:
         return [self._nak(req, ERR_UNKNOWN_COMMAND)]
 
 
-def download(link: Any, system: int, component: int, path: str, *, timeout_s: float = 0.5, retries: int = 5,
-             max_bytes: int = MAX_DOWNLOAD_BYTES, progress: Callable[[int, int], None] | None = None) -> bytes:
-    """Read one file with OpenFileRO / ReadFile / TerminateSession; LinkError naming the step on failure."""
-    where = f"mftp {path} on component {component}"
-    # A server answers a request that repeats its last seq with its last answer (a lost ACK): a download
-    # starting at a fixed seq would get the previous one's answer when that one ended at the same seq (seq 1
-    # after a refused OpenFileRO). A random start makes that a 1 in 65536 chance.
-    seq = [random.randrange(0x10000)]
+@dataclass(frozen=True)
+class _OpenFile:
+    session: int
+    length: int           # bytes, as OpenFileRO's ACK announces them
 
-    def exchange(opcode: int, *, session: int = 0, offset: int = 0, size: int = 0, data: bytes = b"",
-                 tries: int = retries + 1) -> Packet:
-        seq[0] = (seq[0] + 1) & 0xFFFF
-        pkt = Packet(seq[0], session, opcode, size, 0, 0, offset, data)
-        msg = link.mav.file_transfer_protocol_encode(0, system, component, pkt.pack())
+
+class _Requests:
+    """One download's requests to one server: each gets the next seq and is sent until its answer comes."""
+
+    def __init__(self, link: Any, system: int, component: int, where: str, timeout_s: float, retries: int) -> None:
+        self.link = link
+        self.system = system
+        self.component = component
+        self.where = where
+        self.timeout_s = timeout_s
+        self.retries = retries
+        # A server answers a request that repeats its last seq with its last answer (a lost ACK): a download
+        # starting at a fixed seq would get the previous one's answer when that one ended at the same seq (seq 1
+        # after a refused OpenFileRO). A random start makes that a 1 in 65536 chance.
+        self.seq = random.randrange(0x10000)
+
+    def exchange(self, opcode: int, *, session: int = 0, offset: int = 0, size: int = 0, data: bytes = b"",
+                 tries: int | None = None) -> Packet:
+        """The server's answer to one request (tried `retries` + 1 times unless told), else LinkError."""
+        tries = self.retries + 1 if tries is None else tries
+        self.seq = (self.seq + 1) & 0xFFFF
+        answer_seq = (self.seq + 1) & 0xFFFF
+        pkt = Packet(self.seq, session, opcode, size, 0, 0, offset, data)
+        msg = self.link.mav.file_transfer_protocol_encode(0, self.system, self.component, pkt.pack())
 
         def ours(m: Any) -> bool:
             p = Packet.unpack(m.payload)
-            return p.req_opcode == opcode and p.seq == (seq[0] + 1) & 0xFFFF
+            return p.req_opcode == opcode and p.seq == answer_seq
 
-        with link.inbox("FILE_TRANSFER_PROTOCOL", src_component=component, predicate=ours) as box:
+        with self.link.inbox("FILE_TRANSFER_PROTOCOL", src_component=self.component, predicate=ours) as box:
             for _ in range(tries):
-                link.send(msg)
-                got = box.get(timeout_s)
+                self.link.send(msg)
+                got = box.get(self.timeout_s)
                 if got is not None:
                     return Packet.unpack(got.payload)
-        raise LinkError(f"no MAVLink FTP answer to opcode {opcode} after {tries} tries", where=where,
+        raise LinkError(f"no MAVLink FTP answer to opcode {opcode} after {tries} tries", where=self.where,
                         hint="the camera may not serve MAVLink FTP; use its http:// definition if it has one")
 
+
+def _open(requests: _Requests, path: str) -> _OpenFile:
     name = path.encode()
     if len(name) > DATA_MAX:
-        raise LinkError("path too long for MAVLink FTP", where=where,
+        raise LinkError("path too long for MAVLink FTP", where=requests.where,
                         hint=f"a MAVLink FTP path holds at most {DATA_MAX} bytes: check the camera's mftp:// URI")
-    opened = exchange(OP_OPEN_RO, size=len(name), data=name)
+    opened = requests.exchange(OP_OPEN_RO, size=len(name), data=name)
     if opened.opcode == OP_NAK:
         code = opened.data[0] if opened.data else 0
-        raise LinkError(f"the camera cannot open the file (FTP error {code})", where=where,
+        raise LinkError(f"the camera cannot open the file (FTP error {code})", where=requests.where,
                         hint=_OPEN_HINTS.get(code, "retry; if it persists, use the camera's http:// definition "
                                                    "if it has one"))
-    length = struct.unpack("<I", opened.data[:4].ljust(4, b"\0"))[0]
-    session = opened.session
+    return _OpenFile(opened.session, struct.unpack("<I", opened.data[:4].ljust(4, b"\0"))[0])
+
+
+def _read(requests: _Requests, file: _OpenFile, max_bytes: int,
+          progress: Callable[[int, int], None] | None) -> bytes:
+    """ReadFile from offset 0 until the announced length or EOF (the caller checks which)."""
+    where = requests.where
+    if file.length > max_bytes:
+        raise LinkError(f"file is {file.length} bytes; the limit is {max_bytes}", where=where,
+                        hint="check that the mftp:// URI names the camera definition, not another file")
     chunks = bytearray()
-    deadline = time.monotonic() + max(10.0, length / 1000)
-    try:  # from here on the session is open: the finally closes it, whatever stops the download
-        if length > max_bytes:
-            raise LinkError(f"file is {length} bytes; the limit is {max_bytes}", where=where,
-                            hint="check that the mftp:// URI names the camera definition, not another file")
-        while len(chunks) < length:
-            if time.monotonic() > deadline:
-                raise LinkError("download took too long", where=where,
-                                hint="check the radio link (lost packets, a low baud rate) and retry")
-            got = exchange(OP_READ, session=session, offset=len(chunks), size=DATA_MAX)
-            if got.opcode == OP_NAK:
-                if got.data[:1] == bytes([ERR_EOF]):
-                    break
-                raise LinkError(f"read failed (FTP error {got.data[0] if got.data else '?'})", where=where,
-                                hint=_BROKEN_SERVER_HINT)
-            if got.offset != len(chunks) or not got.data:
-                raise LinkError("the camera answered a read at the wrong offset", where=where,
-                                hint=_BROKEN_SERVER_HINT)
-            chunks += got.data
-            if progress is not None:
-                progress(len(chunks), length)
-    finally:
-        # Sent until answered (an ACK, or a NAK when the server has already closed it): a TerminateSession
-        # lost on the radio left the session holding one of the server's few slots. When none of the tries
-        # is answered the camera has gone quiet, and its idle-session expiry frees the slot; the download's
-        # own outcome (its data, or the error that ended it) is what the caller gets either way.
-        try:
-            exchange(OP_TERMINATE, session=session, tries=TERMINATE_TRIES)
-        except LinkError:
-            pass
-    if len(chunks) != length:
-        raise LinkError(f"got {len(chunks)} of {length} bytes", where=where,
-                        hint="the camera ended the file before its announced size; " + _BROKEN_SERVER_HINT)
+    deadline = time.monotonic() + max(10.0, file.length / 1000)
+    while len(chunks) < file.length:
+        if time.monotonic() > deadline:
+            raise LinkError("download took too long", where=where,
+                            hint="check the radio link (lost packets, a low baud rate) and retry")
+        got = requests.exchange(OP_READ, session=file.session, offset=len(chunks), size=DATA_MAX)
+        if got.opcode == OP_NAK:
+            if got.data[:1] == bytes([ERR_EOF]):
+                break
+            raise LinkError(f"read failed (FTP error {got.data[0] if got.data else '?'})", where=where,
+                            hint=_BROKEN_SERVER_HINT)
+        if got.offset != len(chunks) or not got.data:
+            raise LinkError("the camera answered a read at the wrong offset", where=where, hint=_BROKEN_SERVER_HINT)
+        chunks += got.data
+        if progress is not None:
+            progress(len(chunks), file.length)
     return bytes(chunks)
+
+
+def _terminate(requests: _Requests, session: int) -> None:
+    """Sent until answered (an ACK, or a NAK when the server has already closed it): a TerminateSession lost
+    on the radio left the session holding one of the server's few slots. When none of the tries is answered
+    the camera has gone quiet, and its idle-session expiry frees the slot."""
+    try:
+        requests.exchange(OP_TERMINATE, session=session, tries=TERMINATE_TRIES)
+    except LinkError:
+        pass
+
+
+def download(link: Any, system: int, component: int, path: str, *, timeout_s: float = 0.5, retries: int = 5,
+             max_bytes: int = MAX_DOWNLOAD_BYTES, progress: Callable[[int, int], None] | None = None) -> bytes:
+    """Read one file with OpenFileRO / ReadFile / TerminateSession; LinkError naming the step on failure."""
+    requests = _Requests(link, system, component, f"mftp {path} on component {component}", timeout_s, retries)
+    file = _open(requests, path)
+    try:  # from here on the session is open: closed whatever stops the download, which keeps its own outcome
+        data = _read(requests, file, max_bytes, progress)
+    finally:
+        _terminate(requests, file.session)
+    if len(data) != file.length:
+        raise LinkError(f"got {len(data)} of {file.length} bytes", where=requests.where,
+                        hint="the camera ended the file before its announced size; " + _BROKEN_SERVER_HINT)
+    return data

@@ -31,6 +31,7 @@ a year; manifest.json must be revalidated on every use.
 from __future__ import annotations
 
 import email.utils
+import errno
 import hashlib
 import http.server
 import io
@@ -45,6 +46,8 @@ import urllib.parse
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
+
+from wiris_tools.errors import LinkError
 
 CONTENT_TYPES = {".xml": "application/xml", ".xz": "application/x-xz", ".json": "application/json"}
 IMMUTABLE = re.compile(r"_v\d+\.xml(\.xz)?$")
@@ -97,8 +100,6 @@ def _bad_segment(prefix: str) -> str | None:
 
 
 def _normal_prefix(prefix: str) -> str:
-    from wiris_tools.errors import LinkError
-
     bad = _bad_segment(prefix)
     if bad is not None:
         what = f"segment {bad[:40]!r}" if bad else "an empty segment (//)"
@@ -451,10 +452,6 @@ def bind_http(server_class: type[http.server.HTTPServer], host: str, port: int, 
               host_option: str, port_option: str):
     """server_class bound to (host, port), IPv6 when `host` is an IPv6 address (http.server listens on
     IPv4 only); a LinkError whose hint names the option to change when binding fails."""
-    import errno
-
-    from wiris_tools.errors import LinkError
-
     family = socket.AF_INET6 if ":" in host else socket.AF_INET
     try:
         return type(server_class.__name__, (server_class,), {"address_family": family})((host, port), handler)
@@ -477,8 +474,6 @@ def make_server(directory: str | Path, host: str = "127.0.0.1", port: int = 8000
     `idle_timeout_s`: the longest wait for one read or write; `request_timeout_s`: for a request's line and
     headers from their first byte. `max_connections`: served at once, `max_per_client` of them from one
     client address; more are answered 503."""
-    from wiris_tools.errors import LinkError
-
     root = Path(directory)
     if not os.path.isdir(root):  # False for any error (a name too long), where Path.is_dir() raises
         raise LinkError("not a directory", where=str(directory),

@@ -73,6 +73,8 @@ FLAVOURS = {
     "ardupilot": Flavour("ardupilot", mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA, True, 1.0, 8.0, True, None),
     "px4": Flavour("px4", mavlink2.MAV_AUTOPILOT_PX4, False, 0.25, 5.0, False, 500),
 }
+# the lists a vehicle keeps (MAV_MISSION_TYPE_ALL names them all at once)
+MISSION_TYPES = (mavlink2.MAV_MISSION_TYPE_MISSION, mavlink2.MAV_MISSION_TYPE_FENCE, mavlink2.MAV_MISSION_TYPE_RALLY)
 
 
 @dataclass
@@ -142,9 +144,9 @@ def firmware_readback(item: MissionItem, firmware: str) -> MissionItem:
     if rule[7] == "L" and item.frame in ALT_REFERENCE:
         out = out.with_(frame=frames[ALT_REFERENCE[item.frame]])
     elif rule[7] == "-":   # not kept: ArduPilot sends 0, PX4 a fence point in GLOBAL_INT
-        out = out.with_(frame=frames["amsl"] if firmware == "px4" else 0)
+        out = out.with_(frame=frames["amsl"] if firmware == "px4" else mavlink2.MAV_FRAME_GLOBAL)
     if firmware != "px4":  # ArduPilot sends autocontinue 1 for a mission item, leaves it 0 otherwise
-        out = out.with_(autocontinue=int(item.mission_type == 0))
+        out = out.with_(autocontinue=int(item.mission_type == mavlink2.MAV_MISSION_TYPE_MISSION))
     return out
 
 
@@ -177,7 +179,7 @@ class VehicleSim:
         self.stores_like_firmware = stores_like_firmware
         self._rng = random.Random(seed)
         self._lock = threading.Lock()
-        self._store: dict[int, list[MissionItem]] = {t: [] for t in (0, 1, 2)}
+        self._store: dict[int, list[MissionItem]] = {t: [] for t in MISSION_TYPES}
         self._upload: _Upload | None = None
         self._done: dict[int, tuple[tuple[int, int], int]] = {}   # type -> (partner, count) of last upload
         self.stats = {"requests": 0, "rerequests": 0, "items": 0, "nacks": 0, "uploads": 0, "downloads": 0}
@@ -265,9 +267,9 @@ class VehicleSim:
         if kind not in self._store:
             self._ack(src, mavlink2.MAV_MISSION_UNSUPPORTED, kind)
             return
-        if self.link.mavlink1 and kind != 0:
+        if self.link.mavlink1 and kind != mavlink2.MAV_MISSION_TYPE_MISSION:
             # pymavlink would pack mission_type into a MAVLink 1 frame; ArduPilot's C library does not
-            self._ack(src, mavlink2.MAV_MISSION_UNSUPPORTED, 0)
+            self._ack(src, mavlink2.MAV_MISSION_UNSUPPORTED, mavlink2.MAV_MISSION_TYPE_MISSION)
             return
         if mtype == "MISSION_COUNT":
             self._on_count(msg, src, kind)
@@ -295,7 +297,7 @@ class VehicleSim:
                 src[0], src[1], msg.seq, it.frame, it.command, it.current, it.autocontinue, it.param1, it.param2,
                 it.param3, it.param4, it.x, it.y, it.z, kind))
         elif mtype == "MISSION_CLEAR_ALL":
-            kinds = (0, 1, 2) if kind == mavlink2.MAV_MISSION_TYPE_ALL else (kind,)
+            kinds = MISSION_TYPES if kind == mavlink2.MAV_MISSION_TYPE_ALL else (kind,)
             for k in kinds:
                 self._store[k] = []
             self._ack(src, mavlink2.MAV_MISSION_ACCEPTED, kind)
@@ -308,7 +310,8 @@ class VehicleSim:
         stored = self._store[kind]
         if self.stores_like_firmware:
             stored = [firmware_readback(it, self.flavour.name) for it in stored]
-        if self.flavour.name == "ardupilot" and kind == 0 and self.home is not None and stored:
+        if self.flavour.name == "ardupilot" and kind == mavlink2.MAV_MISSION_TYPE_MISSION and self.home is not None \
+                and stored:
             return [self.home.with_(current=0)] + stored[1:]
         return stored
 

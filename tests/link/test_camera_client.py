@@ -104,7 +104,7 @@ def test_camera_refusal_names_the_result(client):
 def test_a_definition_type_that_cannot_carry_the_value_says_what_to_check(client, pro):
     """A camera's definition may declare a type its own range does not fit (a uint8 up to 1000) or one
     without a PARAM_EXT number encoding: the value is refused before anything is sent."""
-    from wiris_tools.emulate.definition import DefParam, Definition
+    from wiris_tools.camera_definition import DefParam, Definition
 
     d = Definition("V", "M", 1, (DefParam("BIG", "uint8", None, max=1000.0), DefParam("TXT", "custom", None)))
     for name, value, text in (("BIG", "300", "does not fit uint8"), ("TXT", "1", "no PARAM_EXT number encoding")):
@@ -203,6 +203,21 @@ def test_apply_when_the_camera_disappears(tmp_path):
             assert err.value.hint                      # the command's hint travels with the step
     finally:
         emu.close()
+
+
+@pytest.mark.parametrize("kind,message", [("param_ext_set", "PARAM_EXT_SET"), ("param_set", "PARAM_SET")])
+def test_a_step_for_another_component_leaves_the_client_aimed_at_its_camera(client, pro, kind, message):
+    """A step naming another component is sent there with that component as the target: the client itself
+    keeps talking to its camera meanwhile (another thread asking the camera something is not redirected).
+    It used to swap its own system/component ids for the step and put them back afterwards."""
+    steps = parse_setup({"steps": [{"kind": kind, "target_component": 77, "param_id": "EMISSIVITY",
+                                    "value": 0.9, "type": "float"}]})
+    aimed_at = []
+    pro.link.subscribe(lambda m: aimed_at.append((client.system, client.component)), message,
+                       predicate=lambda m: m.target_component == 77)
+    with pytest.raises(LinkError, match="stopped the sequence"):
+        client.apply(steps)                     # nobody is component 77: no answer
+    assert aimed_at and set(aimed_at) == {(1, 100)}
 
 
 def test_no_camera_times_out():
@@ -833,3 +848,15 @@ def test_set_gives_up_on_a_camera_that_answers_in_progress_for_ever():
     err = call.error
     assert "PARAM_ACK_IN_PROGRESS" in err.message and err.where == "EMISSIVITY" and "--timeout" in err.hint
     assert IN_PROGRESS_TIMEOUTS * 0.1 <= call.waited < IN_PROGRESS_TIMEOUTS * 0.1 + 3
+
+
+def test_the_client_loads_no_emulator():
+    """The definition reader and the PARAM_EXT codec that client and emulators share live beside both, so a
+    ground station loads no emulator code (it used to find them under wiris_tools/emulate/)."""
+    import subprocess
+    import sys
+
+    code = ("import sys, wiris_tools.camera_client\n"
+            "print(sorted(m for m in sys.modules if m.startswith('wiris_tools.emulate')))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"

@@ -11,8 +11,8 @@ from pymavlink.dialects.v20 import ardupilotmega as m
 from cdf.catalogue import catalogue
 from cdf.generate import definition_xml
 from emu_wire import NAN, Wire, ack_of, only, types
-from wiris_tools.emulate import paramext
-from wiris_tools.emulate.definition import parse_definition
+from wiris_tools import paramext
+from wiris_tools.camera_definition import parse_definition
 from wiris_tools.emulate.wiris import WirisConfig, WirisState, new_wiris
 
 WORKSWELL = [c.id for c in catalogue().cameras if c.protocol == "workswell-mavlink"]

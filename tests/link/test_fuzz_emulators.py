@@ -16,7 +16,7 @@ from pymavlink.dialects.v20 import ardupilotmega as m
 
 from cdf.catalogue import catalogue
 from emu_wire import Wire
-from wiris_tools.emulate import paramext
+from wiris_tools import paramext
 from wiris_tools.emulate.rededge import RedEdgeState
 from wiris_tools.emulate.runner import start_emulator
 from wiris_tools.emulate.wiris import new_wiris
@@ -183,7 +183,7 @@ action = st.one_of(
 def test_commands_and_param_ext_share_one_consistent_state(actions):
     """Any sequence of setting commands and PARAM_EXT sets: a refusal changes nothing, every value stays
     allowed, and PARAM_EXT reads back exactly what the commands report."""
-    from wiris_tools.emulate import paramext
+    from wiris_tools import paramext
 
     state = _fresh_wiris()
     g = Wire()

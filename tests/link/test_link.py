@@ -12,7 +12,7 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from raw_peers import timed_call
-from wiris_tools.errors import LinkError
+from wiris_tools.errors import CommandRefused, LinkError, NoAnswer
 from wiris_tools.link import Link, command_name
 from wiris_tools.signing import key_from_text, load_signing_key
 
@@ -175,6 +175,27 @@ def test_a_result_the_dialect_does_not_define_still_gets_a_hint(links, result):
     with pytest.raises(LinkError, match=f"answered MAV_RESULT {result}") as err:
         b.command_long(1, 100, mavlink2.MAV_CMD_SET_CAMERA_MODE, [0, 1], timeout=1, retries=0)
     assert "firmware" in err.value.hint
+
+
+@pytest.mark.parametrize("result", [mavlink2.MAV_RESULT_DENIED, mavlink2.MAV_RESULT_UNSUPPORTED, 200])
+def test_a_refusal_carries_its_result_and_command_as_values(links, result):
+    """A caller that tells a refusal from silence (the camera client: UNSUPPORTED means "try the older
+    request") reads the result from the error, not from its text."""
+    a, b = links
+    b.wait_heartbeat(timeout=3, component=100)
+    Responder(a, [[(result, 0)]])
+    with pytest.raises(CommandRefused) as err:
+        b.command_long(1, 100, mavlink2.MAV_CMD_SET_CAMERA_MODE, [0, 1], timeout=1, retries=0)
+    assert (err.value.result, err.value.command) == (result, mavlink2.MAV_CMD_SET_CAMERA_MODE)
+
+
+def test_silence_is_no_answer_not_a_refusal(links):
+    _a, b = links
+    b.wait_heartbeat(timeout=3, component=100)
+    with pytest.raises(NoAnswer) as err:
+        b.command_long(1, 100, mavlink2.MAV_CMD_SET_CAMERA_MODE, [0, 1], timeout=0.2, retries=1)
+    assert err.value.command == mavlink2.MAV_CMD_SET_CAMERA_MODE and not isinstance(err.value, CommandRefused)
+    assert err.value.message.startswith("no answer to MAV_CMD_SET_CAMERA_MODE after 2 tries")
 
 
 def test_more_than_seven_params_is_refused_with_a_hint(links):

@@ -169,7 +169,7 @@ def mavsdk_results(tmp_path_factory):
 @pytest.mark.parametrize("job", [*WORKSWELL, f"{WORKSWELL[0]}@mftp"])
 def test_mavsdk_camera_plugin_uses_the_emulator(mavsdk_results, job):
     from cdf.generate import definition_xml
-    from wiris_tools.emulate.definition import parse_definition
+    from wiris_tools.camera_definition import parse_definition
 
     r = mavsdk_results.get(job)
     assert r is not None, "the MAVSDK subprocess died before this model"
@@ -220,6 +220,6 @@ def test_mavproxy_parses_what_the_emulator_serves(model):
     assert body == emu.definition
     r = peers.mavproxy_load_definition(body)
     assert r.accepted, r.error
-    from wiris_tools.emulate.definition import parse_definition
+    from wiris_tools.camera_definition import parse_definition
 
     assert set(r.parameters) == {p.name for p in parse_definition(body).params}

@@ -10,7 +10,7 @@ from pymavlink.dialects.v20 import ardupilotmega as m
 
 from cdf.catalogue import catalogue
 from emu_wire import Wire, only, types
-from wiris_tools.emulate import paramext
+from wiris_tools import paramext
 from wiris_tools.emulate.rededge import RedEdgeState
 from wiris_tools.emulate.runner import start_emulator
 from wiris_tools.link import Link

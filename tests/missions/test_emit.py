@@ -100,7 +100,7 @@ def test_visible_settings_in_flight_refused_on_px4():
 
 def test_altitudes_are_whole_centimetres_as_ardupilot_stores_them():
     """ArduPilot keeps mission altitudes in cm; a finer value would read back different under --verify."""
-    from missions.emit.emitter import emitter as emit
+    from missions.emit import emitter as emit
 
     item = emit._nav(16, 50.0, 14.0, 40.123456)
     assert item.z == 40.12

@@ -5,6 +5,6 @@
     runner.run_emulator  the thin I/O shell: a Link, a tick thread, and the definition's HTTP server
 
 The states are pure: `handle(msg, now)` and `tick(now)` return the messages to send, so tests and the
-fuzzer drive them without sockets. `paramext` is the PARAM_EXT value codec that the camera client uses too;
-`definition` reads the parameter list of a camera definition file.
+fuzzer drive them without sockets. What they share with the camera client lives beside it in wiris_tools:
+`paramext` (the PARAM_EXT value codec) and `camera_definition` (the parameter list of a definition file).
 """

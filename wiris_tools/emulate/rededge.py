@@ -50,7 +50,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from cdf.catalogue import Camera, Setting
 from cdf.errors import CdfError
 from missions.geometry.geo import great_circle_m
-from wiris_tools.emulate import paramext
+from wiris_tools import paramext
 
 Message = Any
 
@@ -60,7 +60,7 @@ DEFAULT_SYSTEM_ID = 255      # "defaults to 255 otherwise"
 ALL_SENSORS = 255            # DIGICAM_CONFIGURE extra_param: "Set to 255 for all"
 MIN_TIMER_S = 1.0
 UINT64_MAX = 2**64 - 1
-MAVLINK2_MAGIC = b"\xfd"
+MAVLINK2_MAGIC = bytes([mavlink2.PROTOCOL_MARKER_V2])
 
 
 @dataclass
@@ -163,7 +163,7 @@ class RedEdgeState:
             self.system_id = sender[0]
             self.mav.srcSystem = sender[0]
         target = getattr(msg, "target_component", None)
-        if target is not None and target not in (0, self.component):
+        if target is not None and target not in (mavlink2.MAV_COMP_ID_ALL, self.component):
             self.ignored += 1
             return []
         handler = getattr(self, "_on_" + mtype.lower(), None)
@@ -180,7 +180,7 @@ class RedEdgeState:
     def _on_gps_raw_int(self, msg, now):
         if msg.time_usec > 0:
             self.utc_base = (msg.time_usec / 1e6, now)
-        self.fix = msg.fix_type > 2
+        self.fix = msg.fix_type >= mavlink2.GPS_FIX_TYPE_3D_FIX
         if self.fix:
             self._position(msg.lat, msg.lon, msg.alt, now)
         return []

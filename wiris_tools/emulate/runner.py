@@ -17,9 +17,16 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
 from cdf.catalogue import Camera, catalogue
 from cdf.errors import CdfError
+from cdf.generate import definition_file_name, definition_xml
+from wiris_tools.camera_definition import parse_definition
+from wiris_tools.emulate.rededge import RedEdgeState
+from wiris_tools.emulate.wiris import DEFINITION_URI_CHARS, WirisConfig, WirisState
 from wiris_tools.errors import LinkError
+from wiris_tools.link import Link
 from wiris_tools.serve import IDLE_TIMEOUT_S, bind_http, host_port
 
 TICK_S = 0.02
@@ -145,64 +152,95 @@ class Emulator:
         self.close()
 
 
+@dataclass(frozen=True)
+class _Clock:
+    """The states' clock (time.monotonic) at start, and what to add to it for UTC."""
+    now: float
+    utc_offset_s: float
+
+    @classmethod
+    def read(cls) -> "_Clock":
+        now = time.monotonic()
+        return cls(now, time.time() - now)
+
+
+@dataclass(frozen=True)
+class _WirisSetup:
+    """How start_emulator sets up a WIRIS (a RedEdge takes only its component and the signing key)."""
+    component: int | None = None
+    system: int = 1
+    http_port: int = 0
+    http_host: str = "127.0.0.1"
+    signing_key: bytes | None = None
+    storage_capacity_mib: tuple[float, float, float] | None = None
+    image_size_mib: float | None = None
+    ethernet_sdk: bool = False
+    licensed: bool = True
+    definition: bytes | None = None
+    definition_scheme: str = "http"
+
+    def config(self, component: int, uri: str) -> WirisConfig:
+        optional: dict[str, Any] = {}       # WirisConfig's own defaults unless given
+        if self.storage_capacity_mib is not None:
+            optional["storage_capacity_mib"] = tuple(self.storage_capacity_mib)
+        if self.image_size_mib is not None:
+            optional["image_size_mib"] = self.image_size_mib
+        return WirisConfig(system=self.system, component=component, definition_uri=uri, licensed=self.licensed,
+                           ethernet_sdk=self.ethernet_sdk, stream_host=self.http_host, **optional)
+
+
 def start_emulator(model: str, url: str, *, component: int | None = None, system: int = 1,
                    http_port: int = 0, http_host: str = "127.0.0.1", signing_key: bytes | None = None,
                    storage_capacity_mib: tuple[float, float, float] | None = None, image_size_mib: float | None = None,
                    ethernet_sdk: bool = False, licensed: bool = True, definition: bytes | None = None,
                    definition_scheme: str = "http") -> Emulator:
     """Start the emulator of catalogue camera `model` on connection `url` (see the module docstring)."""
-    from pymavlink.dialects.v20 import ardupilotmega as mavlink2
-
-    from wiris_tools.link import Link
-
     camera = catalogue().get(model)
-    now = time.monotonic()
-    utc_offset = time.time() - now
+    clock = _Clock.read()
     if camera.protocol == "rededge-serial":
-        from wiris_tools.emulate.rededge import RedEdgeState
-
-        if component is not None and component != camera.default_component_id:
-            raise CdfError(f"a {camera.model} always uses component {camera.default_component_id}",
-                           where=model, hint="drop --component")
-        state = RedEdgeState(camera, now=now, utc_offset_s=utc_offset)
-        link = Link(url, system=state.system_id, component=state.component, mav_type=mavlink2.MAV_TYPE_GENERIC,
-                    heartbeat_s=0, mavlink1=camera.mavlink_version == 1, signing_key=signing_key)
-        emu = Emulator(camera, state, link, threading.Lock())
+        emu = _start_rededge(camera, model, url, component, signing_key, clock)
     else:
-        from cdf.generate import definition_file_name, definition_xml
-        from wiris_tools.emulate.definition import parse_definition
-        from wiris_tools.emulate.wiris import WirisConfig, WirisState
-
-        comp = camera.default_component_id if component is None else component
-        if comp not in camera.component_ids:
-            raise CdfError(f"component id {comp} is not one a {camera.model} can use",
-                           where=model, hint=f"choose one of {', '.join(map(str, camera.component_ids))} (§3.2)")
-        body = definition if definition is not None else definition_xml(camera)
-        parsed = parse_definition(body, model)
-        if definition_scheme not in ("http", "mftp"):
-            raise CdfError(f"unknown definition transport {definition_scheme!r}", hint="use http or mftp")
-        file_name = definition_file_name(camera)
-        http = _DefinitionServer(body, file_name, http_host, http_port)
-        uri = http.uri if definition_scheme == "http" else f"mftp://{file_name}"
-        try:
-            if len(uri) > 139:
-                raise CdfError(f"definition URI is {len(uri)} characters; CAMERA_INFORMATION holds 139",
-                               where=uri, hint="use a shorter --http-host")
-            kw: dict[str, Any] = {}
-            if storage_capacity_mib is not None:
-                kw["storage_capacity_mib"] = tuple(storage_capacity_mib)
-            if image_size_mib is not None:
-                kw["image_size_mib"] = image_size_mib
-            config = WirisConfig(system=system, component=comp, definition_uri=uri, licensed=licensed,
-                                 ethernet_sdk=ethernet_sdk, stream_host=http_host, **kw)
-            state = WirisState(camera, parsed, config, now=now, utc_offset_s=utc_offset, ftp_files={file_name: body})
-            link = Link(url, system=system, component=comp, mav_type=mavlink2.MAV_TYPE_CAMERA, heartbeat_s=0,
-                        signing_key=signing_key)
-        except BaseException:
-            http.close()
-            raise
-        emu = Emulator(camera, state, link, threading.Lock(), uri, body, http)
-    link.subscribe(emu._on_message)
+        setup = _WirisSetup(component, system, http_port, http_host, signing_key, storage_capacity_mib,
+                           image_size_mib, ethernet_sdk, licensed, definition, definition_scheme)
+        emu = _start_wiris(camera, model, url, setup, clock)
+    emu.link.subscribe(emu._on_message)
     emu._thread = threading.Thread(target=emu._tick_loop, name=f"emulator {model}", daemon=True)
     emu._thread.start()
     return emu
+
+
+def _start_rededge(camera: Camera, model: str, url: str, component: int | None, signing_key: bytes | None,
+                   clock: _Clock) -> Emulator:
+    if component is not None and component != camera.default_component_id:
+        raise CdfError(f"a {camera.model} always uses component {camera.default_component_id}",
+                       where=model, hint="drop --component")
+    state = RedEdgeState(camera, now=clock.now, utc_offset_s=clock.utc_offset_s)
+    link = Link(url, system=state.system_id, component=state.component, mav_type=mavlink2.MAV_TYPE_GENERIC,
+                heartbeat_s=0, mavlink1=camera.mavlink_version == 1, signing_key=signing_key)
+    return Emulator(camera, state, link, threading.Lock())
+
+
+def _start_wiris(camera: Camera, model: str, url: str, setup: _WirisSetup, clock: _Clock) -> Emulator:
+    comp = camera.default_component_id if setup.component is None else setup.component
+    if comp not in camera.component_ids:
+        raise CdfError(f"component id {comp} is not one a {camera.model} can use",
+                       where=model, hint=f"choose one of {', '.join(map(str, camera.component_ids))} (§3.2)")
+    body = setup.definition if setup.definition is not None else definition_xml(camera)
+    parsed = parse_definition(body, model)
+    if setup.definition_scheme not in ("http", "mftp"):
+        raise CdfError(f"unknown definition transport {setup.definition_scheme!r}", hint="use http or mftp")
+    file_name = definition_file_name(camera)
+    http = _DefinitionServer(body, file_name, setup.http_host, setup.http_port)
+    uri = http.uri if setup.definition_scheme == "http" else f"mftp://{file_name}"
+    try:  # the server is up: closed again if the camera cannot start
+        if len(uri) > DEFINITION_URI_CHARS:
+            raise CdfError(f"definition URI is {len(uri)} characters; CAMERA_INFORMATION holds {DEFINITION_URI_CHARS}",
+                           where=uri, hint="use a shorter --http-host")
+        state = WirisState(camera, parsed, setup.config(comp, uri), now=clock.now, utc_offset_s=clock.utc_offset_s,
+                           ftp_files={file_name: body})
+        link = Link(url, system=setup.system, component=comp, mav_type=mavlink2.MAV_TYPE_CAMERA, heartbeat_s=0,
+                    signing_key=setup.signing_key)
+    except BaseException:
+        http.close()
+        raise
+    return Emulator(camera, state, link, threading.Lock(), uri, body, http)

@@ -43,8 +43,10 @@ from typing import Any
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from cdf.catalogue import Camera, Setting
-from wiris_tools.emulate import paramext
-from wiris_tools.emulate.definition import Definition, DefParam
+from cdf.generate import definition_file_name, definition_xml
+from wiris_tools import paramext
+from wiris_tools.camera_definition import Definition, DefParam, parse_definition
+from wiris_tools.mavftp import FtpServer
 from wiris_tools.serve import host_port
 
 Message = Any
@@ -56,6 +58,16 @@ HEARTBEAT_S = 1.0
 # internal drive is its "HD mass storage type".
 STORAGE_TYPES = {"ssd": mavlink2.STORAGE_TYPE_HD, "usb": mavlink2.STORAGE_TYPE_USB_STICK,
                  "microsd": mavlink2.STORAGE_TYPE_MICROSD}
+# CAMERA_CAPTURE_STATUS.image_status and video_status (§6.4.4, as common.xml, which gives the numbers in the
+# fields' descriptions and no enum that pymavlink could name): image 0 idle, 1 capture in progress, 2 interval
+# set but idle, 3 interval set and capture in progress; video 0 idle, 1 capture in progress.
+IMAGE_STATUS_IDLE = 0
+IMAGE_STATUS_INTERVAL_CAPTURING = 3
+VIDEO_STATUS_IDLE = 0
+VIDEO_STATUS_CAPTURING = 1
+_INFO = mavlink2.MAVLink_camera_information_message
+# cam_definition_uri is char[140]: a URI of up to 139 characters keeps the NUL that ends it
+DEFINITION_URI_CHARS = _INFO.array_lengths[_INFO.ordered_fieldnames.index("cam_definition_uri")] - 1
 GPS_MESSAGES = ("GLOBAL_POSITION_INT", "GPS_STATUS")
 PARAM_EXT_MESSAGES = ("PARAM_EXT_REQUEST_LIST", "PARAM_EXT_REQUEST_READ", "PARAM_EXT_SET")
 
@@ -156,8 +168,6 @@ class WirisState:
         # the other transport common.xml allows for cam_definition_uri.
         self.ftp = None
         if ftp_files:
-            from wiris_tools.mavftp import FtpServer
-
             self.ftp = FtpServer(ftp_files, self.mav)
         self.reset_settings()
 
@@ -212,7 +222,7 @@ class WirisState:
             self.satellites_visible = msg.satellites_visible
             return []
         target = getattr(msg, "target_component", None)
-        if target is not None and target not in (0, self.config.component):
+        if target is not None and target not in (mavlink2.MAV_COMP_ID_ALL, self.config.component):
             self.ignored += 1
             return []
         if not self.config.licensed:
@@ -391,7 +401,7 @@ class WirisState:
         return mavlink2.MAV_RESULT_ACCEPTED, [self.camera_information(now)]
 
     def _cmd_request_camera_settings(self, params, changes, now):
-        if params[0] == 1:
+        if params[0] == mavlink2.MAV_BOOL_TRUE:
             return mavlink2.MAV_RESULT_ACCEPTED, [self.camera_settings(now)]
         return mavlink2.MAV_RESULT_ACCEPTED, []   # "0: No Action" (NaN ignores the parameter)
 
@@ -450,18 +460,18 @@ class WirisState:
     def _cmd_storage_format(self, params, changes, now):
         storage = self._storage_index(params[0])
         after = []
-        if params[1] == 1:
+        if params[1] == mavlink2.MAV_BOOL_TRUE:
             self.used_mib[storage] = 0.0
             # common.xml: "Once format is complete, a STORAGE_INFORMATION message is sent" (the manual is
             # silent); formatting here is instant, so it follows the ACK at once
             after.append(self.storage_information(storage, now))
-        if params[2] == 1:
+        if params[2] == mavlink2.MAV_BOOL_TRUE:
             self.image_count = 0
             self.history.clear()
         return mavlink2.MAV_RESULT_ACCEPTED, after
 
     def _cmd_reset_camera_settings(self, params, changes, now):
-        if params[0] == 1:
+        if params[0] == mavlink2.MAV_BOOL_TRUE:
             self.reset_settings()
         return mavlink2.MAV_RESULT_ACCEPTED, []
 
@@ -555,7 +565,7 @@ class WirisState:
         pos = Position(self.position.lat, self.position.lon, self.position.alt, self.position.relative_alt)
         if self.available_mib(storage) < size:
             self.capture.running = False
-            shot = Captured(self.image_count, self.time_boot_ms(now), utc_us, pos, 0, "")
+            shot = Captured(self.image_count, self.time_boot_ms(now), utc_us, pos, mavlink2.MAV_BOOL_FALSE, "")
             return [self._image_message(shot)]
         self.used_mib[storage] += size
         index = self.image_count
@@ -563,7 +573,8 @@ class WirisState:
         enum = self.camera.enum("storage")
         option = enum.by_value(storage) if enum else None
         folder = option.key if option else f"storage{storage}"
-        shot = Captured(index, self.time_boot_ms(now), utc_us, pos, 1, f"{folder}/IMG_{index:05d}.jpg")
+        shot = Captured(index, self.time_boot_ms(now), utc_us, pos, mavlink2.MAV_BOOL_TRUE,
+                        f"{folder}/IMG_{index:05d}.jpg")
         self.history.append(shot)
         del self.history[:-1000]
         return [self._image_message(shot)]
@@ -595,7 +606,7 @@ class WirisState:
                 focal = thermal.lenses_mm[lens]
             if thermal.resolution_px:
                 res = thermal.resolution_px
-        uri = self.config.definition_uri.encode()[:139]
+        uri = self.config.definition_uri.encode()[:DEFINITION_URI_CHARS]
         # §6.4.1: sensor size "not implemented, sends 0"; firmware version is not in the manual's table (0 =
         # unknown in common.xml).
         return self.mav.camera_information_encode(
@@ -654,11 +665,11 @@ class WirisState:
 
     def _capture_status(self, now: float) -> Message:
         c = self.capture
-        # §6.4.4: 0 idle, 1 capture in progress, 2 interval set but idle, 3 interval set and capture in progress
-        image_status = 3 if c.running else 0
+        image_status = IMAGE_STATUS_INTERVAL_CAPTURING if c.running else IMAGE_STATUS_IDLE
+        video_status = VIDEO_STATUS_CAPTURING if self.video_recording else VIDEO_STATUS_IDLE
         # §6.4.4: recording time "not implemented, sends 0"; available capacity is the internal SSD's
         return self.mav.camera_capture_status_encode(
-            self.time_boot_ms(now), image_status, 1 if self.video_recording else 0,
+            self.time_boot_ms(now), image_status, video_status,
             float(c.interval_s if c.running else 0.0), 0, self.available_mib(0), self.image_count)
 
     def _streams(self, wire: float) -> list[Message]:
@@ -748,11 +759,6 @@ class WirisState:
 def new_wiris(camera: Camera, config: WirisConfig | None = None, *, now: float = 0.0,
               utc_offset_s: float = 0.0, definition_bytes: bytes | None = None) -> WirisState:
     """A WirisState whose parameter list is the catalogue camera's generated definition."""
-    from cdf.generate import definition_xml
-    from wiris_tools.emulate.definition import parse_definition
-
-    from cdf.generate import definition_file_name
-
     data = definition_bytes if definition_bytes is not None else definition_xml(camera)
     return WirisState(camera, parse_definition(data, camera.id), config, now=now, utc_offset_s=utc_offset_s,
                       ftp_files={definition_file_name(camera): data})
