@@ -157,6 +157,7 @@ class TransferResult:
     nacks_tolerated: int = 0    # error MISSION_ACKs followed by further requests
     notes: tuple[str, ...] = ()
     mavlink1: bool = False      # download: the vehicle answered in MAVLink 1 framing
+    verified: bool = False      # upload_verified: the read-back matched what was sent
 
 
 class UploadUnconfirmed(LinkError):
@@ -467,7 +468,7 @@ class MissionClient:
                             f"read-back ({down.opaque_id:#010x})", where=self._where(mission_type),
                             hint="someone else changed the mission meanwhile; upload again")
         return TransferResult(mission_type, len(items), up.seconds + down.seconds, up.opaque_id or down.opaque_id,
-                              up.resent + down.resent, up.nacks_tolerated, up.notes + note + ("verified",))
+                              up.resent + down.resent, up.nacks_tolerated, up.notes + note, verified=True)
 
 
 class _Upload:
@@ -833,9 +834,9 @@ def upload_file(link: Link, path: str, *, mission_type: int = MISSION_TYPE_MISSI
     return {"file": str(path), "type": TYPE_NAMES[mission_type], "target_system": system,
             "autopilot": "ardupilot" if ardupilot else "px4" if hb.autopilot == mavlink2.MAV_AUTOPILOT_PX4
             else str(hb.autopilot), "items": len(items), "home_row": ardupilot and mission_type == 0,
-            "seconds": round(result.seconds, 3), "verified": "verified" in result.notes,
+            "seconds": round(result.seconds, 3), "verified": result.verified,
             "opaque_id": result.opaque_id, "resent": result.resent, "nacks_tolerated": result.nacks_tolerated,
-            "notes": list(n for n in result.notes if n != "verified")}
+            "notes": list(result.notes)}
 
 
 def download_file(link: Link, out: str, *, target_system: int | None = None, target_component: int = 1,

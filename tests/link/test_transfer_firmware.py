@@ -129,7 +129,7 @@ def test_verify_accepts_what_the_firmware_gives_back(flavour):
     with FirmwareSim(flavour) as sim, Link(f"udpout:127.0.0.1:{sim.port}") as link:
         link.wait_heartbeat(timeout=3, system=1)
         result = MissionClient(link, timeouts=FAST).upload_verified(items)
-    assert "verified" in result.notes and result.count == len(items)
+    assert result.verified and result.count == len(items)
 
 
 def _set(index: int, **changes):
@@ -256,7 +256,7 @@ def test_vehicle_sim_gives_ardupilot_loiter_turns_and_script_time_back_like_the_
     with VehicleSim(flavour="ardupilot", stores_like_firmware=True, heartbeat_s=0.2) as sim, \
             Link(f"udpout:127.0.0.1:{sim.port}") as link:
         link.wait_heartbeat(timeout=3, system=1)
-        assert "verified" in MissionClient(link, timeouts=FAST).upload_verified(items).notes
+        assert MissionClient(link, timeouts=FAST).upload_verified(items).verified
 
 
 def same_values(a: MissionItem, b: MissionItem) -> bool:
@@ -282,7 +282,7 @@ def test_vehicle_sim_gives_items_back_like_the_firmware(flavour):
             Link(f"udpout:127.0.0.1:{sim.port}") as link:
         link.wait_heartbeat(timeout=3, system=1)
         client = MissionClient(link, timeouts=FAST)
-        assert "verified" in client.upload_verified(items).notes
+        assert client.upload_verified(items).verified
         got, _ = client.download()
     assert len(got) == len(items) and all(same_values(g, model(it)) for g, it in zip(got, items))
 
@@ -347,7 +347,7 @@ def test_ardupilot_answers_error_after_completion_and_a_lost_accepted_is_unconfi
     # GCS_Common.cpp handle_mission_item: an item when not receiving gets MAV_MISSION_ERROR
     assert C.MAV_MISSION_ERROR in answers
     assert "MAV_MISSION_ERROR to the repeated last item" in err.value.message and "--verify" in err.value.hint
-    assert "verified" in result.notes
+    assert result.verified
 
 
 def test_a_deferred_accepted_is_waited_for_and_a_busy_vehicle_asked_again():
@@ -364,7 +364,7 @@ def test_a_deferred_accepted_is_waited_for_and_a_busy_vehicle_asked_again():
         start = time.monotonic()
         up = client.upload(WAYPOINTS)
         assert time.monotonic() - start >= 0.55 and up.opaque_id != 0 and up.resent >= 1
-        assert "verified" in client.upload_verified(WAYPOINTS).notes
+        assert client.upload_verified(WAYPOINTS).verified
         # another ground station downloading while the next upload's ACCEPTED is deferred
         done = []
         worker = threading.Thread(target=lambda: done.append(client.upload(list(reversed(WAYPOINTS)))))
