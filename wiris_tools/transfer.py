@@ -68,8 +68,8 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from cdf.float32 import FLOAT32_MAX
 from missions.emit.items import MISSION_TYPE_MISSION, MissionItem
-from missions.formats.planfile import FLOAT32_MAX
 from wiris_tools.errors import LinkError
 from wiris_tools.link import Link
 from wiris_tools.readback import compare_items, readback_firmware
