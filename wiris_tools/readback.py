@@ -148,8 +148,8 @@ _ARDUPILOT_MISSION = {
     _C.MAV_CMD_VIDEO_START_CAPTURE: "i-------",     # stream id
     _C.MAV_CMD_VIDEO_STOP_CAPTURE: "i-------",
 }
-# ArduPlane (same function, the APM_BUILD_ArduPlane branch): a waypoint keeps acceptance radius and pass-by
-# distance, each clamped to a byte, instead of the delay.
+# ArduPlane (same function, the APM_BUILD_ArduPlane branch, read at a877ec7c; not run on the plane SITL): a
+# waypoint keeps acceptance radius and pass-by distance, each clamped to a byte, instead of the delay.
 _ARDUPLANE_MISSION = {**_ARDUPILOT_MISSION, _C.MAV_CMD_NAV_WAYPOINT: "-cc-eehL"}
 # libraries/GCS_MAVLink/MissionItemProtocol_Fence.cpp (get_item_as_mission_item, 92e0e660): vertex count
 # (uint8) or radius (float; AC_PolyFence_loader "read_float") in p1, x/y; z is sent as 0, the frame not kept.
