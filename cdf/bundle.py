@@ -37,6 +37,7 @@ from typing import Iterable, Iterator
 
 from cdf.catalogue import Camera, Catalogue
 from cdf.errors import CdfError
+from cdf.paths import require_directory
 
 MANIFEST = "manifest.json"
 # CAMERA_INFORMATION.cam_definition_uri is char[140] and must be NUL-terminated (common.xml): 139 bytes of text.
@@ -182,13 +183,8 @@ def build_bundle(directory: str | Path, models: Iterable[str] = (), *, all_model
 
         cat = catalogue()
     directory = Path(directory)
-    try:
-        if directory.exists() and not directory.is_dir():
-            raise CdfError("the output path exists and is not a directory", where=str(directory),
-                           hint="choose another -o directory, or move that file away")
-    except OSError as err:  # exists() answers only "no such file"; a name too long raises
-        raise CdfError(f"cannot use the output directory: {err.strerror}", where=str(directory),
-                       hint="choose another -o directory, one you may create and write to") from None
+    require_directory(directory, CdfError, missing_ok=True, hint="choose another -o directory, or move that file away",
+                      access_hint="choose another -o directory, one you may create and write to")
     if base_url is not None:
         check_base_url(base_url)
     cameras, skipped = select_cameras(cat, models, all_models)

@@ -79,12 +79,18 @@ _INT_TWIN = {_C.MAV_FRAME_GLOBAL_INT: _C.MAV_FRAME_GLOBAL,
 
 # ArduCopter, Rover and Sub: libraries/AP_Mission/AP_Mission.cpp, mission_cmd_to_mavlink_int (what
 # mavlink_int_to_mission_cmd kept, with the Mission_Command field types of AP_Mission.h); x/y/z only for
-# stored_in_location() commands, every other command comes back in frame 0. Checked entry by entry against
-# ArduPilot/ardupilot a877ec7c (4.4-era; AP_Mission.h types from 019546d9) and, for what came after it
-# (IMAGE_START_CAPTURE's instance, IMAGE_STOP_CAPTURE, SET_CAMERA_SOURCE, DO_SET_ROI_LOCATION/NONE,
-# fractional loiter turns), CarbonixUAV/cxpilot-core f8a8cd3 and blitzy-public-samples/ardupilot-blitzy
-# 4b5c0ce, whose two functions read the same for every command here. a877ec7c keeps no IMAGE_START_CAPTURE
-# instance ("image_start_capture.interval_s = packet.param2" first): a 4.4 vehicle gives p1 back as 0.
+# stored_in_location() commands, every other command comes back in frame 0. Sources: the two functions read
+# entry by entry at upstream ArduPilot/ardupilot a877ec7c (4.4-era, AP_Mission.h types from 019546d9), and
+# every entry of this table and of the fence and rally tables below uploaded to and downloaded from the
+# ArduPilot SITL this project tests with, master 90700977 (4.7.0-dev, ../shared/sitl; in-range values, each
+# field distinct): each kept field came back as its letter says and each "-" field as 0, except
+# DO_MOUNT_CONTROL's z (the mount mode, not compared). Not checked at the release tags Copter-4.4.x, 4.5.x
+# or 4.6.x: their sources could not be read here. What came after a877ec7c (IMAGE_START_CAPTURE's instance,
+# IMAGE_STOP_CAPTURE, SET_CAMERA_SOURCE, DO_SET_ROI_LOCATION/NONE, fractional loiter turns) is therefore known
+# only for 4.7.0-dev; a877ec7c keeps no IMAGE_START_CAPTURE instance ("image_start_capture.interval_s =
+# packet.param2" first), so a 4.4 vehicle gives p1 back as 0. A negative value in an unsigned slot (a camera
+# id, an image count) comes back wrapped on the x86 SITL (-7 as 249 in a uint8) and 0 on ARM boards: it is
+# not what the rule predicts, a false alarm of --verify for an input no plan has.
 _ARDUPILOT_MISSION = {
     _C.MAV_CMD_NAV_WAYPOINT: "i---eehL",            # p1 delay s (uint16); acceptance/pass-by/yaw dropped
     _C.MAV_CMD_NAV_LOITER_UNLIM: "--i-eehL",        # radius as uint16, its sign the direction
@@ -142,8 +148,8 @@ _ARDUPILOT_MISSION = {
     _C.MAV_CMD_VIDEO_START_CAPTURE: "i-------",     # stream id
     _C.MAV_CMD_VIDEO_STOP_CAPTURE: "i-------",
 }
-# ArduPlane (same function, the APM_BUILD_ArduPlane branch): a waypoint keeps acceptance radius and pass-by
-# distance, each clamped to a byte, instead of the delay.
+# ArduPlane (same function, the APM_BUILD_ArduPlane branch, read at a877ec7c; not run on the plane SITL): a
+# waypoint keeps acceptance radius and pass-by distance, each clamped to a byte, instead of the delay.
 _ARDUPLANE_MISSION = {**_ARDUPILOT_MISSION, _C.MAV_CMD_NAV_WAYPOINT: "-cc-eehL"}
 # libraries/GCS_MAVLink/MissionItemProtocol_Fence.cpp (get_item_as_mission_item, 92e0e660): vertex count
 # (uint8) or radius (float; AC_PolyFence_loader "read_float") in p1, x/y; z is sent as 0, the frame not kept.

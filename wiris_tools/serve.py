@@ -47,6 +47,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
+from cdf.paths import require_directory
 from wiris_tools.errors import LinkError
 
 CONTENT_TYPES = {".xml": "application/xml", ".xz": "application/x-xz", ".json": "application/json"}
@@ -474,11 +475,8 @@ def make_server(directory: str | Path, host: str = "127.0.0.1", port: int = 8000
     `idle_timeout_s`: the longest wait for one read or write; `request_timeout_s`: for a request's line and
     headers from their first byte. `max_connections`: served at once, `max_per_client` of them from one
     client address; more are answered 503."""
-    root = Path(directory)
-    if not os.path.isdir(root):  # False for any error (a name too long), where Path.is_dir() raises
-        raise LinkError("not a directory", where=str(directory),
-                        hint="build a bundle first: wiris cdf build --all -o DIR")
-    root = Path(os.path.realpath(root))
+    require_directory(directory, LinkError, hint="build a bundle first: wiris cdf build --all -o DIR")
+    root = Path(os.path.realpath(directory))
     config = ServeConfig(root=root, prefix=_normal_prefix(prefix if prefix is not None else prefix_from_manifest(root)),
                          **({"log": log} if log is not None else {}))
     # StreamRequestHandler applies `timeout` to the socket; http.server closes the connection when a read

@@ -65,11 +65,12 @@ import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from cdf.float32 import FLOAT32_MAX
 from missions.emit.items import MISSION_TYPE_MISSION, MissionItem
-from missions.formats.planfile import FLOAT32_MAX
 from wiris_tools.errors import LinkError
 from wiris_tools.link import Link
 from wiris_tools.readback import compare_items, readback_firmware
@@ -157,6 +158,7 @@ class TransferResult:
     nacks_tolerated: int = 0    # error MISSION_ACKs followed by further requests
     notes: tuple[str, ...] = ()
     mavlink1: bool = False      # download: the vehicle answered in MAVLink 1 framing
+    verified: bool = False      # upload_verified: the read-back matched what was sent
 
 
 class UploadUnconfirmed(LinkError):
@@ -324,118 +326,8 @@ class MissionClient:
                  deadline_s: float | None = None) -> tuple[list[MissionItem], TransferResult]:
         """Read the vehicle's list of `mission_type`; returns (items, result). It ends with LinkError
         `deadline_s` seconds after it started, or when given None at download_deadline_s of the count."""
-        t = self.timeouts
-        where = self._where(mission_type)
-        start = time.monotonic()
-        given = deadline_s is not None
-        end = start + deadline_s if deadline_s is not None else math.inf
-        resent = 0
         with self._inbox(["MISSION_COUNT", "MISSION_ITEM_INT", "MISSION_ACK"], mission_type) as box:
-            # 1. the count
-            wait = t.first_s
-            count_msg = None
-            fatal: int | None = None
-            busy = False
-            # Error acks are judged like on upload: a transient one (ERROR, INVALID_SEQUENCE - often a
-            # stale answer to a duplicated packet of the previous transfer) is ignored; any other
-            # ends the download when the wait it arrived in passes without an answer. DENIED is
-            # ArduPilot's "busy": it refuses list and item requests while an upload is being received,
-            # and until the deferred ACCEPTED of its last one is out (MissionItemProtocol.cpp) - asked
-            # again until the retries run out.
-            for attempt in range(t.retries + 1):
-                self.link.send(self.link.mav.mission_request_list_encode(self.target_system, self.target_component,
-                                                                         mission_type))
-                sent = time.monotonic()
-                deadline = min(sent + wait, end)
-                while True:
-                    msg = box.get(max(0.0, deadline - time.monotonic()))
-                    if msg is None:
-                        break
-                    if msg.get_type() == "MISSION_COUNT":
-                        count_msg = msg
-                        if attempt == 0:
-                            self.rtt.sample(time.monotonic() - sent)
-                        break
-                    if msg.get_type() != "MISSION_ACK":
-                        continue
-                    if msg.type == mavlink2.MAV_MISSION_DENIED:
-                        busy = True
-                    elif msg.type in _FATAL_NACKS:
-                        fatal = msg.type
-                if count_msg is not None:
-                    break
-                if fatal == mavlink2.MAV_MISSION_UNSUPPORTED:
-                    raise ListUnsupported(f"the vehicle has no {TYPE_NAMES.get(mission_type, mission_type)} list "
-                                          "(it answered MAV_MISSION_UNSUPPORTED to the list request)", where=where,
-                                          hint="nothing to download: this firmware was built without it")
-                if fatal is not None:
-                    raise LinkError(f"the vehicle answered {mission_result_name(fatal)} to the list request",
-                                    where=where, hint=_NACK_HINTS.get(fatal, _DOWNLOAD_NACK_HINT))
-                if time.monotonic() >= end:
-                    raise _past_deadline(deadline_s, given, "no MISSION_COUNT came", where, t)
-                resent += 1
-                wait = min(wait * 2, t.ack_s)
-            if count_msg is None and busy:
-                raise LinkError(f"the vehicle answered MAV_MISSION_DENIED to all {t.retries + 1} list requests",
-                                where=where, hint="it is busy receiving an upload (another ground station?); "
-                                                  "retry when that has finished")
-            if count_msg is None:
-                raise LinkError(f"no MISSION_COUNT after {t.retries + 1} list requests", where=where,
-                                hint="check the connection and the target system/component")
-            count = count_msg.count
-            opaque = opaque_id_of(count_msg)
-            if deadline_s is None:
-                deadline_s = download_deadline_s(count, self.rtt.srtt, t)
-                end = start + deadline_s
-            got: dict[int, MissionItem] = {}
-            fatal = None      # an error ack that came with (or before) the count was not about the items
-            last_answer: int | None = None
-            # 2. the items, in order (PX4 refuses out-of-order requests)
-            for seq in range(count):
-                tries = 0
-                while seq not in got:
-                    self.link.send(self.link.mav.mission_request_int_encode(self.target_system,
-                                                                            self.target_component, seq, mission_type))
-                    sent = time.monotonic()
-                    rto = self.rtt.rto(t.min_rto_s, max(t.item_s, t.min_rto_s), t.item_s)
-                    deadline = min(sent + min(rto * (2 ** tries), t.ack_s), end)
-                    while seq not in got:
-                        msg = box.get(max(0.0, deadline - time.monotonic()))
-                        if msg is None:
-                            break
-                        if msg.get_type() == "MISSION_ITEM_INT":
-                            # Only the item asked for: a late duplicate of an older item (or of
-                            # an earlier transfer) must never fill another slot.
-                            if msg.seq == seq:
-                                got[seq] = item_from_msg(msg)
-                                if tries == 0:
-                                    self.rtt.sample(time.monotonic() - sent)
-                        elif msg.get_type() == "MISSION_ACK":
-                            last_answer = msg.type
-                            if msg.type in _FATAL_NACKS and msg.type != mavlink2.MAV_MISSION_DENIED:
-                                fatal = msg.type
-                    if seq in got:
-                        break
-                    if fatal is not None:
-                        raise LinkError(f"the vehicle answered {mission_result_name(fatal)} "
-                                        f"to the request for item {seq}", where=where,
-                                        hint=_NACK_HINTS.get(fatal, _DOWNLOAD_NACK_HINT))
-                    if time.monotonic() >= end:
-                        raise _past_deadline(deadline_s, given, f"{len(got)} of {count} items had arrived (item {seq} "
-                                             f"was asked for {tries + 1} times)", where, t)
-                    tries += 1
-                    resent += 1
-                    if tries > t.retries:
-                        answer = "" if last_answer is None else f" (last answer: {mission_result_name(last_answer)})"
-                        raise LinkError(f"item {seq} of {count} never arrived after {t.retries + 1} requests{answer}",
-                                        where=where, hint="the link is too lossy or was lost; retry the download")
-                if progress:
-                    progress(seq + 1, count)
-            self.link.send(self.link.mav.mission_ack_encode(self.target_system, self.target_component,
-                                                            mavlink2.MAV_MISSION_ACCEPTED, mission_type))
-        items = [got[i] for i in range(count)]
-        mavlink1 = (count_msg.get_msgbuf() or b"\xfd")[0] == mavlink2.PROTOCOL_MARKER_V1
-        return items, TransferResult(mission_type, count, time.monotonic() - start, opaque, resent, mavlink1=mavlink1)
+            return _Download(self, box, mission_type, progress, deadline_s).run()
 
     # -- upload + read-back --------------------------------------------------------------------
     def upload_verified(self, items: Sequence[MissionItem], *, mission_type: int = MISSION_TYPE_MISSION,
@@ -467,7 +359,7 @@ class MissionClient:
                             f"read-back ({down.opaque_id:#010x})", where=self._where(mission_type),
                             hint="someone else changed the mission meanwhile; upload again")
         return TransferResult(mission_type, len(items), up.seconds + down.seconds, up.opaque_id or down.opaque_id,
-                              up.resent + down.resent, up.nacks_tolerated, up.notes + note + ("verified",))
+                              up.resent + down.resent, up.nacks_tolerated, up.notes + note, verified=True)
 
 
 class _Upload:
@@ -715,6 +607,153 @@ class _Upload:
                 c.link.unsubscribe(sub)
 
 
+class _Download:
+    """One download, in two steps: the count (the list request asked again, doubling the wait, until a
+    MISSION_COUNT comes), then each item in order (PX4 refuses out-of-order requests), re-requested after the
+    RTO. Every wait also ends at the download's deadline, which the count sets when none was given.
+
+    Error acks are judged like on upload: a transient one (ERROR, INVALID_SEQUENCE - often a stale answer to
+    a duplicated packet of the previous transfer) is ignored; any other ends the download when the wait it
+    arrived in passes without an answer. DENIED is ArduPilot's "busy": it refuses list and item requests
+    while an upload is being received, and until the deferred ACCEPTED of its last one is out
+    (MissionItemProtocol.cpp) - asked again until the retries run out."""
+
+    def __init__(self, client: "MissionClient", box, mission_type: int, progress: Progress | None,
+                 deadline_s: float | None) -> None:
+        self.c = client
+        self.t = client.timeouts
+        self.box = box
+        self.mission_type = mission_type
+        self.where = client._where(mission_type)
+        self.progress = progress
+        self.start = time.monotonic()
+        self.given = deadline_s is not None
+        self.deadline_s = deadline_s
+        self.end = self.start + deadline_s if deadline_s is not None else math.inf
+        self.resent = 0
+        self.busy = False                   # a DENIED came to a list request
+        self.fatal: int | None = None       # an error ack that ends the step it came in
+        self.last_answer: int | None = None  # the last ack among the items
+
+    def run(self) -> tuple[list[MissionItem], TransferResult]:
+        count_msg = self.count()
+        count = count_msg.count
+        if not self.given:
+            self.deadline_s = download_deadline_s(count, self.c.rtt.srtt, self.t)
+            self.end = self.start + self.deadline_s
+        self.fatal = None  # an error ack that came with (or before) the count was not about the items
+        items = []
+        for seq in range(count):
+            items.append(self.item(seq, count))
+            if self.progress:
+                self.progress(seq + 1, count)
+        c = self.c
+        c.link.send(c.link.mav.mission_ack_encode(c.target_system, c.target_component, mavlink2.MAV_MISSION_ACCEPTED,
+                                                  self.mission_type))
+        mavlink1 = (count_msg.get_msgbuf() or b"\xfd")[0] == mavlink2.PROTOCOL_MARKER_V1
+        return items, TransferResult(self.mission_type, count, time.monotonic() - self.start, opaque_id_of(count_msg),
+                                     self.resent, mavlink1=mavlink1)
+
+    def _wait(self, deadline: float):
+        return self.box.get(max(0.0, deadline - time.monotonic()))
+
+    def _past_deadline(self, received: str) -> LinkError:
+        return _past_deadline(self.deadline_s, self.given, received, self.where, self.t)
+
+    # -- step 1: the count ---------------------------------------------------------------------
+    def count(self):
+        """The vehicle's MISSION_COUNT; LinkError (ListUnsupported: it has no such list) otherwise."""
+        t = self.t
+        wait = t.first_s
+        for attempt in range(t.retries + 1):
+            msg = self.ask_for_count(wait, first=attempt == 0)
+            if msg is not None:
+                return msg
+            self.check_list_refused()
+            if time.monotonic() >= self.end:
+                raise self._past_deadline("no MISSION_COUNT came")
+            self.resent += 1
+            wait = min(wait * 2, t.ack_s)
+        if self.busy:
+            raise LinkError(f"the vehicle answered MAV_MISSION_DENIED to all {t.retries + 1} list requests",
+                            where=self.where, hint="it is busy receiving an upload (another ground station?); "
+                                                   "retry when that has finished")
+        raise LinkError(f"no MISSION_COUNT after {t.retries + 1} list requests", where=self.where,
+                        hint="check the connection and the target system/component")
+
+    def ask_for_count(self, wait: float, first: bool):
+        """Send one list request; the MISSION_COUNT that answers it within `wait`, else None (noting the
+        error acks that came meanwhile)."""
+        c = self.c
+        c.link.send(c.link.mav.mission_request_list_encode(c.target_system, c.target_component, self.mission_type))
+        sent = time.monotonic()
+        deadline = min(sent + wait, self.end)
+        while (msg := self._wait(deadline)) is not None:
+            if msg.get_type() == "MISSION_COUNT":
+                if first:
+                    c.rtt.sample(time.monotonic() - sent)
+                return msg
+            if msg.get_type() != "MISSION_ACK":
+                continue
+            if msg.type == mavlink2.MAV_MISSION_DENIED:
+                self.busy = True
+            elif msg.type in _FATAL_NACKS:
+                self.fatal = msg.type
+        return None
+
+    def check_list_refused(self) -> None:
+        fatal = self.fatal
+        if fatal == mavlink2.MAV_MISSION_UNSUPPORTED:
+            raise ListUnsupported(f"the vehicle has no {TYPE_NAMES.get(self.mission_type, self.mission_type)} list "
+                                  "(it answered MAV_MISSION_UNSUPPORTED to the list request)", where=self.where,
+                                  hint="nothing to download: this firmware was built without it")
+        if fatal is not None:
+            raise LinkError(f"the vehicle answered {mission_result_name(fatal)} to the list request",
+                            where=self.where, hint=_NACK_HINTS.get(fatal, _DOWNLOAD_NACK_HINT))
+
+    # -- step 2: the items, one at a time -------------------------------------------------------
+    def item(self, seq: int, count: int) -> MissionItem:
+        """Item `seq`, asked for up to `retries` + 1 times; LinkError when it never comes."""
+        t = self.t
+        for tries in range(t.retries + 1):
+            item = self.ask_for_item(seq, tries)
+            if item is not None:
+                return item
+            if self.fatal is not None:
+                raise LinkError(f"the vehicle answered {mission_result_name(self.fatal)} to the request for item "
+                                f"{seq}", where=self.where, hint=_NACK_HINTS.get(self.fatal, _DOWNLOAD_NACK_HINT))
+            if time.monotonic() >= self.end:
+                raise self._past_deadline(f"{seq} of {count} items had arrived (item {seq} was asked for "
+                                          f"{tries + 1} times)")
+            self.resent += 1
+        answer = "" if self.last_answer is None else f" (last answer: {mission_result_name(self.last_answer)})"
+        raise LinkError(f"item {seq} of {count} never arrived after {t.retries + 1} requests{answer}",
+                        where=self.where, hint="the link is too lossy or was lost; retry the download")
+
+    def ask_for_item(self, seq: int, tries: int) -> MissionItem | None:
+        """Send the request for item `seq` (the `tries`-th time); the item if it comes within the RTO (doubled
+        per earlier try, at most `ack_s`), else None."""
+        c, t = self.c, self.t
+        c.link.send(c.link.mav.mission_request_int_encode(c.target_system, c.target_component, seq,
+                                                          self.mission_type))
+        sent = time.monotonic()
+        rto = c.rtt.rto(t.min_rto_s, max(t.item_s, t.min_rto_s), t.item_s)
+        deadline = min(sent + min(rto * (2 ** tries), t.ack_s), self.end)
+        while (msg := self._wait(deadline)) is not None:
+            if msg.get_type() == "MISSION_ITEM_INT":
+                # Only the item asked for: a late duplicate of an older item (or of an earlier transfer)
+                # must never fill another slot.
+                if msg.seq == seq:
+                    if tries == 0:
+                        c.rtt.sample(time.monotonic() - sent)
+                    return item_from_msg(msg)
+            elif msg.get_type() == "MISSION_ACK":
+                self.last_answer = msg.type
+                if msg.type in _FATAL_NACKS and msg.type != mavlink2.MAV_MISSION_DENIED:
+                    self.fatal = msg.type
+        return None
+
+
 # -- files <-> vehicle (what `wiris mission upload/download` run) -------------------------------------
 
 PLAN_SUFFIXES = (".plan",)
@@ -722,8 +761,17 @@ WPL_SUFFIXES = (".waypoints", ".wpl", ".txt")
 CAPTURE_SUFFIXES = (".yaml", ".yml")
 
 
+Home = tuple[float, float, float]
+
+
+class LoadedList(NamedTuple):
+    """What load_for_upload read: the items of one list, without a home row, and the file's home."""
+    items: list[MissionItem]
+    home: Home | None
+
+
 def load_for_upload(path: str, mission_type: int = MISSION_TYPE_MISSION, *, part: int | None = None,
-                    firmware: str | None = None) -> tuple[list[MissionItem], tuple[float, float, float] | None]:
+                    firmware: str | None = None) -> LoadedList:
     """The items of `mission_type` in a .plan, a WPL 110 file or a capture plan (compiled on the fly),
     without a home row, and the file's home. PlanError/LinkError for anything unusable."""
     from pathlib import Path
@@ -732,60 +780,86 @@ def load_for_upload(path: str, mission_type: int = MISSION_TYPE_MISSION, *, part
 
     p = Path(path)
     suffix = p.suffix.lower()
-    kind = TYPE_NAMES.get(mission_type, str(mission_type))
     if suffix in PLAN_SUFFIXES:
-        from missions.formats.planfile import load_plan
-        items, fence, rally, home = load_plan(p)
-        chosen = {MISSION_TYPE_MISSION: items, mavlink2.MAV_MISSION_TYPE_FENCE: fence,
-                  mavlink2.MAV_MISSION_TYPE_RALLY: rally}[mission_type]
+        chosen, home = _list_of_plan_file(p, mission_type)
     elif suffix in WPL_SUFFIXES:
-        if mission_type != MISSION_TYPE_MISSION:
-            raise PlanError(f"a WPL 110 file holds a mission, not a {kind} list", where=str(p),
-                            hint="upload fence and rally from a .plan file")
+        _require_mission(p, mission_type, "a WPL 110 file holds a mission")
         from missions.formats.wpl import load_wpl
         chosen, home = load_wpl(p)
     elif suffix in CAPTURE_SUFFIXES:
-        if mission_type != MISSION_TYPE_MISSION:
-            raise PlanError(f"a capture plan compiles to a mission, not a {kind} list", where=str(p),
-                            hint="upload fence and rally from a .plan file")
-        try:
-            from missions.compile import compile_plan
-        except ImportError:
-            raise PlanError("this installation cannot compile capture plans (missions.compile is missing)",
-                            where=str(p), hint="compile it elsewhere and upload the .plan file") from None
-        compiled = compile_plan(str(p), firmware=firmware)
-        try:
-            from missions.measure.report import report
-            errors = report(compiled)["errors"]
-        except ImportError:
-            errors = []
-        except PlanError as err:  # from measuring the mission (a photo budget): about the plan as a whole
-            err.where = err.where or str(p)
-            raise
-        if errors:
-            raise PlanError(f"the compiled mission has {len(errors)} error(s): {errors[0]}", where=str(p),
-                            hint="run `wiris mission check` and fix the plan before uploading")
-        parts = list(compiled.parts) if compiled.parts else [compiled.items]
-        if len(parts) > 1 and part is None:
-            raise PlanError(f"the mission is split into {len(parts)} parts to fit the vehicle's "
-                            f"{compiled.item_limit} items", where=str(p), hint="choose one with --part 1..N")
-        if part is not None and not 1 <= part <= len(parts):
-            raise PlanError(f"--part {part}: the mission has {len(parts)} part(s)", where=str(p),
-                            hint="leave out --part: the mission fits the vehicle in one upload" if len(parts) == 1
-                            else f"give --part 1..{len(parts)}: each part is a complete mission, flown in turn")
-        chosen = list(parts[(part or 1) - 1])
-        home = compiled.home
+        _require_mission(p, mission_type, "a capture plan compiles to a mission")
+        chosen, home = _capture_plan_part(p, part, firmware)
     else:
         raise PlanError(f"unknown file type {suffix or '(no suffix)'!r}", where=str(p),
                         hint="upload a .plan, a .waypoints (QGC WPL 110) or a capture plan .yaml")
     chosen = [it.with_(mission_type=mission_type) for it in chosen]
     if not chosen:
-        raise PlanError(f"the file holds no {kind} items", where=str(p),
+        raise PlanError(f"the file holds no {TYPE_NAMES.get(mission_type, str(mission_type))} items", where=str(p),
                         hint="check --type (mission, fence or rally); to clear a list, use the ground station")
-    return chosen, home
+    return LoadedList(chosen, home)
 
 
-def home_item(home: tuple[float, float, float] | None) -> MissionItem:
+def _list_of_plan_file(p, mission_type: int) -> LoadedList:
+    from missions.formats.planfile import load_plan
+    items, fence, rally, home = load_plan(p)
+    chosen = {MISSION_TYPE_MISSION: items, mavlink2.MAV_MISSION_TYPE_FENCE: fence,
+              mavlink2.MAV_MISSION_TYPE_RALLY: rally}[mission_type]
+    return LoadedList(chosen, home)
+
+
+def _require_mission(p, mission_type: int, what: str) -> None:
+    """PlanError unless a mission is asked for: only a .plan file holds fence and rally lists."""
+    from missions.errors import PlanError
+    if mission_type != MISSION_TYPE_MISSION:
+        raise PlanError(f"{what}, not a {TYPE_NAMES.get(mission_type, str(mission_type))} list", where=str(p),
+                        hint="upload fence and rally from a .plan file")
+
+
+def _capture_plan_part(p, part: int | None, firmware: str | None) -> LoadedList:
+    """The mission of capture plan `p` compiled for `firmware` (None: the plan's), its part `part` (1..N) when
+    it is split at the vehicle's item limit."""
+    compiled = _compiled_without_errors(p, firmware)
+    parts = list(compiled.parts) if compiled.parts else [compiled.items]
+    return LoadedList(list(parts[_part_index(p, part, len(parts), compiled.item_limit)]), compiled.home)
+
+
+def _compiled_without_errors(p, firmware: str | None):
+    """missions.compile.compile_plan of `p`; PlanError when the report of the compiled mission finds errors."""
+    from missions.errors import PlanError
+    try:
+        from missions.compile import compile_plan
+    except ImportError:
+        raise PlanError("this installation cannot compile capture plans (missions.compile is missing)",
+                        where=str(p), hint="compile it elsewhere and upload the .plan file") from None
+    compiled = compile_plan(str(p), firmware=firmware)
+    try:
+        from missions.measure.report import report
+        errors = report(compiled)["errors"]
+    except ImportError:
+        errors = []
+    except PlanError as err:  # from measuring the mission (a photo budget): about the plan as a whole
+        err.where = err.where or str(p)
+        raise
+    if errors:
+        raise PlanError(f"the compiled mission has {len(errors)} error(s): {errors[0]}", where=str(p),
+                        hint="run `wiris mission check` and fix the plan before uploading")
+    return compiled
+
+
+def _part_index(p, part: int | None, count: int, item_limit: int) -> int:
+    """The index into the `count` parts of --part `part` (None: the only one); PlanError when it names none."""
+    from missions.errors import PlanError
+    if count > 1 and part is None:
+        raise PlanError(f"the mission is split into {count} parts to fit the vehicle's {item_limit} items",
+                        where=str(p), hint="choose one with --part 1..N")
+    if part is not None and not 1 <= part <= count:
+        raise PlanError(f"--part {part}: the mission has {count} part(s)", where=str(p),
+                        hint="leave out --part: the mission fits the vehicle in one upload" if count == 1
+                        else f"give --part 1..{count}: each part is a complete mission, flown in turn")
+    return (part or 1) - 1
+
+
+def home_item(home: Home | None) -> MissionItem:
     """ArduPilot's item 0: the home position (it replaces it with its own home on upload)."""
     from missions.emit.items import FRAME_GLOBAL, deg_to_e7
     lat, lon, alt = home if home is not None else (0.0, 0.0, 0.0)
@@ -817,7 +891,7 @@ def find_autopilot(link: Link, target_system: int | None, timeout: float):
 def upload_file(link: Link, path: str, *, mission_type: int = MISSION_TYPE_MISSION, verify: bool = False,
                 target_system: int | None = None, target_component: int = 1, part: int | None = None,
                 firmware: str | None = None, timeout: float = 10.0, progress: Progress | None = None,
-                loaded: tuple[list[MissionItem], tuple[float, float, float] | None] | None = None) -> dict:
+                loaded: LoadedList | None = None) -> dict:
     """Load `path` (or take `loaded`, from load_for_upload), upload it (ArduPilot: home as item 0),
     optionally verify; a summary dict."""
     items, home = loaded if loaded is not None else load_for_upload(path, mission_type, part=part,
@@ -833,9 +907,9 @@ def upload_file(link: Link, path: str, *, mission_type: int = MISSION_TYPE_MISSI
     return {"file": str(path), "type": TYPE_NAMES[mission_type], "target_system": system,
             "autopilot": "ardupilot" if ardupilot else "px4" if hb.autopilot == mavlink2.MAV_AUTOPILOT_PX4
             else str(hb.autopilot), "items": len(items), "home_row": ardupilot and mission_type == 0,
-            "seconds": round(result.seconds, 3), "verified": "verified" in result.notes,
+            "seconds": round(result.seconds, 3), "verified": result.verified,
             "opaque_id": result.opaque_id, "resent": result.resent, "nacks_tolerated": result.nacks_tolerated,
-            "notes": list(n for n in result.notes if n != "verified")}
+            "notes": list(result.notes)}
 
 
 def download_file(link: Link, out: str, *, target_system: int | None = None, target_component: int = 1,
@@ -845,62 +919,88 @@ def download_file(link: Link, out: str, *, target_system: int | None = None, tar
     (None: MissionClient.download's own, from the count and the round trip)."""
     from pathlib import Path
 
-    from missions.errors import PlanError
-    from missions.formats.planfile import atomic_write, check_writable, write_plan
-    from missions.formats.wpl import write_wpl
+    from missions.formats.planfile import atomic_write
 
     p = Path(out)
+    suffix = _output_suffix(p)
+    hb = find_autopilot(link, target_system, timeout)
+    system = hb.get_srcSystem()
+    client = MissionClient(link, system, target_component)
+    mission, res = client.download(mission_type=MISSION_TYPE_MISSION, progress=progress, deadline_s=deadline_s)
+    items, home = _split_home(mission, hb.autopilot == mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA)
+    others = {kind: _download_other_list(client, kind, res.mavlink1, deadline_s)
+              for kind in (mavlink2.MAV_MISSION_TYPE_FENCE, mavlink2.MAV_MISSION_TYPE_RALLY)
+              } if suffix in PLAN_SUFFIXES else {}
+    atomic_write(p, _file_text(p, suffix, items, home, hb, others))
+    return {"file": str(p), "target_system": system,
+            "items": {"mission": len(items), **{TYPE_NAMES[kind]: len(o.items) for kind, o in others.items()}},
+            "home": list(home) if home else None, "opaque_id": res.opaque_id, "seconds": round(res.seconds, 3),
+            "notes": [o.note for o in others.values() if o.note is not None]}
+
+
+def _output_suffix(p) -> str:
+    """The suffix of output file `p`, after checking it can be written - before the download, not after it."""
+    from missions.errors import PlanError
+    from missions.formats.planfile import check_writable
+
     suffix = p.suffix.lower()
     if suffix not in PLAN_SUFFIXES + WPL_SUFFIXES:
         raise PlanError(f"unknown output type {suffix or '(no suffix)'!r}", where=str(p),
                         hint="write a .plan or a .waypoints file")
-    check_writable(p)  # before the download, not after it
-    hb = find_autopilot(link, target_system, timeout)
-    system = hb.get_srcSystem()
-    ardupilot = hb.autopilot == mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA
-    client = MissionClient(link, system, target_component)
-    items, res = client.download(mission_type=MISSION_TYPE_MISSION, progress=progress, deadline_s=deadline_s)
-    home = None
-    if ardupilot and items:
-        h = items.pop(0)
-        home = (h.x / 1e7, h.y / 1e7, h.z)
-    lists = {"mission": len(items)}
-    notes: list[str] = []
-    extra: dict[int, list[MissionItem]] = {}
-    if suffix in PLAN_SUFFIXES:
-        # mission_type is a MAVLink 2 extension: a vehicle that answered our (MAVLink 2) list request in
-        # MAVLink 1 cannot carry a fence or rally list (ArduPilot answers UNSUPPORTED, GCS_Common.cpp
-        # mavlink2_requirement_met, in a MAVLink 1 ack without the mission_type that says which list). Its
-        # answer, not its HEARTBEAT: PX4 talks MAVLink 1 until it hears MAVLink 2.
-        mavlink1 = res.mavlink1
-        for kind in (mavlink2.MAV_MISSION_TYPE_FENCE, mavlink2.MAV_MISSION_TYPE_RALLY):
-            name = TYPE_NAMES[kind]
-            if mavlink1:
-                extra[kind] = []
-                notes.append(f"{name} not downloaded: the vehicle talks MAVLink 1, which cannot carry fence or "
-                             "rally lists")
-            else:
-                try:
-                    extra[kind], _ = client.download(mission_type=kind, deadline_s=deadline_s)
-                except ListUnsupported as err:      # the vehicle has no such list: an empty one is the truth
-                    extra[kind] = []
-                    notes.append(f"{name} not downloaded: {err.message}")
-                except LinkError as err:
-                    # An empty list in the file would claim "no fence" for a vehicle that has one.
-                    raise LinkError(f"the {name} list could not be downloaded, so no file was written: "
-                                    f"{err.message}", where=err.where,
-                                    hint=f"{err.hint}; to save the mission alone, use -o FILE.waypoints") from None
-            lists[name] = len(extra[kind])
-    try:  # what the vehicle holds may not fit the file form (an infinite float): say where it goes
+    check_writable(p)
+    return suffix
+
+
+def _split_home(items: list[MissionItem], ardupilot: bool) -> LoadedList:
+    """The mission without ArduPilot's item 0, and that item's position as the file's home."""
+    if not ardupilot or not items:
+        return LoadedList(items, None)
+    h = items[0]
+    return LoadedList(items[1:], (h.x / 1e7, h.y / 1e7, h.z))
+
+
+class _OtherList(NamedTuple):
+    """A fence or rally list for a .plan file."""
+    items: list[MissionItem]
+    note: str | None = None     # why it is empty without having been downloaded
+
+
+def _download_other_list(client: MissionClient, kind: int, mavlink1: bool, deadline_s: float | None) -> _OtherList:
+    """The vehicle's fence or rally list; empty, with a note, when the vehicle cannot give it; LinkError when
+    the download fails (an empty list in the file would claim "no fence" for a vehicle that has one)."""
+    name = TYPE_NAMES[kind]
+    # mission_type is a MAVLink 2 extension: a vehicle that answered our (MAVLink 2) list request in MAVLink 1
+    # cannot carry a fence or rally list (ArduPilot answers UNSUPPORTED, GCS_Common.cpp mavlink2_requirement_met,
+    # in a MAVLink 1 ack without the mission_type that says which list). Its answer, not its HEARTBEAT: PX4
+    # talks MAVLink 1 until it hears MAVLink 2.
+    if mavlink1:
+        return _OtherList([], f"{name} not downloaded: the vehicle talks MAVLink 1, which cannot carry fence or "
+                              "rally lists")
+    try:
+        items, _ = client.download(mission_type=kind, deadline_s=deadline_s)
+    except ListUnsupported as err:      # the vehicle has no such list: an empty one is the truth
+        return _OtherList([], f"{name} not downloaded: {err.message}")
+    except LinkError as err:
+        raise LinkError(f"the {name} list could not be downloaded, so no file was written: {err.message}",
+                        where=err.where, hint=f"{err.hint}; to save the mission alone, use -o FILE.waypoints") from None
+    return _OtherList(items)
+
+
+def _file_text(p, suffix: str, items: list[MissionItem], home: Home | None, hb,
+               others: dict[int, _OtherList]) -> str:
+    """The text of output file `p`; PlanError (where: `p`) when what the vehicle holds does not fit the file
+    form (an infinite float)."""
+    from missions.errors import PlanError
+    from missions.formats.planfile import write_plan
+    from missions.formats.wpl import write_wpl
+
+    try:
         if suffix in PLAN_SUFFIXES:
-            text = write_plan(items, home, firmware=int(hb.autopilot), vehicle=int(hb.type),
-                              fence=extra[mavlink2.MAV_MISSION_TYPE_FENCE], rally=extra[mavlink2.MAV_MISSION_TYPE_RALLY])
-        else:
-            text = write_wpl(items, home)
+            return write_plan(items, home, firmware=int(hb.autopilot), vehicle=int(hb.type),
+                              fence=others[mavlink2.MAV_MISSION_TYPE_FENCE].items,
+                              rally=others[mavlink2.MAV_MISSION_TYPE_RALLY].items)
+        return write_wpl(items, home)
     except PlanError as err:
         if err.where is None:
             err.where = str(p)
         raise
-    atomic_write(p, text)
-    return {"file": str(p), "target_system": system, "items": lists, "home": list(home) if home else None,
-            "opaque_id": res.opaque_id, "seconds": round(res.seconds, 3), "notes": notes}

@@ -16,7 +16,7 @@ KNOWN_TYPES = NUMERIC_TYPES + ("custom", "string")
 # std::stoi (int, 32-bit) is what MAVSDK's ParamValue::set_from_xml uses for these types (reference §4.2).
 STOI_TYPES = ("bool", "uint8", "int8", "uint16", "int16", "uint32", "int32")
 STOI_MAX = 2**31 - 1
-FLOAT32_MAX = 3.4028234663852886e38
+from cdf.float32 import FLOAT32_MAX  # noqa: E402
 
 _INT = re.compile(r"-?[0-9]+")
 _FLOAT = re.compile(r"[-+]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][-+]?[0-9]+)?")

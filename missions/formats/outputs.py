@@ -56,6 +56,7 @@ import stat
 import tempfile
 from typing import Callable, Iterable, Iterator, NamedTuple
 
+from cdf.paths import require_directory
 from missions.compiled import Compiled
 from missions.errors import PlanError
 
@@ -389,13 +390,8 @@ def write_outputs(compiled: Compiled, out_dir: str | Path, rep: dict | None = No
     from missions.measure.report import report
 
     out_dir = Path(out_dir)
-    try:
-        if out_dir.exists() and not out_dir.is_dir():
-            raise PlanError("the output path exists and is not a directory", where=str(out_dir),
-                            hint="give a directory for -o")
-    except OSError as e:  # exists() answers only "no such file"; a name too long raises
-        raise PlanError(f"cannot use the output directory: {e.strerror}", where=str(out_dir),
-                        hint="give -o a path you may access, each name in it at most 255 bytes") from None
+    require_directory(out_dir, PlanError, missing_ok=True, hint="give a directory for -o",
+                      access_hint="give -o a path you may access, each name in it at most 255 bytes")
     if sim is None:
         sim = simulate(compiled)
     if rep is None:

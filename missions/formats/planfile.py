@@ -41,6 +41,7 @@ from decimal import ROUND_HALF_UP, Decimal
 from pathlib import Path
 from typing import Any, Iterator
 
+from cdf.float32 import FLOAT32_MAX  # params 1-4 and z travel as float32
 from missions.errors import PlanError
 from missions.formats.itemcheck import check_items, command_label, home_problem, item_problem
 from missions.emit.items import (FRAME_GLOBAL, FRAME_GLOBAL_RELATIVE_ALT, FRAME_GLOBAL_TERRAIN_ALT, MISSION_TYPE_FENCE,
@@ -53,7 +54,6 @@ Home = tuple[float, float, float]
 # write_plan refuses anything larger, so every file this tool writes it can read again (a download too).
 MAX_PLAN_BYTES = 64 * 1024 * 1024
 MAX_ITEMS = 65535                     # MISSION_COUNT is 16 bits
-FLOAT32_MAX = 3.4028234663852886e38   # params 1-4 and z travel as float32
 
 # MAV_CMD numbers (common.xml) — named here because missions/ modules stay free of pymavlink.
 CMD_NAV_WAYPOINT = 16

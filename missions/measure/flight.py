@@ -517,7 +517,8 @@ class _Flight:
     def digicam_control(self, i: int, it: MissionItem) -> None:
         # param5 "Shot": 1 takes a photo (frame MISSION keeps it in x), whether or not DO_TRIGGER_CONTROL
         # has stopped the trigger: PX4's camera_trigger fires a one-shot without looking at its enabled
-        # state (CameraTrigger::Run, "One shot command-based capture handling", PX4-Autopilot 7704fe75)
+        # state (CameraTrigger::Run, "One shot command-based capture handling", read at PX4-Autopilot master
+        # 7704fe75; the v1.16.0 tag the project's PX4 SITL runs could not be read here, nor was this flown on it)
         if it.x == 1:
             self.singles.append(SinglePhoto(self.last_vertex, self.trigger_payloads, i))
 

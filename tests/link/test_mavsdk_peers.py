@@ -61,7 +61,7 @@ def test_our_upload_to_mavsdk_server_is_identical(mavsdk_vehicle, n):
 def test_upload_verified_against_mavsdk_server(mavsdk_vehicle):
     server, client = mavsdk_vehicle
     result = client.upload_verified(mission(30))
-    assert "verified" in result.notes
+    assert result.verified
     assert server.incoming(timeout=30)[0] == "SUCCESS"
 
 

@@ -56,6 +56,13 @@ def test_mission_round_trip_is_identical(vehicle):
     assert seen[-1] == (60, 60) and [d for d, _ in seen] == sorted(d for d, _ in seen)
 
 
+def test_verified_is_a_field_of_the_result_not_a_note(vehicle):
+    _sim, client = vehicle
+    assert client.upload(waypoints(4)).verified is False
+    result = client.upload_verified(waypoints(4))
+    assert result.verified is True and "verified" not in result.notes
+
+
 @pytest.mark.parametrize("kind", [MISSION_TYPE_FENCE, MISSION_TYPE_RALLY])
 def test_fence_and_rally_lists_are_separate(vehicle, kind):
     sim, client = vehicle
@@ -236,7 +243,7 @@ def test_lost_final_ack_is_unconfirmed_and_verify_settles_it():
                 client.upload(waypoints(5))
             lost["n"] = 1
             result = client.upload_verified(waypoints(5))
-            assert "verified" in result.notes and any("final MISSION_ACK" in n for n in result.notes)
+            assert result.verified and any("final MISSION_ACK" in n for n in result.notes)
 
 
 from hypothesis import given, settings  # noqa: E402

@@ -10,18 +10,15 @@ import sys
 import click
 
 from wiris_tools.cli.jsonout import echo_json
-from wiris_tools.cli.options import FiniteRange
+from wiris_tools.cli.options import FiniteRange, connect_option, signing_key_option
 
 
 def _link_options(fn):
-    @click.option("--connect", "url", required=True, metavar="URL",
-                  help="pymavlink connection string: udpin:127.0.0.1:14550, udpout:HOST:PORT, tcp:HOST:PORT, "
-                       "/dev/ttyUSB0,57600.")
+    @connect_option()
     @click.option("--component", type=click.IntRange(0, 255), default=None,
                   help="The camera's component id (default: the first camera heard, 100–105 or MAV_TYPE_CAMERA).")
     @click.option("--system", type=click.IntRange(1, 255), default=None, help="The camera's system id.")
-    @click.option("--signing-key", type=click.Path(dir_okay=False), default=None,
-                  help="MAVLink 2 signing key file (64 hex characters or a passphrase).")
+    @signing_key_option()
     @click.option("--mavlink1", is_flag=True, help="Send MAVLink 1 frames (a RedEdge's serial API).")
     @click.option("--timeout", type=FiniteRange(0.05, 60), default=1.0, show_default=True,
                   help="Seconds to wait for each answer (each request is retried 3 times; one the camera "

@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import click
 
-from wiris_tools.cli.options import FiniteRange
+from wiris_tools.cli.options import FiniteRange, connect_option, signing_key_option
 
 
 @click.command()
 @click.argument("model")
-@click.option("--connect", "url", required=True, metavar="URL",
-              help="pymavlink connection string, e.g. udpout:127.0.0.1:14550 (towards a GCS) or udpin:0.0.0.0:14560.")
+@connect_option("udpout:127.0.0.1:14550 (towards a GCS) or udpin:0.0.0.0:14560")
 @click.option("--component", type=int, default=None, help="Component id (WIRIS: 100–105, default 100).")
 @click.option("--system", type=click.IntRange(1, 255), default=1, show_default=True,
               help="System id (a RedEdge adopts its peer's instead).")
@@ -26,8 +25,7 @@ from wiris_tools.cli.options import FiniteRange
               show_default=True, help="Transport named in cam_definition_uri (WIRIS; MAVLink FTP is always served too).")
 @click.option("--ethernet-sdk", is_flag=True, help="Emulate the Ethernet Stream SDK (RTSP streams).")
 @click.option("--no-licence", is_flag=True, help="Emulate a camera without the MAVLink licence (ignores commands).")
-@click.option("--signing-key", type=click.Path(dir_okay=False), default=None,
-              help="MAVLink 2 signing key file (64 hex characters or a passphrase).")
+@signing_key_option()
 @click.option("--duration", type=FiniteRange(0, None), default=0.0,
               help="Stop after this many seconds (0: run until Ctrl-C).")
 def emulate(model: str, url: str, component: int | None, system: int, http_port: int, http_host: str,

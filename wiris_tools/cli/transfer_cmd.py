@@ -13,19 +13,15 @@ from contextlib import contextmanager
 import click
 
 from wiris_tools.cli.jsonout import echo_json
-from wiris_tools.cli.options import FiniteRange
+from wiris_tools.cli.options import FiniteRange, connect_option, signing_key_option
 
 TYPES = ("mission", "fence", "rally")
 
 
 def _connect_options(f):
     options = [
-        click.option("--connect", "url", required=True, metavar="URL",
-                     help="pymavlink connection string: udpin:127.0.0.1:14550, udpout:HOST:PORT, tcp:HOST:PORT, "
-                          "/dev/ttyUSB0,57600"),
-        click.option("--signing-key", type=click.Path(dir_okay=False), default=None,
-                     help="MAVLink 2 signing key file: 64 hex characters (the 32-byte key) or a passphrase "
-                          "(SHA-256, as MAVProxy's `signing setup`)"),
+        connect_option(),
+        signing_key_option(),
         click.option("--target-system", type=click.IntRange(1, 255), default=None,
                      help="the vehicle's system id (default: the first autopilot heard)"),
         click.option("--target-component", type=click.IntRange(0, 255), default=1, show_default=True,
