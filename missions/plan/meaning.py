@@ -149,10 +149,10 @@ def _choose_components(cameras: Mapping[str, Any], doc: PositionedYaml, comp: di
                            f"payload {taken[cid]} is on component {cid}, where the RedEdge ({name}) is fixed",
                            "move the WIRIS to a free id of 101..105 in its menu and here")
         else:
-            chosen = _free_component(name, cam, taken, has_rededge, doc)
-            if chosen is None:
+            free = _free_component(name, cam, taken, has_rededge, doc)
+            if free is None:
                 continue
-            cid = chosen
+            cid = free
             if has_rededge or cid != cam.default_component_id:
                 notes.append(f"payload {name}: component_id not given, using {cid}"
                              + (" (100 is the RedEdge's)" if has_rededge else "")
