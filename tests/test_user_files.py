@@ -25,7 +25,7 @@ REPO = Path(__file__).resolve().parents[1]
 
 
 def _plan(p):
-    from missions.plan.load import load_plan
+    from missions.plan import load_plan
     return load_plan(p)
 
 
@@ -193,7 +193,7 @@ def test_an_endless_pipe_into_dev_stdin_stops_at_the_cap():
 def test_a_plan_on_standard_input_compiles_with_paths_relative_to_the_current_directory(tmp_path):
     plan = (REPO / "tests" / "missions" / "plans" / "good.yaml").read_text()
     shutil.copytree(REPO / "tests" / "missions" / "plans" / "areas", tmp_path / "areas")
-    child = _child("from missions.plan.load import load_plan; p = load_plan('-'); print(p.name, p.path, p.base_dir)",
+    child = _child("from missions.plan import load_plan; p = load_plan('-'); print(p.name, p.path, p.base_dir)",
                    cwd=tmp_path)
     out, err = child.communicate(plan.encode(), timeout=120)
     assert child.returncode == 0, err

@@ -27,7 +27,7 @@ from missions.emit.items import FRAME_MISSION, MissionItem, mavlink
 
 MARKER = 0xA000          # bits 15–13 = 0b101: our ids; other scripts' DO_SEND_SCRIPT_MESSAGE ids are left alone
 MARKER_MASK = 0xE000
-FIRST_COMPONENT = 100    # MAV_COMP_ID_CAMERA; components 100..105 fit three bits
+FIRST_COMPONENT = mavlink.MAV_COMP_ID_CAMERA    # 100; components 100..105 fit three bits
 QUEUE_SIZE = 5           # AP_Scripting::mission_cmd_queue_size: items queued for scripts before drops
 PERIOD_MS = 20           # script update period: drains the queue long before a batch refills it
 

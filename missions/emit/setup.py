@@ -136,7 +136,7 @@ class RedEdgeSurvey:
 
 def setup_steps(payloads: Iterable[Any], cameras: Mapping[str, Any],
                 rededge: Mapping[str, RedEdgeSurvey] | None = None) -> tuple[SetupStep, ...]:
-    """The pre-flight sequence for plan payloads (missions.plan.load.Payload), cameras by payload name."""
+    """The pre-flight sequence for plan payloads (missions.plan.Payload), cameras by payload name."""
     steps: list[SetupStep] = []
     rededge = rededge or {}
     for p in payloads:

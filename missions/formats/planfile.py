@@ -1,4 +1,4 @@
-"""QGroundControl `.plan` files: read and write (pure: no sockets, no pymavlink).
+"""QGroundControl `.plan` files: read and write (pure: no sockets).
 
     text = write_plan(items, (lat, lon, alt_amsl), firmware="ardupilot", vehicle="copter",
                       fence=fence_items, rally=rally_items, cruise_speed=12.0)
@@ -43,9 +43,9 @@ from typing import Any, Iterator
 
 from cdf.float32 import FLOAT32_MAX  # params 1-4 and z travel as float32
 from missions.errors import PlanError
-from missions.formats.itemcheck import check_items, command_label, home_problem, item_problem
+from missions.formats.itemcheck import GLOBAL_FRAMES, check_items, command_label, home_problem, item_problem
 from missions.emit.items import (FRAME_GLOBAL, FRAME_GLOBAL_RELATIVE_ALT, FRAME_GLOBAL_TERRAIN_ALT, MISSION_TYPE_FENCE,
-                            MISSION_TYPE_MISSION, MISSION_TYPE_RALLY, MissionItem)
+                            MISSION_TYPE_MISSION, MISSION_TYPE_RALLY, MissionItem, mavlink)
 
 Home = tuple[float, float, float]
 
@@ -55,38 +55,46 @@ Home = tuple[float, float, float]
 MAX_PLAN_BYTES = 64 * 1024 * 1024
 MAX_ITEMS = 65535                     # MISSION_COUNT is 16 bits
 
-# MAV_CMD numbers (common.xml) — named here because missions/ modules stay free of pymavlink.
-CMD_NAV_WAYPOINT = 16
-CMD_FENCE_RETURN_POINT = 5000
-CMD_FENCE_POLYGON_INCLUSION = 5001
-CMD_FENCE_POLYGON_EXCLUSION = 5002
-CMD_FENCE_CIRCLE_INCLUSION = 5003
-CMD_FENCE_CIRCLE_EXCLUSION = 5004
-CMD_RALLY_POINT = 5100
+# The fence and rally commands a .plan keeps in its geoFence and rallyPoints sections.
+CMD_FENCE_RETURN_POINT = mavlink.MAV_CMD_NAV_FENCE_RETURN_POINT
+CMD_FENCE_POLYGON_INCLUSION = mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION
+CMD_FENCE_POLYGON_EXCLUSION = mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_EXCLUSION
+CMD_FENCE_CIRCLE_INCLUSION = mavlink.MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION
+CMD_FENCE_CIRCLE_EXCLUSION = mavlink.MAV_CMD_NAV_FENCE_CIRCLE_EXCLUSION
+CMD_RALLY_POINT = mavlink.MAV_CMD_NAV_RALLY_POINT
 
-# MAV_AUTOPILOT (common.xml): what QGC writes as firmwareType.
-FIRMWARE_TYPES = {"generic": 0, "ardupilot": 3, "px4": 12}
-# MAV_TYPE (common.xml): what QGC writes as vehicleType.
-VEHICLE_TYPES = {"generic": 0, "fixedwing": 1, "plane": 1, "copter": 2, "multirotor": 2, "quadrotor": 2,
-                 "helicopter": 4, "rover": 10, "boat": 11, "sub": 12, "hexarotor": 13, "octorotor": 14,
-                 "vtol": 21}  # 21 = MAV_TYPE_VTOL_TILTROTOR; QGC treats every VTOL type alike
+# MAV_AUTOPILOT: what QGC writes as firmwareType (generic when the caller names none).
+FIRMWARE_TYPES = {"generic": mavlink.MAV_AUTOPILOT_GENERIC, "ardupilot": mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA,
+                  "px4": mavlink.MAV_AUTOPILOT_PX4}
+# MAV_TYPE: what QGC writes as vehicleType (generic when the caller names none).
+VEHICLE_TYPES = {"generic": mavlink.MAV_TYPE_GENERIC, "fixedwing": mavlink.MAV_TYPE_FIXED_WING,
+                 "plane": mavlink.MAV_TYPE_FIXED_WING, "copter": mavlink.MAV_TYPE_QUADROTOR,
+                 "multirotor": mavlink.MAV_TYPE_QUADROTOR, "quadrotor": mavlink.MAV_TYPE_QUADROTOR,
+                 "helicopter": mavlink.MAV_TYPE_HELICOPTER, "rover": mavlink.MAV_TYPE_GROUND_ROVER,
+                 "boat": mavlink.MAV_TYPE_SURFACE_BOAT, "sub": mavlink.MAV_TYPE_SUBMARINE,
+                 "hexarotor": mavlink.MAV_TYPE_HEXAROTOR, "octorotor": mavlink.MAV_TYPE_OCTOROTOR,
+                 "vtol": mavlink.MAV_TYPE_VTOL_TILTROTOR}  # QGC treats every VTOL type alike
 
 # QGC's AltMode enum (QGroundControlQmlGlobal.h) for globalPlanAltitudeMode / AltitudeMode.
 ALT_MODE_MIXED, ALT_MODE_RELATIVE, ALT_MODE_ABSOLUTE, ALT_MODE_TERRAIN_FRAME = 0, 1, 2, 4
 _FRAME_ALT_MODE = {FRAME_GLOBAL_RELATIVE_ALT: ALT_MODE_RELATIVE, FRAME_GLOBAL: ALT_MODE_ABSOLUTE,
                    FRAME_GLOBAL_TERRAIN_ALT: ALT_MODE_TERRAIN_FRAME}
 
-# How MISSION_ITEM_INT carries x/y per MAV_FRAME (common.xml): global frames as degE7, local
-# frames as metres * 1e4, anything else (MAV_FRAME_MISSION) as a plain integer.
-_GLOBAL_FRAMES = frozenset({0, 3, 5, 6, 10, 11})      # GLOBAL, _RELATIVE_ALT, their _INT twins, TERRAIN_ALT(_INT)
-_LOCAL_FRAMES = frozenset({1, 4, 7, 8, 9, 20, 21, 22, 23})
+# How MISSION_ITEM_INT carries x/y per MAV_FRAME (common.xml): global frames (itemcheck.GLOBAL_FRAMES) as
+# degE7, local frames as metres * 1e4, anything else (MAV_FRAME_MISSION, BODY_FRD) as a plain integer.
+# 22 and 23 are no MAV_FRAME (common.xml's end at 21, LOCAL_FLU): a file's item in them has its x/y read as
+# a local frame's, then is refused by item_problem.
+_LOCAL_FRAMES = frozenset({mavlink.MAV_FRAME_LOCAL_NED, mavlink.MAV_FRAME_LOCAL_ENU,
+                           mavlink.MAV_FRAME_LOCAL_OFFSET_NED, mavlink.MAV_FRAME_BODY_NED,
+                           mavlink.MAV_FRAME_BODY_OFFSET_NED, mavlink.MAV_FRAME_LOCAL_FRD, mavlink.MAV_FRAME_LOCAL_FLU,
+                           22, 23})
 
 QGC_DEFAULT_CRUISE_SPEED = 15.0   # QGC's application defaults, written when the caller gives none
 QGC_DEFAULT_HOVER_SPEED = 5.0
 
 
 def _scale(frame: int) -> int:
-    if frame in _GLOBAL_FRAMES:
+    if frame in GLOBAL_FRAMES:
         return 10**7
     if frame in _LOCAL_FRAMES:
         return 10**4
@@ -168,6 +176,11 @@ def _simple_item(item: MissionItem, jump_id: int) -> dict[str, Any]:
     return out
 
 
+def _degrees(item: MissionItem) -> list[float | int]:
+    """[lat, lon] of a fence or rally item as the .plan's geoFence and rallyPoints keep them: degrees."""
+    return [_coord(item.x, FRAME_GLOBAL), _coord(item.y, FRAME_GLOBAL)]
+
+
 def _fence_json(fence: list[MissionItem]) -> dict[str, Any]:
     polygons: list[dict[str, Any]] = []
     circles: list[dict[str, Any]] = []
@@ -184,15 +197,15 @@ def _fence_json(fence: list[MissionItem]) -> dict[str, Any]:
                                 f"with param1 = vertex count", where=where,
                                 hint="emit each polygon as param1 = N on all N vertex items")
             polygons.append({"inclusion": it.command == CMD_FENCE_POLYGON_INCLUSION,
-                             "polygon": [[_coord(f.x, 0), _coord(f.y, 0)] for f in fence[i:i + n]],
+                             "polygon": [_degrees(f) for f in fence[i:i + n]],
                              "version": 1})
             i += n
         elif it.command in (CMD_FENCE_CIRCLE_INCLUSION, CMD_FENCE_CIRCLE_EXCLUSION):
-            circles.append({"circle": {"center": [_coord(it.x, 0), _coord(it.y, 0)], "radius": _num(it.param1)},
+            circles.append({"circle": {"center": _degrees(it), "radius": _num(it.param1)},
                             "inclusion": it.command == CMD_FENCE_CIRCLE_INCLUSION, "version": 1})
             i += 1
         elif it.command == CMD_FENCE_RETURN_POINT:
-            out["breachReturn"] = [_coord(it.x, 0), _coord(it.y, 0), _num(it.z)]
+            out["breachReturn"] = [*_degrees(it), _num(it.z)]
             i += 1
         else:
             raise PlanError(f"command {it.command} is not a fence item", where=where,
@@ -205,12 +218,12 @@ def _rally_json(rally: list[MissionItem]) -> dict[str, Any]:
         if it.command != CMD_RALLY_POINT:
             raise PlanError(f"command {it.command} is not a rally point", where=f"rally item {i}",
                             hint="rally items are NAV_RALLY_POINT (5100)")
-    return {"points": [[_coord(r.x, 0), _coord(r.y, 0), _num(r.z)] for r in rally], "version": 2}
+    return {"points": [[*_degrees(r), _num(r.z)] for r in rally], "version": 2}
 
 
 def _code(table: dict[str, int], value: str | int | None, what: str) -> int:
     if value is None:
-        return 0
+        return table["generic"]
     if isinstance(value, int):
         return value
     try:
@@ -419,7 +432,7 @@ class _Reader:
         if not (-90 <= lat <= 90 and -180 <= lon <= 180):
             raise self.err(path, f"latitude {lat} / longitude {lon} out of range",
                            "check the order, [latitude, longitude]: latitude -90..90, longitude -180..180")
-        return self.fixed(lat, f"{path}[0]", 0), self.fixed(lon, f"{path}[1]", 0)
+        return self.fixed(lat, f"{path}[0]", FRAME_GLOBAL), self.fixed(lon, f"{path}[1]", FRAME_GLOBAL)
 
 
 def _kind(v: Any) -> str:

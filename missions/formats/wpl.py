@@ -29,7 +29,7 @@ from typing import NamedTuple
 
 from missions.errors import PlanError
 from missions.formats.itemcheck import check_items, command_label, home_problem, item_problem
-from missions.emit.items import FRAME_GLOBAL, MISSION_TYPE_MISSION, MissionItem
+from missions.emit.items import FRAME_GLOBAL, MISSION_TYPE_MISSION, MissionItem, mavlink
 from missions.formats.planfile import FLOAT32_MAX, MAX_ITEMS, READ_HINT, _scale, atomic_write, check_finite, xy_hint
 
 Home = tuple[float, float, float]
@@ -39,7 +39,9 @@ HEADER = "QGC WPL 110"
 # nothing this tool could not read again.
 MAX_WPL_BYTES = 16 * 1024 * 1024
 SIZE_HINT = "a waypoint file of 65535 items is about 6 MB, at most 12 MB: is this the right file?"
-CMD_NAV_WAYPOINT = 16   # MAV_CMD_NAV_WAYPOINT (common.xml)
+# Old Mission Planner files write the home row as command 0, which is no MAV_CMD; pymavlink's mavwp reads it
+# as home too.
+OLD_MP_HOME_COMMAND = 0
 
 
 def _num(v: float) -> str:
@@ -73,7 +75,7 @@ def _row(index: int, it: MissionItem, current: int) -> str:
 def _home_item(home: Home | None) -> MissionItem:
     from missions.emit.items import deg_to_e7
     lat, lon, alt = home if home is not None else (0.0, 0.0, 0.0)
-    return MissionItem(command=CMD_NAV_WAYPOINT, frame=FRAME_GLOBAL, x=deg_to_e7(lat), y=deg_to_e7(lon),
+    return MissionItem(command=mavlink.MAV_CMD_NAV_WAYPOINT, frame=FRAME_GLOBAL, x=deg_to_e7(lat), y=deg_to_e7(lon),
                        z=float(alt))
 
 
@@ -124,6 +126,27 @@ def _decimal(field: str, where: str, what: str) -> Decimal:
 def read_wpl(text: str | bytes, name: str = "<waypoints>", *,
              home_row: bool | None = None) -> tuple[list[MissionItem], Home | None]:
     """(mission items, home) from WPL 110 text; PlanError with NAME:LINE otherwise."""
+    lines = _decoded(text, name).splitlines()
+    if not lines or lines[0].strip() != HEADER:
+        first = lines[0].strip()[:40] if lines else ""
+        raise PlanError(f"the first line is {first!r}, not {HEADER!r}", where=f"{name}:1",
+                        hint="only QGC WPL 110 is read (Mission Planner and MAVProxy save it)")
+    rows = _read_rows(lines[1:], name)
+    if home_row is None:
+        home_row = bool(rows) and _looks_like_home(rows[0].item)
+    home: Home | None = None
+    items = [row.item for row in rows]
+    if home_row and items:
+        items.pop(0)
+        home = _home_of(rows[0])
+        _check_row(rows[0], home_problem(home))
+    for row in rows[1:] if home_row else rows:
+        _check_row(row, item_problem(row.item, unset=row.unset))
+    return items, home
+
+
+def _decoded(text: str | bytes, name: str) -> str:
+    """The file's text, size-capped; bytes decoded as UTF-8 (a byte order mark dropped)."""
     if isinstance(text, bytes):
         if len(text) > MAX_WPL_BYTES:
             raise PlanError(f"the file is larger than {MAX_WPL_BYTES // 2**20} MB", where=name, hint=SIZE_HINT)
@@ -134,80 +157,109 @@ def read_wpl(text: str | bytes, name: str = "<waypoints>", *,
                             hint="save the file as UTF-8 (a comment in another encoding?) or export it again") from None
     if len(text) > MAX_WPL_BYTES:
         raise PlanError(f"the file is larger than {MAX_WPL_BYTES // 2**20} MB", where=name, hint=SIZE_HINT)
-    lines = text.splitlines()
-    if not lines or lines[0].strip() != HEADER:
-        first = lines[0].strip()[:40] if lines else ""
-        raise PlanError(f"the first line is {first!r}, not {HEADER!r}", where=f"{name}:1",
-                        hint="only QGC WPL 110 is read (Mission Planner and MAVProxy save it)")
-    rows: list[_Row] = []
-    for lineno, line in enumerate(lines[1:], start=2):
-        stripped = line.strip()
-        if not stripped or stripped.startswith("#"):
-            continue
-        where = f"{name}:{lineno}"
-        fields = stripped.split()
-        if len(fields) != 12:
-            raise PlanError(f"expected 12 fields, found {len(fields)}", where=where,
-                            hint="INDEX CURRENT FRAME COMMAND P1 P2 P3 P4 LAT LON ALT AUTOCONTINUE")
-        ints = []
-        for k, what, hi in ((0, "index", 65535), (1, "current", 1), (2, "frame", 255), (3, "command", 65535),
-                            (11, "autocontinue", 1)):
-            d = _decimal(fields[k], where, what)
-            if not d.is_finite() or d != d.to_integral_value():
-                raise PlanError(f"{what} {fields[k]!r} is not a whole number", where=where,
-                                hint="write it without decimals, e.g. 16; current and autocontinue are 0 or 1")
-            if not 0 <= d <= hi:
-                raise PlanError(f"{what} {int(d)} is outside 0..{hi}", where=where,
-                                hint="current and autocontinue are 0 or 1" if hi == 1 else
-                                f"{what} is a number from 0 to {hi}")
-            ints.append(int(d))
-        index, current, frame, command, auto = ints
-        if index != len(rows):
-            raise PlanError(f"row index {index}, expected {len(rows)}", where=where,
-                            hint="rows must be numbered 0, 1, 2, … without gaps")
-        params = [float(_decimal(fields[k], where, f"param{k - 3}")) for k in range(4, 8)]
-        z = float(_decimal(fields[10], where, "altitude/z"))
-        if any(abs(v) > FLOAT32_MAX for v in (*params, z) if not math.isnan(v)):
-            raise PlanError("a value is beyond the float32 range MISSION_ITEM_INT carries", where=where,
-                            hint="params 1-4 and altitude travel as float32 (at most ±3.4e38); NaN means unset")
-        xy = []
-        unset = set()
-        for k, what in ((8, "latitude/x"), (9, "longitude/y")):
-            d = _decimal(fields[k], where, what)
-            if not d.is_finite():
-                xy.append(0)
-                unset.add("xy"[k - 8])
-                continue
-            v = int((d * _scale(frame)).to_integral_value(rounding=ROUND_HALF_UP))
-            if not -2**31 <= v < 2**31:
-                raise PlanError(f"{what} {fields[k]} does not fit MISSION_ITEM_INT for frame {frame}", where=where,
-                                hint=xy_hint(frame))
-            xy.append(v)
-        rows.append(_Row(where, MissionItem(command=command, frame=frame, param1=params[0], param2=params[1],
-                                            param3=params[2], param4=params[3], x=xy[0], y=xy[1], z=z,
-                                            autocontinue=auto, current=current, mission_type=MISSION_TYPE_MISSION),
-                         frozenset(unset)))
-        if len(rows) > MAX_ITEMS:
-            raise PlanError(f"more than {MAX_ITEMS} rows", where=where,
-                            hint=f"a MAVLink mission holds at most {MAX_ITEMS} items, home included: split the file")
-    if home_row is None:
-        home_row = bool(rows) and rows[0].item.command in (CMD_NAV_WAYPOINT, 0) and rows[0].item.frame == FRAME_GLOBAL
-    home: Home | None = None
-    items = [row.item for row in rows]
-    if home_row and items:
-        h = items.pop(0)
-        home = (math.nan if "x" in rows[0].unset else h.x / 1e7, math.nan if "y" in rows[0].unset else h.y / 1e7,
-                h.z)
-        _check_row(rows[0], home_problem(home))
-    for row in rows[1:] if home_row else rows:
-        _check_row(row, item_problem(row.item, unset=row.unset))
-    return items, home
+    return text
 
 
 class _Row(NamedTuple):
     where: str                 # NAME:LINE
     item: MissionItem
     unset: frozenset[str]      # "x"/"y" written as NaN (read as 0)
+
+
+class _WholeFields(NamedTuple):
+    """The fields of a row that are whole numbers."""
+
+    index: int
+    current: int
+    frame: int
+    command: int
+    autocontinue: int
+
+
+# (field number, name in messages, largest value) of each of _WholeFields, in its order.
+_WHOLE_FIELDS = ((0, "index", 65535), (1, "current", 1), (2, "frame", 255), (3, "command", 65535),
+                 (11, "autocontinue", 1))
+
+
+def _read_rows(lines: list[str], name: str) -> list[_Row]:
+    """Each row after the header line (blank and `#` lines skipped), its values checked as they are read."""
+    rows: list[_Row] = []
+    for lineno, line in enumerate(lines, start=2):
+        stripped = line.strip()
+        if not stripped or stripped.startswith("#"):
+            continue
+        where = f"{name}:{lineno}"
+        rows.append(_read_row(stripped.split(), where, len(rows)))
+        if len(rows) > MAX_ITEMS:
+            raise PlanError(f"more than {MAX_ITEMS} rows", where=where,
+                            hint=f"a MAVLink mission holds at most {MAX_ITEMS} items, home included: split the file")
+    return rows
+
+
+def _read_row(fields: list[str], where: str, index: int) -> _Row:
+    """Row number `index` of the file (counted from 0) from its whitespace-separated fields."""
+    if len(fields) != 12:
+        raise PlanError(f"expected 12 fields, found {len(fields)}", where=where,
+                        hint="INDEX CURRENT FRAME COMMAND P1 P2 P3 P4 LAT LON ALT AUTOCONTINUE")
+    whole = _whole_fields(fields, where)
+    if whole.index != index:
+        raise PlanError(f"row index {whole.index}, expected {index}", where=where,
+                        hint="rows must be numbered 0, 1, 2, … without gaps")
+    params = [float(_decimal(fields[k], where, f"param{k - 3}")) for k in range(4, 8)]
+    z = float(_decimal(fields[10], where, "altitude/z"))
+    if any(abs(v) > FLOAT32_MAX for v in (*params, z) if not math.isnan(v)):
+        raise PlanError("a value is beyond the float32 range MISSION_ITEM_INT carries", where=where,
+                        hint="params 1-4 and altitude travel as float32 (at most ±3.4e38); NaN means unset")
+    (x, y), unset = _position_fields(fields, whole.frame, where)
+    item = MissionItem(command=whole.command, frame=whole.frame, param1=params[0], param2=params[1],
+                       param3=params[2], param4=params[3], x=x, y=y, z=z, autocontinue=whole.autocontinue,
+                       current=whole.current, mission_type=MISSION_TYPE_MISSION)
+    return _Row(where, item, unset)
+
+
+def _whole_fields(fields: list[str], where: str) -> _WholeFields:
+    values = []
+    for k, what, hi in _WHOLE_FIELDS:
+        d = _decimal(fields[k], where, what)
+        if not d.is_finite() or d != d.to_integral_value():
+            raise PlanError(f"{what} {fields[k]!r} is not a whole number", where=where,
+                            hint="write it without decimals, e.g. 16; current and autocontinue are 0 or 1")
+        if not 0 <= d <= hi:
+            raise PlanError(f"{what} {int(d)} is outside 0..{hi}", where=where,
+                            hint="current and autocontinue are 0 or 1" if hi == 1 else
+                            f"{what} is a number from 0 to {hi}")
+        values.append(int(d))
+    return _WholeFields(*values)
+
+
+def _position_fields(fields: list[str], frame: int, where: str) -> tuple[tuple[int, int], frozenset[str]]:
+    """x/y as MISSION_ITEM_INT carries them in `frame`, and which of them the row left NaN (read as 0)."""
+    xy = []
+    unset = set()
+    for k, what in ((8, "latitude/x"), (9, "longitude/y")):
+        d = _decimal(fields[k], where, what)
+        if not d.is_finite():
+            xy.append(0)
+            unset.add("xy"[k - 8])
+            continue
+        v = int((d * _scale(frame)).to_integral_value(rounding=ROUND_HALF_UP))
+        if not -2**31 <= v < 2**31:
+            raise PlanError(f"{what} {fields[k]} does not fit MISSION_ITEM_INT for frame {frame}", where=where,
+                            hint=xy_hint(frame))
+        xy.append(v)
+    return (xy[0], xy[1]), frozenset(unset)
+
+
+def _looks_like_home(item: MissionItem) -> bool:
+    """Row 0 as Mission Planner and MAVProxy write home for ArduPilot: a NAV_WAYPOINT (or command 0) in
+    absolute altitude."""
+    return item.command in (mavlink.MAV_CMD_NAV_WAYPOINT, OLD_MP_HOME_COMMAND) and item.frame == FRAME_GLOBAL
+
+
+def _home_of(row: _Row) -> Home:
+    """Home from its row: a NaN latitude or longitude stays NaN (home_problem refuses it)."""
+    h = row.item
+    return (math.nan if "x" in row.unset else h.x / 1e7, math.nan if "y" in row.unset else h.y / 1e7, h.z)
 
 
 def _check_row(row: _Row, problem) -> None:

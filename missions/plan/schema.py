@@ -2,7 +2,7 @@
 
 The schema is the structural contract: names, types, units, ranges an editor can check while typing.
 What a schema cannot say well (a setting against the camera catalogue, a payload name defined elsewhere in
-the plan, altitude_m xor gsd_cm with a useful message) is checked by `missions.plan.load` after it, with the
+the plan, altitude_m xor gsd_cm with a useful message) is checked by `missions.plan.meaning` after it, with the
 same file:line:col locations.
 
 Keys carry their unit (`altitude_m`, `speed_mps`, `gsd_cm`, `hold_s`, `angle_deg`); `x-hint` on a property

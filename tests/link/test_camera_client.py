@@ -430,7 +430,7 @@ def test_setup_param_set_types_are_checked(step, error):
 def test_rededge_exposure_reaches_every_imager(tmp_path):
     """A compiled plan's RedEdge exposure settings: one DIGICAM_CONFIGURE, which the camera never answers, sent
     retries + 1 times over the wire (counted where the emulator receives it) and applied to all five bands."""
-    from missions.plan.load import Payload
+    from missions.plan import Payload
     from missions.emit.setup import setup_steps
 
     cam = catalogue().get("rededge-mx")

@@ -14,7 +14,7 @@ from missions.emit import lua
 from missions.compile import compile_plan
 from missions.errors import PlanError
 from missions.measure.report import report
-from missions.plan.load import parse_plan
+from missions.plan import parse_plan
 from missions.emit.setup import commands_for
 
 PLANS = Path(__file__).resolve().parent / "plans"

@@ -12,7 +12,7 @@ from pymavlink.dialects.v20 import ardupilotmega as m
 
 from missions.compile import compile_plan
 from missions.errors import PlanError
-from missions.plan.load import parse_plan
+from missions.plan import parse_plan
 
 HERE = Path(__file__).resolve().parent
 

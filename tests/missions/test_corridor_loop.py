@@ -16,7 +16,7 @@ from missions.geometry.corridor import plan_corridor
 from missions.measure.coverage import measure
 from missions.geometry.footprint import Footprint
 from missions.geometry.geo import LocalProjection
-from missions.plan.load import parse_plan
+from missions.plan import parse_plan
 from missions.measure.report import report
 
 # the reviewer's corridor-loop plan (/tmp/s12/rev-geom/repro/corridor-loop): a 300 m square, starting at its

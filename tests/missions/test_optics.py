@@ -7,7 +7,7 @@ import pytest
 from cdf.catalogue import catalogue
 from missions.geometry import optics
 from missions.errors import PlanError
-from missions.plan.load import Payload
+from missions.plan import Payload
 
 
 def info(camera: str, lens: float | None = None, imager: str | None = None, landscape: bool = True):

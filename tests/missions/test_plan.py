@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from missions.errors import PlanError
-from missions.plan.load import MAX_PLAN_BYTES, load_plan, parse_plan
+from missions.plan import MAX_PLAN_BYTES, load_plan, parse_plan
 from missions.plan.schema import plan_schema
 
 PLANS = Path(__file__).resolve().parent / "plans"

@@ -9,7 +9,7 @@ import yaml
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 from missions.errors import PlanError
-from missions.plan.load import Plan, parse_plan
+from missions.plan import Plan, parse_plan
 
 PLANS = Path(__file__).resolve().parent / "plans"
 GOOD = (PLANS / "good.yaml").read_text()

@@ -317,7 +317,7 @@ def test_flying_over_a_hole_is_reported():
 
 def _compile_yaml(tmp_path, survey: dict, firmware: str = "ardupilot"):
     from missions.compile import compile_plan
-    from missions.plan.load import parse_plan
+    from missions.plan import parse_plan
     doc = {"version": 1, "name": "t", "vehicle": {"firmware": firmware, "frame": "copter", "speed_mps": 4.5},
            "home": {"lat": 50.0995, "lon": 14.5, "alt_amsl_m": 250},
            "payloads": {"thermal": {"camera": "wiris-pro", "imager": "thermal", "lens_mm": 13, "component_id": 100}},

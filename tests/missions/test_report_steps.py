@@ -11,7 +11,7 @@ from shapely.geometry import LineString
 
 from missions.compile import compile_plan
 from missions.emit.items import FRAME_MISSION, mavlink
-from missions.plan.load import parse_plan
+from missions.plan import parse_plan
 from missions.measure.report import area_geometry, report
 
 # Two fields side by side, touching along 14.502 E; the east one is flown higher and with lower overlaps, so its

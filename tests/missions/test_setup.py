@@ -13,7 +13,7 @@ import pytest
 
 from cdf.catalogue import catalogue
 from missions.errors import PlanError
-from missions.plan.load import Payload
+from missions.plan import Payload
 from missions.emit.setup import RedEdgeSurvey, commands_for, dumps_setup, setup_steps, wire_params
 
 

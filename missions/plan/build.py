@@ -1,0 +1,126 @@
+"""The plan's last pass: validated plan values -> the frozen `Plan` (missions.plan.types).
+
+    plan = build_plan(data, resolved, "survey.yaml", base_dir, locations)
+
+Only called once the schema and meaning passes found nothing: every key read here is there and of its type,
+so a KeyError or TypeError is a gap between the schema and this builder (parse_plan reports it as a bug).
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Any, Callable, Mapping
+
+from missions.plan.meaning import Resolved
+from missions.plan.types import (CameraStep, CorridorStep, Home, LandStep, Payload, Plan, RtlStep, Step, SurveyStep,
+                                 TakeoffStep, Vehicle, WaypointStep)
+
+
+def build_plan(data: dict, resolved: Resolved, path: str, base_dir: Path, locations: Mapping) -> Plan:
+    from cdf.catalogue import catalogue
+
+    cat = catalogue()
+    cameras = {name: cat.get(p["camera"]) for name, p in data["payloads"].items()}
+    payloads = tuple(_payload(name, p, cameras[name], resolved.component_ids[name])
+                     for name, p in data["payloads"].items())
+    steps: list[Step] = []
+    for i, step in enumerate(data["mission"]):
+        kind, body = next(iter(step.items()))
+        build = _STEP_BUILDERS.get(kind)
+        if build is not None:
+            steps.append(build(i, body or {}, cameras))
+    v, h = data["vehicle"], data["home"]
+    return Plan(
+        version=int(data["version"]), name=data.get("name") or _default_name(path),
+        vehicle=Vehicle(v["firmware"], v["frame"], float(v["speed_mps"]), v.get("max_mission_items")),
+        home=Home(float(h["lat"]), float(h["lon"]), float(h["alt_amsl_m"])),
+        payloads=payloads, mission=tuple(steps), path=path, base_dir=str(base_dir), notes=tuple(resolved.notes),
+        locations=locations)
+
+
+def _default_name(path: str) -> str:
+    """The plan file's name without .yaml, made file-name safe: outputs are named after it."""
+    stem = Path(path).name
+    for suffix in (".yaml", ".yml"):
+        if stem.lower().endswith(suffix):
+            stem = stem[: -len(suffix)]
+    stem = re.sub(r"[^A-Za-z0-9._-]", "-", stem).lstrip(".-_") or "plan"
+    return stem[:64]
+
+
+def _as_written(settings: Mapping[str, Any]) -> tuple[tuple[str, Any], ...]:
+    return tuple((k, tuple(x) if isinstance(x, list) else x) for k, x in settings.items())
+
+
+def _wire_values(camera: Any, settings: Mapping[str, Any]) -> tuple[tuple[str, float | int], ...]:
+    return tuple((k, camera.setting(k).check(val)) for k, val in settings.items())
+
+
+def _payload(name: str, p: dict, camera: Any, component_id: int) -> Payload:
+    settings = p.get("settings") or {}
+    return Payload(
+        name=name, camera=camera.id, imager=p.get("imager"), lens_mm=_float_or_none(p, "lens_mm"),
+        component_id=component_id, component_given="component_id" in p,
+        landscape=p.get("orientation", "landscape") == "landscape",
+        settings=_as_written(settings), values=_wire_values(camera, settings))
+
+
+def _float_or_none(body: Mapping[str, Any], key: str) -> float | None:
+    return float(body[key]) if key in body else None
+
+
+def _pairs(points: Any) -> tuple[tuple[float, float], ...]:
+    return tuple((float(p[0]), float(p[1])) for p in points)
+
+
+def _area_value(v: Any) -> Any:
+    return v if isinstance(v, str) else _pairs(v)
+
+
+def _takeoff(i: int, b: dict, cameras: Mapping[str, Any]) -> TakeoffStep:
+    return TakeoffStep(i, float(b["alt_m"]))
+
+
+def _survey(i: int, b: dict, cameras: Mapping[str, Any]) -> SurveyStep:
+    ov = b["overlap"]
+    angle = b.get("angle_deg", "auto")
+    return SurveyStep(
+        i, _area_value(b["area"]), tuple(b["payloads"]), float(ov["front"]), float(ov["side"]),
+        altitude_m=_float_or_none(b, "altitude_m"), gsd_cm=_float_or_none(b, "gsd_cm"),
+        exclude=tuple(_area_value(x) for x in b.get("exclude", ())),
+        angle_deg=angle if angle == "auto" else float(angle),
+        trigger=b.get("trigger", "distance"), turnaround_m=_float_or_none(b, "turnaround_m"),
+        refly_90=bool(b.get("refly_90", False)))
+
+
+def _corridor(i: int, b: dict, cameras: Mapping[str, Any]) -> CorridorStep:
+    ov = b["overlap"]
+    return CorridorStep(
+        i, _pairs(b["line"]), float(b["width_m"]), tuple(b["payloads"]), float(ov["front"]), float(ov["side"]),
+        altitude_m=_float_or_none(b, "altitude_m"), gsd_cm=_float_or_none(b, "gsd_cm"),
+        trigger=b.get("trigger", "distance"), turnaround_m=_float_or_none(b, "turnaround_m"))
+
+
+def _waypoint(i: int, b: dict, cameras: Mapping[str, Any]) -> WaypointStep:
+    return WaypointStep(i, float(b["lat"]), float(b["lon"]), float(b["alt_m"]), float(b.get("hold_s", 0.0)),
+                        b.get("capture"))
+
+
+def _camera(i: int, b: dict, cameras: Mapping[str, Any]) -> CameraStep:
+    return CameraStep(i, b["payload"], _as_written(b["settings"]), _wire_values(cameras[b["payload"]], b["settings"]))
+
+
+def _rtl(i: int, b: dict, cameras: Mapping[str, Any]) -> RtlStep:
+    return RtlStep(i)
+
+
+def _land(i: int, b: dict, cameras: Mapping[str, Any]) -> LandStep:
+    return LandStep(i, b.get("lat"), b.get("lon"))
+
+
+# Each mission step's builder by its name in the plan: (index in the mission, its body, cameras by payload).
+_STEP_BUILDERS: dict[str, Callable[[int, dict, Mapping[str, Any]], Step]] = {
+    "takeoff": _takeoff, "survey": _survey, "corridor": _corridor, "waypoint": _waypoint, "camera": _camera,
+    "rtl": _rtl, "land": _land,
+}
