@@ -906,7 +906,7 @@ def upload_file(link: Link, path: str, *, mission_type: int = MISSION_TYPE_MISSI
                                                                     progress=progress)
     return {"file": str(path), "type": TYPE_NAMES[mission_type], "target_system": system,
             "autopilot": "ardupilot" if ardupilot else "px4" if hb.autopilot == mavlink2.MAV_AUTOPILOT_PX4
-            else str(hb.autopilot), "items": len(items), "home_row": ardupilot and mission_type == 0,
+            else str(hb.autopilot), "items": len(items), "home_row": ardupilot and mission_type == MISSION_TYPE_MISSION,
             "seconds": round(result.seconds, 3), "verified": result.verified,
             "opaque_id": result.opaque_id, "resent": result.resent, "nacks_tolerated": result.nacks_tolerated,
             "notes": list(result.notes)}
