@@ -34,8 +34,8 @@ Complexity (n = photos, L = lines, V = area vertices, C = boustrophedon cells, P
   cross a hole/notch get a visibility-graph path (built once per part, O(V²) segment tests, parts ≤ 400
   vertices); photos O(n) (vectorised per straight segment). angle_deg="auto" ranks ~30–60 candidate angles on
   bare inside segments, then plans once; above EXHAUSTIVE_ANGLE_PARTS parts it ranks ~200 angles on the bare
-  inside segments measured from the edges alone (O(V + crossings) each, `parts_objective`) and plans the whole
-  area at no more than its four best. Measured on 2 shared cores: 100 km² (785k photos) plans in 4–9 s and
+  inside segments measured from the edges alone and a hop per part to its nearest neighbour (O(V + crossings
+  + P) each, `parts_objective`) and plans the whole area at no more than its four best. Measured on 2 shared cores: 100 km² (785k photos) plans in 4–9 s and
   measures in ~2 s; a jagged 2000-vertex boundary takes ~3 s at a fixed angle, ~30 s with "auto"; 20,000 small
   triangles (P = 20,000) compile in ~20 s of CPU with "auto" (bench/bench_survey_scaling.py).
 """
@@ -53,7 +53,7 @@ from missions.area import Area
 from missions.errors import PlanError
 from missions.footprint import Footprint, transect_spacing_m, trigger_distance_m
 from missions.route import KIND_PHOTO, Route, RoutePoint, build_route, order_legs
-from missions.swaths import (Leg, PartEdges, SwathSet, bare_lines, candidate_angles, generate_swaths,
+from missions.swaths import (Leg, PartEdges, SwathSet, bare_lines, candidate_angles, frame, generate_swaths,
                              normalise_angle)
 from missions.triggers import PhotoPoint, TriggerSpan, simulate_distance_trigger
 
@@ -72,10 +72,11 @@ MAX_PHOTOS = 100_000
 # compile in ~20 s of one core: bench/bench_survey_scaling.py), and an area of more is better merged or split
 # over several plans. Checked before any swaths are generated.
 MAX_SURVEY_PARTS = 20_000
-# Up to this many polygon parts the angle search plans the whole area at each candidate angle (its cost grows
-# with parts × angles); above, it ranks angles on a per-part estimate (`parts_objective`). No area of the
-# survey-quality benchmark or the examples has more than three parts.
-EXHAUSTIVE_ANGLE_PARTS = 50
+# Up to this many polygon parts the angle search plans the whole area at each candidate angle (~1 s at 100 small
+# parts, growing with parts × angles); above, it ranks angles on a per-part estimate (`parts_objective`), whose
+# pick flies within ~1-3 % of that search's on grids of 100-1,500 small triangles (better at 600 and 1,500).
+# No area of the survey-quality benchmark or the examples has more than three parts.
+EXHAUSTIVE_ANGLE_PARTS = 100
 # The many-parts search re-ranks FULL_RANK_PARTS // parts of its best angles (1 to 4) on the full swaths, each a
 # whole plan of the area: four up to 1,000 parts, none (the estimate's best) above 2,000.
 FULL_RANK_PARTS = 4000
@@ -264,14 +265,45 @@ def _polygons(geometry: Any) -> list[Any]:
     return list(geometry.geoms) if geometry.geom_type == "MultiPolygon" else [geometry]
 
 
-def parts_objective(edges: PartEdges, angle_deg: float, across_m: float, spacing_m: float, along_m: float,
-                    turnaround_m: float, speed_mps: float) -> float:
+@dataclass(frozen=True)
+class PartNeighbours:
+    """Pairs (i[k], j[k]) of parts, sorted by i, whose centroids lie within 1.5 times the distance from i's
+    centroid to its nearest neighbour's: the hops a route over many small parts takes are among them."""
+
+    i: np.ndarray
+    j: np.ndarray
+
+    @classmethod
+    def of(cls, geometry: Any) -> "PartNeighbours":
+        import shapely
+        pts = shapely.centroid(np.array(_polygons(geometry), dtype=object))
+        tree = shapely.STRtree(pts)
+        (src, _dst), dist = tree.query_nearest(pts, exclusive=True, return_distance=True, all_matches=False)
+        nearest = np.zeros(len(pts))
+        nearest[src] = dist
+        i, j = tree.query(pts, predicate="dwithin", distance=1.5 * nearest + 1e-6)
+        keep = i != j
+        order = np.lexsort((j[keep], i[keep]))
+        return cls(i[keep][order], j[keep][order])
+
+
+def parts_objective(edges: PartEdges, neighbours: PartNeighbours, angle_deg: float, across_m: float,
+                    spacing_m: float, along_m: float, turnaround_m: float, speed_mps: float) -> float:
     """The angle objective (seconds) estimated part by part: the bare inside segments of every part's lines
     (`swaths.bare_lines`: what generate_swaths(estimate=True) gives, from the edges in one vectorised pass), each
-    leg with its turnaround stubs and two turns, and a spacing's hop from line to line within a part. The hops
-    between parts are left out: they join the same places whatever the angle, to within a part's size."""
+    leg with its turnaround stubs and two turns, a spacing's hop from line to line within a part, and a hop from
+    each part to its nearest neighbour. A part is flown as a run along the lines (its extent along them less a
+    footprint, plus the stubs), so lines pointing from one part to the next make progress towards it and the
+    hop between them is that much shorter: the effect that makes lines along a row of small parts pay."""
     bare = bare_lines(edges, angle_deg, across_m, spacing_m, along_m)
-    path_m = bare.length_m + 2.0 * turnaround_m * bare.legs + spacing_m * bare.line_hops
+    d, n = frame(angle_deg)
+    run = turnaround_m + np.where(bare.one_photo, 0.0, np.maximum(bare.along_m - along_m, 0.0) / 2.0)
+    i, j = neighbours.i, neighbours.j
+    step = bare.centre_xy[j] - bare.centre_xy[i]
+    hop = np.hypot(np.maximum(np.abs(step @ d) - run[i] - run[j], 0.0), step @ n)
+    first = np.flatnonzero(np.r_[True, i[1:] != i[:-1]]) if len(i) else np.zeros(0, np.int64)
+    hops_m = float(np.minimum.reduceat(hop, first).sum()) if len(i) else 0.0
+    path_m = bare.length_m + 2.0 * turnaround_m * bare.legs + spacing_m * bare.line_hops + hops_m
     return estimated_time_s(path_m, 2 * bare.legs, speed_mps)
 
 
@@ -282,12 +314,13 @@ def _best_angle_of_many_parts(geometry: Any, across_m: float, spacing_m: float, 
     are ranked on `parts_objective` (edges × angles), refined to 0.25°, and only the best few (fewer as the
     parts grow: FULL_RANK_PARTS / parts) are re-ranked on the full swaths."""
     edges = PartEdges.of(geometry)
+    neighbours = PartNeighbours.of(geometry)
     cache: dict[float, float] = {}
 
     def cost(a: float) -> float:
         a = round(normalise_angle(a), 6)
         if a not in cache:
-            cache[a] = parts_objective(edges, a, across_m, spacing_m, along_m, turnaround_m, speed_mps)
+            cache[a] = parts_objective(edges, neighbours, a, across_m, spacing_m, along_m, turnaround_m, speed_mps)
         return cache[a]
 
     cands = sorted(set(candidate_angles(geometry)) | {float(a) for a in range(-90, 90)})

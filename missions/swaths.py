@@ -408,7 +408,8 @@ class PartEdges:
     def of(cls, geometry: Any) -> "PartEdges":
         a, b, part, left, first = [], [], [], [], []
         n = 0
-        for p, poly in enumerate(leaf_parts(geometry, "Polygon")):
+        polys = list(geometry.geoms) if geometry.geom_type == "MultiPolygon" else [geometry]
+        for p, poly in enumerate(polys):        # in generate_swaths' order of parts
             first.append(n)
             for r, ring in enumerate([poly.exterior, *poly.interiors]):
                 xy = np.asarray(ring.coords)[:, :2]
@@ -426,6 +427,9 @@ class BareLines:
     length_m: float      # the inside segments' length, summed
     legs: int            # inside segments (a part that fits in one footprint: one, of length 0)
     line_hops: int       # lines after the first of each part
+    centre_xy: np.ndarray    # per part: the centre of its extent in the lines' frame (x, y metres)
+    along_m: np.ndarray      # per part: its extent along the lines
+    one_photo: np.ndarray    # per part: it fits in one footprint
 
 
 def bare_lines(edges: PartEdges, angle_deg: float, across_m: float, spacing_m: float, along_m: float,
@@ -460,7 +464,9 @@ def bare_lines(edges: PartEdges, angle_deg: float, across_m: float, spacing_m: f
     v = va[e] + (u - ua[e]) * (vb[e] - va[e]) / du
     # an edge crossed going +u with the area on its left has the area above it: the line enters there
     length = float(np.sum(-np.sign(du) * edges.left[e] * v))
-    return BareLines(length, int(len(e) // 2 + one_photo.sum()), int(np.maximum(nl - 1, 0).sum()))
+    cx, cy = uv_to_xy(centre, (vmin + vmax) / 2.0, normalise_angle(angle_deg))
+    return BareLines(length, int(len(e) // 2 + one_photo.sum()), int(np.maximum(nl - 1, 0).sum()),
+                     np.column_stack([cx, cy]), vmax - vmin, one_photo)
 
 
 def candidate_angles(geometry: Any, coarse_step_deg: float = 10.0, max_edges: int = 24) -> list[float]:

@@ -326,6 +326,20 @@ def test_many_part_angle_search_flies_along_strips() -> None:
     assert len(plan.legs) == 2 * len(strips)
 
 
+def test_many_part_angle_search_flies_along_a_row_of_one_photo_parts() -> None:
+    """Parts that each fit in one photo cost the same at every angle on their own; what differs is the hop from
+    one to the next: lines along the row fly each part's turnaround stubs towards the next part."""
+    from shapely.geometry import MultiPolygon, box
+
+    from missions.survey import EXHAUSTIVE_ANGLE_PARTS
+    row = MultiPolygon([box(k * 60.0, 0, k * 60.0 + 10, 10) for k in range(EXHAUSTIVE_ANGLE_PARTS + 20)])
+    area = area_from_xy(row)
+    plan = plan_survey(area, FP, 80, 70, angle_deg="auto", turnaround_m=10, speed_mps=6)
+    across = plan_survey(area, FP, 80, 70, angle_deg=0, turnaround_m=10, speed_mps=6)
+    assert abs(normalise_angle(plan.angle_deg - 90.0)) <= 10.0
+    assert plan.stats.est_time_s < 0.9 * across.stats.est_time_s
+
+
 def test_many_part_angle_search_plans_the_whole_area_a_few_times(monkeypatch) -> None:
     """1,500 small polygons: the angle search ranks angles part by part and plans the whole area at most at its
     few best angles (planning it at each of ~60 angles took minutes), and the plan covers every part."""
