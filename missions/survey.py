@@ -37,7 +37,7 @@ Complexity (n = photos, L = lines, V = area vertices, C = boustrophedon cells, P
   inside segments measured from the edges alone and a hop per part to its nearest neighbour (O(V + crossings
   + P) each, `parts_objective`) and plans the whole area at no more than its four best. Measured on 2 shared cores: 100 km² (785k photos) plans in 4–9 s and
   measures in ~2 s; a jagged 2000-vertex boundary takes ~3 s at a fixed angle, ~30 s with "auto"; 20,000 small
-  triangles (P = 20,000) compile in ~20 s of CPU with "auto" (bench/bench_survey_scaling.py).
+  triangles (P = 20,000) compile in ~25 s of CPU with "auto" (bench/bench_survey_scaling.py).
 """
 
 from __future__ import annotations
@@ -69,7 +69,7 @@ HOVER_HOLD_S = 4.0        # QGC's _hoverAndCaptureDelaySeconds
 # is generated.
 MAX_PHOTOS = 100_000
 # Separate polygons one survey plans. The planner's cost grows about linearly with them (20,000 small triangles
-# compile in ~20 s of one core: bench/bench_survey_scaling.py), and an area of more is better merged or split
+# compile in ~25 s of one core: bench/bench_survey_scaling.py), and an area of more is better merged or split
 # over several plans. Checked before any swaths are generated.
 MAX_SURVEY_PARTS = 20_000
 # Up to this many polygon parts the angle search plans the whole area at each candidate angle (~1 s at 100 small
