@@ -3,8 +3,9 @@
 1. Cells: legs of consecutive lines whose along-track ranges overlap one-to-one form a boustrophedon cell
    (a monotone region). A concave area or a hole splits lines into several legs; where the pairing is not
    one-to-one a new cell starts.
-2. Cell order: greedy nearest-next from every cell end as a start (cheap: O(cells²) per start, starts capped),
-   keeping the shortest total connection. Inside a cell the legs alternate direction (lawn-mower).
+2. Cell order: greedy nearest-next from every cell end as a start (the nearest next entry found on a grid of
+   buckets: about O(cells) per start; starts capped), keeping the shortest total connection. Inside a cell the
+   legs alternate direction (lawn-mower).
 3. Each leg is flown turnaround-in → entry → exit → turnaround-out; the turnaround extends `turnaround_m`
    along the line beyond each end (QGC's TurnAroundDistance) so the vehicle is straight and at speed when
    the camera starts. The exit point lies `exit_margin_m` past the last photo so that an autopilot which
@@ -46,6 +47,10 @@ _AVOID_CLEARANCE_M = 0.5
 # Inside means deeper than this: a detour inside the area follows its boundary, which may be a zone's edge
 # (the report measures the path over the zones with the same tolerance).
 ZONE_EDGE_TOL_M = 0.05
+
+# Up to this many cell entries (4 per cell) the greedy order scans them all at each step (numpy, faster than
+# bucketing them at this size); above, it searches a grid of buckets around the position (_NearestEntry).
+_SCAN_ENTRIES = 800
 
 KIND_TURN_IN = "turnaround"
 KIND_ENTRY = "entry"
@@ -121,6 +126,88 @@ def _ends(leg: Leg, rev: bool) -> tuple[tuple[float, float], tuple[float, float]
     return (b, a) if rev else (a, b)
 
 
+class _NearestEntry:
+    """The greedy's nearest-next query over the cell entries (4 per cell, `flat[4·cell + option]`), a cell's four
+    taken out once it is flown. Few entries left: a scan over all of them. Many: they are bucketed on a square
+    grid of about one cell per bucket and `pop` scans rings of buckets outward from the position until no
+    bucket beyond can hold anything nearer, so a step costs the neighbourhood, not every cell (a scan at every
+    step is cells × entries distances a start: 1.4·10^8 for 6,000 parts). A ring search that would
+    visit more buckets than there are entries left scans them all instead, which bounds the steps where the
+    nearest entry is far away (the last cells of a sweep). Either way distances are np.hypot and ties go to
+    the lowest index, so the order is the one a scan over all entries gives."""
+
+    def __init__(self, flat: np.ndarray) -> None:
+        self.flat = flat
+        self.left = np.ones(len(flat), bool)
+        self.count = len(flat)
+        self.buckets: dict[tuple[int, int], list[int]] = {}
+        self.key: list[tuple[int, int]] = []
+        if self.count <= _SCAN_ENTRIES:
+            return
+        x0, y0 = flat.min(axis=0)
+        x1, y1 = flat.max(axis=0)
+        cells = len(flat) // 4
+        self.h = max(math.sqrt((x1 - x0) * (y1 - y0) / cells), max(x1 - x0, y1 - y0) / cells, 1e-3)
+        self.origin = (float(x0), float(y0))
+        ij = np.floor((flat - np.array(self.origin)) / self.h).astype(np.int64)
+        self.key = [(int(i), int(j)) for i, j in ij.tolist()]
+        for k, key in enumerate(self.key):
+            self.buckets.setdefault(key, []).append(k)
+
+    def remove_cell(self, c: int) -> None:
+        for k in range(4 * c, 4 * c + 4):
+            self.left[k] = False
+            if self.key:
+                self.buckets[self.key[k]].remove(k)
+        self.count -= 4
+
+    def _ring(self, bi: int, bj: int, r: int) -> list[int]:
+        if r == 0:
+            return list(self.buckets.get((bi, bj), ()))
+        out: list[int] = []
+        get = self.buckets.get
+        for j in range(bj - r, bj + r + 1):
+            out.extend(get((bi - r, j), ()))
+            out.extend(get((bi + r, j), ()))
+        for i in range(bi - r + 1, bi + r):
+            out.extend(get((i, bj - r), ()))
+            out.extend(get((i, bj + r), ()))
+        return out
+
+    def _nearest_of(self, idx: list[int], pos: np.ndarray) -> tuple[float, int]:
+        ii = np.array(idx)
+        dd = np.hypot(self.flat[ii, 0] - pos[0], self.flat[ii, 1] - pos[1])
+        d = float(dd.min())
+        return d, int(ii[dd == d].min())
+
+    def _nearest_left(self, pos: np.ndarray) -> tuple[float, int]:
+        dd = np.hypot(self.flat[:, 0] - pos[0], self.flat[:, 1] - pos[1])
+        dd[~self.left] = np.inf
+        k = int(np.argmin(dd))
+        return float(dd[k]), k
+
+    def _nearest_by_rings(self, pos: np.ndarray) -> tuple[float, int]:
+        bi = int(math.floor((pos[0] - self.origin[0]) / self.h))
+        bj = int(math.floor((pos[1] - self.origin[1]) / self.h))
+        best = (math.inf, -1)
+        r = 0           # rings 0..r scanned: what they leave lies at least r·h from pos (less rounding)
+        while True:
+            ring = self._ring(bi, bj, r)
+            if ring:
+                best = min(best, self._nearest_of(ring, pos))
+            if best[0] < (r - 1e-6) * self.h:
+                return best
+            r += 1
+            if (2 * r + 1) ** 2 > self.count:
+                return self._nearest_left(pos)
+
+    def pop(self, pos: np.ndarray) -> tuple[int, float]:
+        """(index, distance) of the nearest entry left, whose cell is then taken out."""
+        d, k = self._nearest_by_rings(pos) if self.key else self._nearest_left(pos)
+        self.remove_cell(k // 4)
+        return k, d
+
+
 def order_legs(legs: Sequence[Leg], start_xy: tuple[float, float] | None = None,
                max_starts: int = 24) -> list[tuple[int, bool]]:
     """(leg index, reversed) in flying order."""
@@ -141,19 +228,19 @@ def order_legs(legs: Sequence[Leg], start_xy: tuple[float, float] | None = None,
     entries = np.array([[o[1] for o in opts] for opts in options])      # n×4×2
     exits = np.array([[o[2] for o in opts] for opts in options])
 
+    flat_entries = entries.reshape(-1, 2)
+
     def greedy(c0: int, o0: int) -> tuple[float, list[tuple[int, int]]]:
-        used = np.zeros(n, bool)
-        used[c0] = True
+        """Nearest next cell entry from each exit; ties go to the lowest (cell, option)."""
+        nearest = _NearestEntry(flat_entries)
+        nearest.remove_cell(c0)
         seq = [(c0, o0)]
         pos = exits[c0, o0]
         total = 0.0 if start_xy is None else float(math.dist(start_xy, entries[c0, o0]))
         for _ in range(n - 1):
-            dd = np.hypot(entries[..., 0] - pos[0], entries[..., 1] - pos[1])
-            dd[used] = np.inf
-            k = int(np.argmin(dd))
+            k, d = nearest.pop(pos)
             c, o = divmod(k, 4)
-            total += float(dd[c, o])
-            used[c] = True
+            total += d
             seq.append((c, o))
             pos = exits[c, o]
         return total, seq
@@ -164,7 +251,7 @@ def order_legs(legs: Sequence[Leg], start_xy: tuple[float, float] | None = None,
     else:
         # cells at the extremes of the sweep are the natural starts
         starts.sort(key=lambda co: (min(legs[i].line for i in cells[co[0]]), co[1]))
-    # each greedy run is O(cells²): keep the total near 2400·cells (24 starts for ≤ 100 cells)
+    # 24 starts up to 100 cells, one above 2400: the search stays near 2400·cells steps
     n_starts = max(1, min(max_starts, 2400 // max(n, 1)))
     best = None
     for c, o in starts[:n_starts]:

@@ -25,15 +25,19 @@
   legs            the legs in flying order; stats (`SurveyStats`); warnings (`PlanWarning(code, message)`).
 
 Errors: `PlanError` for overlap out of range, a trigger interval shorter than the camera's minimum
-(hint: the highest speed that works), an area that produces no legs.
+(hint: the highest speed that works), an area that produces no legs, an area of more than MAX_SURVEY_PARTS
+separate polygons.
 
-Complexity (n = photos, L = lines, V = area vertices, C = boustrophedon cells):
+Complexity (n = photos, L = lines, V = area vertices, C = boustrophedon cells, P = polygon parts):
   swaths O(L·V) vectorised + one union of O(legs) rectangles; route O(legs) plus greedy cell order
-  O(C²·starts) with starts ≤ 2400/C; connections that would cross a hole/notch get a visibility-graph
-  path (built once per part, O(V²) segment tests, parts ≤ 400 vertices); photos O(n) (vectorised per
-  straight segment). angle_deg="auto" ranks ~30–60 candidate angles on bare inside segments, then plans
-  once. Measured on 2 shared cores: 100 km² (785k photos) plans in 4–9 s and measures in ~2 s; a jagged
-  2000-vertex boundary takes ~3 s at a fixed angle, ~30 s with "auto".
+  O(C·starts) (the nearest next entry found on a grid of buckets) with starts ≤ 2400/C; connections that would
+  cross a hole/notch get a visibility-graph path (built once per part, O(V²) segment tests, parts ≤ 400
+  vertices); photos O(n) (vectorised per straight segment). angle_deg="auto" ranks ~30–60 candidate angles on
+  bare inside segments, then plans once; above EXHAUSTIVE_ANGLE_PARTS parts it ranks ~200 angles on the bare
+  inside segments measured from the edges alone and a hop per part to its nearest neighbour (O(V + crossings
+  + P) each, `parts_objective`) and plans the whole area at no more than its four best. Measured on 2 shared cores: 100 km² (785k photos) plans in 4–9 s and
+  measures in ~2 s; a jagged 2000-vertex boundary takes ~3 s at a fixed angle, ~30 s with "auto"; 20,000 small
+  triangles (P = 20,000) compile in ~25 s of CPU with "auto" (bench/bench_survey_scaling.py).
 """
 
 from __future__ import annotations
@@ -50,7 +54,8 @@ from missions.geometry.area import Area
 from missions.errors import PlanError
 from missions.geometry.footprint import Footprint, transect_spacing_m, trigger_distance_m
 from missions.geometry.route import KIND_PHOTO, Route, RoutePoint, build_route, order_legs
-from missions.geometry.swaths import Leg, SwathSet, candidate_angles, generate_swaths, normalise_angle
+from missions.geometry.swaths import (Leg, PartEdges, SwathSet, bare_lines, candidate_angles, frame, generate_swaths,
+                             normalise_angle)
 from missions.geometry.triggers import PhotoPoint, TriggerSpan, simulate_distance_trigger
 
 # A multirotor brakes and re-accelerates at each leg end; at ~2 m/s² (ArduCopter WPNAV_ACCEL default
@@ -64,6 +69,18 @@ HOVER_HOLD_S = 4.0        # QGC's _hoverAndCaptureDelaySeconds
 # and a few hundred MB (both grow with the photo count). Checked per step from an estimate, before anything
 # is generated.
 MAX_PHOTOS = 100_000
+# Separate polygons one survey plans. The planner's cost grows about linearly with them (20,000 small triangles
+# compile in ~25 s of one core: bench/bench_survey_scaling.py), and an area of more is better merged or split
+# over several plans. Checked before any swaths are generated.
+MAX_SURVEY_PARTS = 20_000
+# Up to this many polygon parts the angle search plans the whole area at each candidate angle (~1 s at 100 small
+# parts, growing with parts × angles); above, it ranks angles on a per-part estimate (`parts_objective`), whose
+# pick flies within ~1-3 % of that search's on grids of 100-1,500 small triangles (better at 600 and 1,500).
+# No area of the survey-quality benchmark or the examples has more than three parts.
+EXHAUSTIVE_ANGLE_PARTS = 100
+# The many-parts search re-ranks FULL_RANK_PARTS // parts of its best angles (1 to 4) on the full swaths, each a
+# whole plan of the area: four up to 1,000 parts, none (the estimate's best) above 2,000.
+FULL_RANK_PARTS = 4000
 
 
 def check_photo_budget(estimate: float, what: str, left: int = MAX_PHOTOS) -> None:
@@ -73,6 +90,16 @@ def check_photo_budget(estimate: float, what: str, left: int = MAX_PHOTOS) -> No
         raise PlanError(f"this {what} would take about {estimate:,.0f} photos{earlier}, more than the "
                         f"{MAX_PHOTOS:,} one plan can hold",
                         hint="split it into several plans, or fly higher (fewer, larger photos)")
+
+
+def check_part_count(geometry: Any, source: str = "") -> None:
+    """PlanError when the area has more than MAX_SURVEY_PARTS separate polygons."""
+    n = len(_polygons(geometry))
+    if n > MAX_SURVEY_PARTS:
+        raise PlanError(f"the area has {n:,} separate polygons, more than the {MAX_SURVEY_PARTS:,} one survey "
+                        "can plan", where=source or None,
+                        hint="merge or simplify the polygons (dissolve neighbours into blocks, drop the smallest) "
+                             "or split them over several survey steps or plans")
 
 
 @dataclass(frozen=True)
@@ -180,7 +207,10 @@ def angle_objective(sw: SwathSet, turnaround_m: float, speed_mps: float) -> floa
 def best_angle(geometry: Any, across_m: float, spacing_m: float, trigger_m: float, along_m: float,
                turnaround_m: float, speed_mps: float) -> float:
     """Minimum-objective line azimuth: candidate edge directions and a coarse sweep ranked on bare inside
-    segments, a 1° refinement, then the best four distinct angles re-ranked on the full swaths."""
+    segments, a 1° refinement, then the best four distinct angles re-ranked on the full swaths. An area of more
+    than EXHAUSTIVE_ANGLE_PARTS parts is ranked on a per-part estimate instead (`_best_angle_of_many_parts`)."""
+    if len(_polygons(geometry)) > EXHAUSTIVE_ANGLE_PARTS:
+        return _best_angle_of_many_parts(geometry, across_m, spacing_m, trigger_m, along_m, turnaround_m, speed_mps)
     cache: dict[float, float] = {}
 
     def cost(a: float) -> float:
@@ -198,19 +228,105 @@ def best_angle(geometry: Any, across_m: float, spacing_m: float, trigger_m: floa
                 best = round(normalise_angle(a), 6)
     # the estimate ignores leg-end rules and repairs, which matter on concave areas: re-rank the best few
     # distinct angles on the full swaths
+    return _rank_on_full_swaths(_finalists(cache, best, 4), geometry, across_m, spacing_m, trigger_m, along_m,
+                                turnaround_m, speed_mps)
+
+
+def _finalists(cache: dict[float, float], best: float, k: int) -> list[float]:
+    """`best` and the next best angles of `cache` (angle -> cost), at most k, at least 3° apart."""
     ranked = sorted(cache, key=lambda a: (cache[a], abs(a)))
     finalists: list[float] = []
     for a in [best] + ranked:
         if all(abs(normalise_angle(a - f)) >= 3.0 for f in finalists):
             finalists.append(a)
-        if len(finalists) == 4:
+        if len(finalists) == k:
             break
+    return finalists
+
+
+def _rank_on_full_swaths(finalists: list[float], geometry: Any, across_m: float, spacing_m: float,
+                         trigger_m: float, along_m: float, turnaround_m: float, speed_mps: float) -> float:
+    if len(finalists) == 1:
+        return finalists[0]
 
     def full_cost(a: float) -> float:
         sw = generate_swaths(geometry, a, across_m, spacing_m, trigger_m, along_m)
         return angle_objective(sw, turnaround_m, speed_mps) if sw.legs else math.inf
 
     return min(finalists, key=lambda a: (full_cost(a), abs(a)))
+
+
+def _polygons(geometry: Any) -> list[Any]:
+    return list(geometry.geoms) if geometry.geom_type == "MultiPolygon" else [geometry]
+
+
+@dataclass(frozen=True)
+class PartNeighbours:
+    """Pairs (i[k], j[k]) of parts, sorted by i, whose centroids lie within 1.5 times the distance from i's
+    centroid to its nearest neighbour's: the hops a route over many small parts takes are among them."""
+
+    i: np.ndarray
+    j: np.ndarray
+
+    @classmethod
+    def of(cls, geometry: Any) -> "PartNeighbours":
+        import shapely
+        pts = shapely.centroid(np.array(_polygons(geometry), dtype=object))
+        tree = shapely.STRtree(pts)
+        (src, _dst), dist = tree.query_nearest(pts, exclusive=True, return_distance=True, all_matches=False)
+        nearest = np.zeros(len(pts))
+        nearest[src] = dist
+        i, j = tree.query(pts, predicate="dwithin", distance=1.5 * nearest + 1e-6)
+        keep = i != j
+        order = np.lexsort((j[keep], i[keep]))
+        return cls(i[keep][order], j[keep][order])
+
+
+def parts_objective(edges: PartEdges, neighbours: PartNeighbours, angle_deg: float, across_m: float,
+                    spacing_m: float, along_m: float, turnaround_m: float, speed_mps: float) -> float:
+    """The angle objective (seconds) estimated part by part: the bare inside segments of every part's lines
+    (`swaths.bare_lines`: what generate_swaths(estimate=True) gives, from the edges in one vectorised pass), each
+    leg with its turnaround stubs and two turns, a spacing's hop from line to line within a part, and a hop from
+    each part to its nearest neighbour. A part is flown as a run along the lines (its extent along them less a
+    footprint, plus the stubs), so lines pointing from one part to the next make progress towards it and the
+    hop between them is that much shorter: the effect that makes lines along a row of small parts pay."""
+    bare = bare_lines(edges, angle_deg, across_m, spacing_m, along_m)
+    d, n = frame(angle_deg)
+    run = turnaround_m + np.where(bare.one_photo, 0.0, np.maximum(bare.along_m - along_m, 0.0) / 2.0)
+    i, j = neighbours.i, neighbours.j
+    step = bare.centre_xy[j] - bare.centre_xy[i]
+    hop = np.hypot(np.maximum(np.abs(step @ d) - run[i] - run[j], 0.0), step @ n)
+    first = np.flatnonzero(np.r_[True, i[1:] != i[:-1]]) if len(i) else np.zeros(0, np.int64)
+    hops_m = float(np.minimum.reduceat(hop, first).sum()) if len(i) else 0.0
+    path_m = bare.length_m + 2.0 * turnaround_m * bare.legs + spacing_m * bare.line_hops + hops_m
+    return estimated_time_s(path_m, 2 * bare.legs, speed_mps)
+
+
+def _best_angle_of_many_parts(geometry: Any, across_m: float, spacing_m: float, trigger_m: float, along_m: float,
+                              turnaround_m: float, speed_mps: float) -> float:
+    """The angle search for an area of many parts: planning the whole area at each of ~60 angles costs
+    parts × angles plans (20,000 small polygons: more than 10 minutes), so candidates and a 1° sweep
+    are ranked on `parts_objective` (edges × angles), refined to 0.25°, and only the best few (fewer as the
+    parts grow: FULL_RANK_PARTS / parts) are re-ranked on the full swaths."""
+    edges = PartEdges.of(geometry)
+    neighbours = PartNeighbours.of(geometry)
+    cache: dict[float, float] = {}
+
+    def cost(a: float) -> float:
+        a = round(normalise_angle(a), 6)
+        if a not in cache:
+            cache[a] = parts_objective(edges, neighbours, a, across_m, spacing_m, along_m, turnaround_m, speed_mps)
+        return cache[a]
+
+    cands = sorted(set(candidate_angles(geometry)) | {float(a) for a in range(-90, 90)})
+    best = min(cands, key=lambda a: (cost(a), abs(a)))
+    for step in (0.5, 0.25):
+        for a in (best - step, best + step):
+            if cost(a) < cost(best) - 1e-9:
+                best = round(normalise_angle(a), 6)
+    k = max(1, min(4, FULL_RANK_PARTS // edges.parts))
+    return _rank_on_full_swaths(_finalists(cache, best, k), geometry, across_m, spacing_m, trigger_m, along_m,
+                                turnaround_m, speed_mps)
 
 
 # ---------------------------------------------------------------------------------------- planning
@@ -251,6 +367,7 @@ def plan_survey(area: Area, footprint: Footprint, front_pct: float, side_pct: fl
                                     f"exclusion zones cut off {'are' if n > 1 else 'is'} nowhere {MIN_PART_WIDTH_M:g} m "
                                     "wide and not surveyed (no GNSS track that narrow misses the exclusion); "
                                     "if it matters, draw the exclusion to leave a wider strip"))
+    check_part_count(geom, area.source)
     # a photo adds about spacing x trigger distance of new ground
     check_photo_budget(geom.area / (spacing * trig) * (2 if refly_90 else 1), "survey", photos_left)
     if isinstance(angle_deg, str):

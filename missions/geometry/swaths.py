@@ -388,6 +388,87 @@ def generate_swaths(geometry: Any, angle_deg: float, footprint_across_m: float, 
     return SwathSet(angle, spacing_m, tuple(legs), nlines)
 
 
+@dataclass(frozen=True)
+class PartEdges:
+    """Every ring edge of an area's parts as arrays, for `bare_lines`: edge k runs a[k] -> b[k] (metres) on part
+    part[k] (edges grouped by part, part p's from first[p]), with the area on its left where left[k] is +1 (an
+    outer ring drawn anticlockwise, a hole clockwise) and on its right where -1."""
+
+    a: np.ndarray
+    b: np.ndarray
+    part: np.ndarray
+    left: np.ndarray
+    first: np.ndarray
+
+    @property
+    def parts(self) -> int:
+        return len(self.first)
+
+    @classmethod
+    def of(cls, geometry: Any) -> "PartEdges":
+        a, b, part, left, first = [], [], [], [], []
+        n = 0
+        polys = list(geometry.geoms) if geometry.geom_type == "MultiPolygon" else [geometry]
+        for p, poly in enumerate(polys):        # in generate_swaths' order of parts
+            first.append(n)
+            for r, ring in enumerate([poly.exterior, *poly.interiors]):
+                xy = np.asarray(ring.coords)[:, :2]
+                ccw = float(np.sum(xy[:-1, 0] * xy[1:, 1] - xy[1:, 0] * xy[:-1, 1])) > 0
+                a.append(xy[:-1])
+                b.append(xy[1:])
+                part.append(np.full(len(xy) - 1, p))
+                left.append(np.full(len(xy) - 1, 1.0 if ccw == (r == 0) else -1.0))
+                n += len(xy) - 1
+        return cls(np.concatenate(a), np.concatenate(b), np.concatenate(part), np.concatenate(left), np.array(first))
+
+
+@dataclass(frozen=True)
+class BareLines:
+    length_m: float      # the inside segments' length, summed
+    legs: int            # inside segments (a part that fits in one footprint: one, of length 0)
+    line_hops: int       # lines after the first of each part
+    centre_xy: np.ndarray    # per part: the centre of its extent in the lines' frame (x, y metres)
+    along_m: np.ndarray      # per part: its extent along the lines
+    one_photo: np.ndarray    # per part: it fits in one footprint
+
+
+def bare_lines(edges: PartEdges, angle_deg: float, across_m: float, spacing_m: float, along_m: float,
+               edge_margin_m: float = DEFAULT_EDGE_MARGIN_M) -> BareLines:
+    """The inside segments of the lines generate_swaths(estimate=True) lays over every part at `angle_deg`,
+    measured from the edges alone in one vectorised pass (cost: edges + crossings; no polygon operations). A
+    line's inside length is the sum of its crossings' v, negative where it enters the area and positive where
+    it leaves: the edges it crosses are counted for u in [low end, high end), so a vertex on the line counts
+    once."""
+    d, n = frame(normalise_angle(angle_deg))
+    ua, va = edges.a @ n, edges.a @ d
+    ub, vb = edges.b @ n, edges.b @ d
+    umin, umax = np.minimum.reduceat(ua, edges.first), np.maximum.reduceat(ua, edges.first)
+    vmin, vmax = np.minimum.reduceat(va, edges.first), np.maximum.reduceat(va, edges.first)
+    w = umax - umin
+    one_photo = (w + 2 * edge_margin_m <= across_m) & (vmax - vmin + 2 * edge_margin_m <= along_m)
+    need = w + 2.0 * edge_margin_m          # as line_offsets counts and centres the lines
+    nl = np.where(need <= across_m + _EPS, 1, np.ceil((need - across_m) / spacing_m - 1e-9) + 1).astype(np.int64)
+    nl[one_photo] = 0
+    # line k of part p lies at u = centre[p] + (k - mid[p]) * spacing
+    centre = (umin + umax) / 2.0
+    mid = (nl - 1) / 2.0
+    p = edges.part
+    lo, hi = np.minimum(ua, ub), np.maximum(ua, ub)
+    k_lo = np.maximum(np.ceil((lo - centre[p]) / spacing_m + mid[p]), 0).astype(np.int64)
+    k_hi = np.minimum(np.ceil((hi - centre[p]) / spacing_m + mid[p]) - 1, nl[p] - 1).astype(np.int64)
+    count = np.maximum(k_hi - k_lo + 1, 0)
+    e = np.repeat(np.arange(len(ua)), count)
+    k = k_lo[e] + np.arange(len(e)) - np.repeat(np.cumsum(count) - count, count)
+    u = centre[p[e]] + (k - mid[p[e]]) * spacing_m
+    du = ub[e] - ua[e]
+    v = va[e] + (u - ua[e]) * (vb[e] - va[e]) / du
+    # an edge crossed going +u with the area on its left has the area above it: the line enters there
+    length = float(np.sum(-np.sign(du) * edges.left[e] * v))
+    cx, cy = uv_to_xy(centre, (vmin + vmax) / 2.0, normalise_angle(angle_deg))
+    return BareLines(length, int(len(e) // 2 + one_photo.sum()), int(np.maximum(nl - 1, 0).sum()),
+                     np.column_stack([cx, cy]), vmax - vmin, one_photo)
+
+
 def candidate_angles(geometry: Any, coarse_step_deg: float = 10.0, max_edges: int = 24) -> list[float]:
     """Angles worth trying: directions of the convex hull's edges (optimal for convex areas: the sweep
     is then perpendicular to the minimum width), of the longest polygon edges, and a coarse sweep."""

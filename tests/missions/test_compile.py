@@ -588,3 +588,49 @@ def test_geometry_argument_errors_carry_a_hint(planner, kwargs, where):
             plan_corridor(args["line"], args["width_m"], fp, 80, 60)
     assert ei.value.where == where
     assert ei.value.hint and "e.g." in ei.value.hint
+
+
+def _triangles_geojson(path: Path, n: int, lat0: float = 50.1105, lon0: float = 14.5005) -> None:
+    """n separated triangles, 20 to 60 m across, 80 m apart, as one GeoJSON MultiPolygon (a parcel or crown export)."""
+    import json
+    import math
+    cols = math.ceil(math.sqrt(n))
+    m_lon = 111_320.0 * math.cos(math.radians(lat0))
+    polys = []
+    for k in range(n):
+        cx, cy = (k % cols) * 80.0, (k // cols) * 80.0
+        r = (20.0 + (k * 7) % 41) / 2.0
+        turn = math.radians((k * 37) % 120)
+        ring = [[lon0 + (cx + r * math.sin(turn + j * 2 * math.pi / 3)) / m_lon,
+                 lat0 + (cy + r * math.cos(turn + j * 2 * math.pi / 3)) / 111_320.0] for j in range(3)]
+        polys.append([ring + ring[:1]])
+    path.write_text(json.dumps({"type": "MultiPolygon", "coordinates": polys}))
+
+
+def test_an_area_of_1500_small_polygons_compiles_with_every_part_photographed(tmp_path):
+    import numpy as np
+    import shapely
+
+    from missions.measure.coverage import _arrays, footprint_polygons
+    from missions.geometry.optics import footprint
+    _triangles_geojson(tmp_path / "crowns.geojson", 1500)
+    c = build(tmp_path, lambda d: survey(d).update(area="crowns.geojson", angle_deg="auto", altitude_m=60))
+    plan = c.intent[0]
+    parts = np.array(list(plan.area.geometry.geoms))
+    assert len(parts) == 1500
+    fp = footprint(c.payloads[0], 60)
+    xy, h, _span = _arrays(plan.photos)
+    covered = shapely.union_all(footprint_polygons(xy, h, fp))
+    assert (shapely.area(shapely.intersection(parts, covered)) / shapely.area(parts)).min() >= 0.995
+    assert len({(l.part, l.line, l.v0) for l in plan.legs}) == len(plan.legs)     # every leg flown once
+    assert any(w.code == "mission_split" for w in c.warnings)            # 9,000 items: in parts
+
+
+def test_an_area_of_more_polygons_than_a_survey_plans_names_the_limit(tmp_path, monkeypatch):
+    from missions.geometry import survey as planner
+    monkeypatch.setattr(planner, "MAX_SURVEY_PARTS", 100)
+    _triangles_geojson(tmp_path / "crowns.geojson", 101)
+    with pytest.raises(PlanError, match="the area has 101 separate polygons, more than the 100 one survey can") as ei:
+        build(tmp_path, lambda d: survey(d).update(area="crowns.geojson"))
+    assert "crowns.geojson" in ei.value.where
+    assert "merge or simplify" in ei.value.hint

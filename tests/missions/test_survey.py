@@ -10,12 +10,13 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 from shapely.geometry import Point
 
-from missions_geometry import WIRIS_60M
+from missions_geometry import WIRIS_60M, area_from_xy, leg_crossings
 from missions.geometry.area import load_area
 from missions.geometry.corridor import plan_corridor
 from missions.measure.coverage import measure
 from missions.errors import PlanError
 from missions.geometry.geo import unwrap_lons
+from missions.geometry.swaths import normalise_angle
 from missions.geometry.survey import plan_survey
 from missions.geometry.triggers import simulate_distance_trigger
 
@@ -239,3 +240,138 @@ def test_route_starts_near_home_and_refly_starts_near_the_end_of_pass_one() -> N
     end1 = plan.waypoints[plan.camera_spans[k - 1].stop_index]
     start2 = plan.waypoints[plan.camera_spans[k].start_index]
     assert math.hypot(end1.x - start2.x, end1.y - start2.y) < 120.0    # a corner hop, not across the area
+
+
+def _triangles(n: int, pitch_m: float = 80.0):
+    """n separated triangles, 20 to 60 m across, on a grid (metres): an area of many small parts."""
+    from shapely.geometry import MultiPolygon, Polygon
+    cols = math.ceil(math.sqrt(n))
+    polys = []
+    for k in range(n):
+        cx, cy = (k % cols) * pitch_m, (k // cols) * pitch_m
+        r = (20.0 + (k * 7) % 41) / 2.0
+        turn = math.radians((k * 37) % 120)
+        corners = [turn + j * 2 * math.pi / 3 for j in range(3)]
+        polys.append(Polygon([(cx + r * math.sin(a), cy + r * math.cos(a)) for a in corners]))
+    return MultiPolygon(polys)
+
+
+def _scan_order(legs, start_xy=None, max_starts=24):
+    """order_legs' greedy as a scan over every cell entry at each step: what its grid search must reproduce."""
+    from missions.geometry.route import _cell_sequence, _ends, build_cells
+    cells = build_cells(legs)
+    opts = [[_cell_sequence(legs, c, fs, ff) for fs in (True, False) for ff in (True, False)] for c in cells]
+    entries = np.array([[_ends(legs[s[0][0]], s[0][1])[0] for s in o] for o in opts])
+    exits = np.array([[_ends(legs[s[-1][0]], s[-1][1])[1] for s in o] for o in opts])
+    n = len(cells)
+
+    def greedy(c0, o0):
+        used = np.zeros(n, bool)
+        used[c0] = True
+        seq, pos = [(c0, o0)], exits[c0, o0]
+        total = 0.0 if start_xy is None else math.dist(start_xy, entries[c0, o0])
+        for _ in range(n - 1):
+            dd = np.hypot(entries[..., 0] - pos[0], entries[..., 1] - pos[1])
+            dd[used] = np.inf
+            c, o = divmod(int(np.argmin(dd)), 4)
+            total += float(dd[c, o])
+            used[c] = True
+            seq.append((c, o))
+            pos = exits[c, o]
+        return total, seq
+
+    starts = [(c, o) for c in range(n) for o in range(4)]
+    if start_xy is not None:
+        starts.sort(key=lambda co: math.dist(start_xy, entries[co]))
+    else:
+        starts.sort(key=lambda co: (min(legs[i].line for i in cells[co[0]]), co[1]))
+    runs = [greedy(c, o) for c, o in starts[:max(1, min(max_starts, 2400 // n))]]
+    best = min(runs, key=lambda r: r[0])      # the first of equal totals, as order_legs keeps it
+    return [step for c, o in best[1] for step in opts[c][o]]
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_leg_order_of_many_cells_is_the_nearest_next_scans(seed: int) -> None:
+    """Above a few hundred cells order_legs finds each nearest next entry on a grid of buckets; the order must be
+    the one scanning every entry gives, ties (a lattice of equal distances) included."""
+    from missions.geometry.route import order_legs
+    from missions.geometry.swaths import Leg
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(250, 700))
+    if seed % 2:        # a lattice: many equal distances, single-photo legs beside short ones
+        xy = rng.integers(0, 25, size=(n, 2)) * 10.0
+        length = rng.choice([0.0, 10.0], size=n)
+    else:               # two far clusters: the search must jump between them
+        xy = rng.uniform(0, 400, size=(n, 2)) + np.where(rng.random(n) < 0.5, 5000.0, 0.0)[:, None]
+        length = rng.uniform(0, 40, size=n)
+    legs = [Leg(k, 0, x, y, y + L, x, y, x, y + L, True, True)
+            for k, ((x, y), L) in enumerate(zip(xy.tolist(), length))]
+    start = None if seed < 2 else (200.0, -50.0)
+    order = order_legs(legs, start)
+    assert sorted(i for i, _ in order) == list(range(n))
+    assert order == _scan_order(legs, start)
+
+
+def test_many_part_angle_search_flies_along_strips() -> None:
+    """Past EXHAUSTIVE_ANGLE_PARTS the angle is ranked on the per-part estimate; parallel strips still get lines
+    along them (two lines along each 60 m wide strip, not a line every 15 m across its 300 m)."""
+    from shapely import affinity
+    from shapely.geometry import MultiPolygon, box
+
+    from missions.geometry.survey import EXHAUSTIVE_ANGLE_PARTS
+    strips = [affinity.rotate(box(0, k * 100.0, 300, k * 100.0 + 60), 90.0 - 30.0, origin=(0, 0))
+              for k in range(EXHAUSTIVE_ANGLE_PARTS + 10)]
+    plan = plan_survey(area_from_xy(MultiPolygon(strips)), FP, 80, 70, angle_deg="auto", turnaround_m=10, speed_mps=6)
+    assert abs(normalise_angle(plan.angle_deg - 30.0)) <= 1.0
+    assert len(plan.legs) == 2 * len(strips)
+
+
+def test_many_part_angle_search_flies_along_a_row_of_one_photo_parts() -> None:
+    """Parts that each fit in one photo cost the same at every angle on their own; what differs is the hop from
+    one to the next: lines along the row fly each part's turnaround stubs towards the next part."""
+    from shapely.geometry import MultiPolygon, box
+
+    from missions.geometry.survey import EXHAUSTIVE_ANGLE_PARTS
+    row = MultiPolygon([box(k * 60.0, 0, k * 60.0 + 10, 10) for k in range(EXHAUSTIVE_ANGLE_PARTS + 20)])
+    area = area_from_xy(row)
+    plan = plan_survey(area, FP, 80, 70, angle_deg="auto", turnaround_m=10, speed_mps=6)
+    across = plan_survey(area, FP, 80, 70, angle_deg=0, turnaround_m=10, speed_mps=6)
+    assert abs(normalise_angle(plan.angle_deg - 90.0)) <= 10.0
+    assert plan.stats.est_time_s < 0.9 * across.stats.est_time_s
+
+
+def test_many_part_angle_search_plans_the_whole_area_a_few_times(monkeypatch) -> None:
+    """1,500 small polygons: the angle search ranks angles part by part and plans the whole area at most at its
+    few best angles (planning it at each of ~60 angles took minutes), and the plan covers every part."""
+    import shapely
+
+    from missions.geometry import survey
+    from missions.measure.coverage import _arrays, footprint_polygons
+    calls = []
+    real = survey.generate_swaths
+
+    def counted(*args, **kwargs):
+        calls.append(args[1])
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(survey, "generate_swaths", counted)
+    geom = _triangles(1500)
+    plan = plan_survey(area_from_xy(geom), FP, 80, 70, angle_deg="auto", turnaround_m=10, speed_mps=6)
+    assert len(calls) <= 5          # the finalists and the plan itself
+    xy, h, _span = _arrays(plan.photos)
+    covered = shapely.union_all(footprint_polygons(xy, h, FP))
+    parts = np.array(list(geom.geoms))
+    assert (shapely.area(shapely.intersection(parts, covered)) / shapely.area(parts)).min() >= 0.995
+    flown = list(plan.legs)
+    assert len(set(flown)) == len(flown) == len(real(geom, plan.angle_deg, FP.across_m, plan.spacing_m,
+                                                      plan.trigger_distance_m, FP.along_m).legs)
+    assert leg_crossings(plan.legs, geom) == []
+
+
+def test_area_of_more_parts_than_the_limit_is_refused_before_planning(monkeypatch) -> None:
+    from missions.geometry import survey
+    monkeypatch.setattr(survey, "MAX_SURVEY_PARTS", 40)
+    monkeypatch.setattr(survey, "generate_swaths", lambda *a, **k: pytest.fail("planned past the limit"))
+    with pytest.raises(PlanError, match="41 separate polygons, more than the 40 one survey can plan") as ei:
+        plan_survey(area_from_xy(_triangles(41)), FP, 80, 70, angle_deg="auto", turnaround_m=10, speed_mps=6)
+    assert "merge or simplify the polygons" in ei.value.hint

@@ -6,11 +6,11 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, given, settings, strategies as st
 from shapely.geometry import LineString, Polygon, box
 from shapely import affinity
 
-from missions_geometry import WIRIS_60M, area_from_xy, leg_crossings, star_polygons
+from missions_geometry import WIRIS_60M, area_from_xy, convex_polygons, leg_crossings, star_polygons
 from missions.geometry.route import build_cells, order_legs
 from missions.geometry.survey import plan_survey
 from missions.geometry.swaths import generate_swaths, line_offsets, normalise_angle
@@ -131,3 +131,21 @@ def test_first_photo_at_each_leg_start() -> None:
         w = plan.waypoints[span.start_index]
         assert w.kind == "entry"
         assert math.hypot(firsts[k].x - w.x, firsts[k].y - w.y) < 1e-9
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(polys=st.lists(st.one_of(star_polygons(), convex_polygons()), min_size=1, max_size=3),
+       angle=st.floats(-90, 90), flip=st.booleans())
+def test_bare_lines_from_the_edges_measure_the_estimate_swaths(polys, angle, flip) -> None:
+    """The many-parts angle search measures the bare inside segments from the edges alone (swaths.bare_lines);
+    they must be generate_swaths(estimate=True)'s, whichever way the rings are drawn."""
+    from shapely.geometry import MultiPolygon
+    from shapely.geometry.polygon import orient
+
+    from missions.geometry.swaths import PartEdges, bare_lines
+    parts = [orient(affinity.translate(p, 2000.0 * k, 0.0), -1.0 if flip else 1.0) for k, p in enumerate(polys)]
+    geom = parts[0] if len(parts) == 1 else MultiPolygon(parts)
+    sw = generate_swaths(geom, angle, FP.across_m, SPACING, TRIG, FP.along_m, estimate=True)
+    bare = bare_lines(PartEdges.of(geom), angle, FP.across_m, SPACING, FP.along_m)
+    assert bare.legs == len(sw.legs)
+    assert bare.length_m == pytest.approx(sum(l.length_m for l in sw.legs), rel=1e-9, abs=1e-6)
