@@ -674,7 +674,7 @@ def _message_fields(name: str) -> dict[str, str]:
     return {f: t for f, t in zip(cls.fieldnames, cls.fieldtypes) if f not in ("target_system", "target_component")}
 
 
-def _parse_message_step(s: dict, loc: str) -> tuple[str, tuple[tuple[str, float | int], ...]]:
+def _checked_message(s: dict, loc: str) -> tuple[str, tuple[tuple[str, float | int], ...]]:
     name = s.get("message")
     if name not in MESSAGES:
         raise LinkError(f"a setup step cannot send message {name!r}", where=loc,
@@ -716,75 +716,105 @@ def parse_setup(data: Any, where: str = "setup") -> list[Step]:
     if len(raw_steps) > MAX_STEPS:
         raise LinkError(f"{len(raw_steps)} steps; at most {MAX_STEPS} are accepted", where=where,
                         hint=f"split the steps into files of at most {MAX_STEPS} and apply them one after another")
-    steps = []
-    for i, s in enumerate(raw_steps, start=1):
-        loc = f"{where}: step {i}"
-        if not isinstance(s, dict):
-            raise LinkError("a step must be a JSON object", where=loc,
-                            hint='write each step as an object, e.g. {"kind": "param_set", "param_id": '
-                                 '"autoCapMode", "value": 2}')
-        desc = str(s.get("description") or "")[:200]
-        if desc:
-            loc += f" ({desc})"
-        kind = s.get("kind")
-        if kind not in KINDS:
-            raise LinkError(f"unknown step kind {kind!r}", where=loc, hint=f"kinds: {', '.join(KINDS)}")
-        comp = s.get("target_component", 0)
-        if isinstance(comp, bool) or not isinstance(comp, int) or not 0 <= comp <= 255:
-            raise LinkError(f"target_component {comp!r} is not a component id (0–255)", where=loc,
-                            hint='write the camera\'s component id, e.g. "target_component": 100 (0: the camera '
-                                 'connected to)')
-        if kind == "command_long":
-            cmd = s.get("command")
-            if isinstance(cmd, str):
-                number = getattr(mavlink2, cmd, None) if cmd.startswith("MAV_CMD_") else None
-                if not isinstance(number, int):
-                    raise LinkError(f"unknown command {cmd!r}", where=loc, hint="use a MAV_CMD_* name from common.xml")
-                cmd = number
-            if isinstance(cmd, bool) or not isinstance(cmd, int) or not 0 <= cmd <= 65535:
-                raise LinkError(f"command {s.get('command')!r} is not a MAV_CMD name or number", where=loc,
-                                hint='e.g. "command": "MAV_CMD_SET_CAMERA_MODE" or its number 530')
-            params = s.get("params", [])
-            if not isinstance(params, list) or len(params) > 7 or any(
-                    p is not None and (isinstance(p, bool) or not isinstance(p, (int, float))) for p in params):
-                raise LinkError("params must be a list of at most 7 numbers or null (NaN)", where=loc,
-                                hint='e.g. "params": [0, 1, null, null, null, null, null] (null keeps the value)')
-            params = list(params) + [None] * (7 - len(params))
-            expect = (s.get("expect") or {}).get("result", "MAV_RESULT_ACCEPTED") \
-                if isinstance(s.get("expect") or {}, dict) else "MAV_RESULT_ACCEPTED"
-            if not isinstance(getattr(mavlink2, str(expect), None), int) or not str(expect).startswith("MAV_RESULT_"):
-                raise LinkError(f"unknown expected result {expect!r}", where=loc, hint="e.g. MAV_RESULT_ACCEPTED")
-            steps.append(Step(i, desc, kind, comp, cmd, tuple(_nan_params(params)), str(expect)))
-            continue
-        if kind == "message":
-            name, fields = _parse_message_step(s, loc)
-            steps.append(Step(i, desc, kind, comp, expect="UNACKNOWLEDGED", message=name, fields=fields))
-            continue
-        pid = s.get("param_id")
-        if not isinstance(pid, str) or not 1 <= len(pid) <= 16 or not pid.isascii():
-            raise LinkError(f"param_id {pid!r} must be 1–16 ASCII characters", where=loc,
-                            hint='write the name the camera uses, e.g. "param_id": "EMISSIVITY" '
-                                 '(`wiris camera settings` lists them)')
-        value = s.get("value")
-        if not _is_number(value):
-            raise LinkError(f"value {value!r} is not a finite number", where=loc,
-                            hint='write a plain JSON number, e.g. "value": 0.97 (not text, true/false, null or NaN)')
-        ptype = str(s.get("type") or ("float" if kind == "param_set" else ""))
-        if kind == "param_ext_set":
-            try:
-                paramext.encode(value, ptype)
-            except paramext.WireValueError as err:
-                raise LinkError(f"{pid}: {err}", where=loc, hint="type is a definition type: uint8…int64, float, double") from None
-        else:
-            ptype = _classic_type_name(ptype)
-            try:
-                paramext.encode_classic(value, ptype)
-            except paramext.WireValueError as err:
-                raise LinkError(f"{pid}: {err}", where=loc,
-                                hint='type is the parameter\'s MAV_PARAM_TYPE, e.g. "MAV_PARAM_TYPE_UINT32" or '
-                                     '"MAV_PARAM_TYPE_REAL32" (4 bytes at most), with a value that fits it') from None
-        steps.append(Step(i, desc, kind, comp, None, (), "", pid, value, ptype))
-    return steps
+    return [_parse_step(i, s, where) for i, s in enumerate(raw_steps, start=1)]
+
+
+class _StepHead(NamedTuple):
+    """What every step has: its number, description, kind, target component and where it is in the file."""
+
+    index: int
+    description: str
+    kind: str
+    component: int
+    where: str
+
+
+def _parse_step(i: int, s: Any, where: str) -> Step:
+    loc = f"{where}: step {i}"
+    if not isinstance(s, dict):
+        raise LinkError("a step must be a JSON object", where=loc,
+                        hint='write each step as an object, e.g. {"kind": "param_set", "param_id": '
+                             '"autoCapMode", "value": 2}')
+    desc = str(s.get("description") or "")[:200]
+    if desc:
+        loc += f" ({desc})"
+    kind = s.get("kind")
+    if kind not in KINDS:
+        raise LinkError(f"unknown step kind {kind!r}", where=loc, hint=f"kinds: {', '.join(KINDS)}")
+    comp = s.get("target_component", 0)
+    if isinstance(comp, bool) or not isinstance(comp, int) or not 0 <= comp <= 255:
+        raise LinkError(f"target_component {comp!r} is not a component id (0–255)", where=loc,
+                        hint='write the camera\'s component id, e.g. "target_component": 100 (0: the camera '
+                             'connected to)')
+    head = _StepHead(i, desc, kind, comp, loc)
+    parse = _STEP_PARSERS.get(kind, _parse_param_step)
+    return parse(head, s)
+
+
+def _parse_command_step(head: _StepHead, s: dict) -> Step:
+    loc = head.where
+    cmd = s.get("command")
+    if isinstance(cmd, str):
+        number = getattr(mavlink2, cmd, None) if cmd.startswith("MAV_CMD_") else None
+        if not isinstance(number, int):
+            raise LinkError(f"unknown command {cmd!r}", where=loc, hint="use a MAV_CMD_* name from common.xml")
+        cmd = number
+    if isinstance(cmd, bool) or not isinstance(cmd, int) or not 0 <= cmd <= 65535:
+        raise LinkError(f"command {s.get('command')!r} is not a MAV_CMD name or number", where=loc,
+                        hint='e.g. "command": "MAV_CMD_SET_CAMERA_MODE" or its number 530')
+    params = s.get("params", [])
+    if not isinstance(params, list) or len(params) > 7 or any(
+            p is not None and (isinstance(p, bool) or not isinstance(p, (int, float))) for p in params):
+        raise LinkError("params must be a list of at most 7 numbers or null (NaN)", where=loc,
+                        hint='e.g. "params": [0, 1, null, null, null, null, null] (null keeps the value)')
+    params = list(params) + [None] * (7 - len(params))
+    expect = (s.get("expect") or {}).get("result", "MAV_RESULT_ACCEPTED") \
+        if isinstance(s.get("expect") or {}, dict) else "MAV_RESULT_ACCEPTED"
+    if not isinstance(getattr(mavlink2, str(expect), None), int) or not str(expect).startswith("MAV_RESULT_"):
+        raise LinkError(f"unknown expected result {expect!r}", where=loc, hint="e.g. MAV_RESULT_ACCEPTED")
+    return Step(head.index, head.description, head.kind, head.component, cmd, tuple(_nan_params(params)),
+                str(expect))
+
+
+def _parse_message_step(head: _StepHead, s: dict) -> Step:
+    name, fields = _checked_message(s, head.where)
+    return Step(head.index, head.description, head.kind, head.component, expect="UNACKNOWLEDGED", message=name,
+                fields=fields)
+
+
+def _parse_param_step(head: _StepHead, s: dict) -> Step:
+    """param_set (a classic parameter) or param_ext_set (a PARAM_EXT one): name, value and its wire type."""
+    loc, kind = head.where, head.kind
+    pid = s.get("param_id")
+    if not isinstance(pid, str) or not 1 <= len(pid) <= 16 or not pid.isascii():
+        raise LinkError(f"param_id {pid!r} must be 1–16 ASCII characters", where=loc,
+                        hint='write the name the camera uses, e.g. "param_id": "EMISSIVITY" '
+                             '(`wiris camera settings` lists them)')
+    value = s.get("value")
+    if not _is_number(value):
+        raise LinkError(f"value {value!r} is not a finite number", where=loc,
+                        hint='write a plain JSON number, e.g. "value": 0.97 (not text, true/false, null or NaN)')
+    ptype = str(s.get("type") or ("float" if kind == "param_set" else ""))
+    if kind == "param_ext_set":
+        try:
+            paramext.encode(value, ptype)
+        except paramext.WireValueError as err:
+            raise LinkError(f"{pid}: {err}", where=loc,
+                            hint="type is a definition type: uint8…int64, float, double") from None
+    else:
+        ptype = _classic_type_name(ptype)
+        try:
+            paramext.encode_classic(value, ptype)
+        except paramext.WireValueError as err:
+            raise LinkError(f"{pid}: {err}", where=loc,
+                            hint='type is the parameter\'s MAV_PARAM_TYPE, e.g. "MAV_PARAM_TYPE_UINT32" or '
+                                 '"MAV_PARAM_TYPE_REAL32" (4 bytes at most), with a value that fits it') from None
+    return Step(head.index, head.description, kind, head.component, None, (), "", pid, value, ptype)
+
+
+# One parser per step kind (the param kinds share one).
+_STEP_PARSERS = {"command_long": _parse_command_step, "message": _parse_message_step,
+                 "param_set": _parse_param_step, "param_ext_set": _parse_param_step}
 
 
 def _classic_type_name(ptype: str) -> str:

@@ -296,7 +296,7 @@ WAYPOINTS = [MissionItem(command=16, frame=3, param4=NAN, x=473977507 + 100 * i,
 class LateDuplicateSim:
     """An ArduPilot vehicle behind a radio that loses the first copy of the last item and delivers a
     duplicate of the item before it late, just ahead of our resent last item: ArduPilot answers the
-    duplicate INVALID_SEQUENCE and then the last item ACCEPTED (repro D of the session 12 review)."""
+    duplicate INVALID_SEQUENCE and then the last item ACCEPTED."""
 
     def __new__(cls, n: int):
         from wiris_tools.vehicle_sim import VehicleSim

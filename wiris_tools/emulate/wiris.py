@@ -260,7 +260,7 @@ class WirisState:
         except CommandRefused:
             return [self._ack(msg, mavlink2.MAV_RESULT_DENIED)]
         except (ArithmeticError, ValueError, TypeError):
-            # An emulator bug (a NaN stored by PARAM_EXT once made the relative zoom raise ValueError). The
+            # An emulator bug (arithmetic on a stored value it did not expect, such as a NaN set over PARAM_EXT). The
             # sender still gets its one COMMAND_ACK: without it, it retries and then reports a lost link, which
             # hides the bug behind a radio problem. Counted in `faults`; tests and the fuzzer assert none.
             self.faults += 1
