@@ -260,9 +260,9 @@ class WirisState:
         except CommandRefused:
             return [self._ack(msg, mavlink2.MAV_RESULT_DENIED)]
         except (ArithmeticError, ValueError, TypeError):
-            # An emulator bug (arithmetic on a stored value it did not expect, such as a NaN set over PARAM_EXT). The
-            # sender still gets its one COMMAND_ACK: without it, it retries and then reports a lost link, which
-            # hides the bug behind a radio problem. Counted in `faults`; tests and the fuzzer assert none.
+            # An emulator bug (arithmetic on a stored value it did not expect, such as a NaN set over
+            # PARAM_EXT). The sender still gets its one COMMAND_ACK: without it, it retries and then reports a
+            # lost link, which hides the bug behind a radio problem. Counted in `faults`; tests and the fuzzer assert none.
             self.faults += 1
             return [self._ack(msg, mavlink2.MAV_RESULT_FAILED)]
         return [self._ack(msg, result), *after]
