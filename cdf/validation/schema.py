@@ -136,8 +136,10 @@ def conforms_fast(root) -> bool:
         return False  # entity reference nodes are invisible to XPath: let xmlschema judge
     if _violation_xpath()(root, cdf_count=sum(1 for _ in root.iter(*CDF_TAGS))):
         return False
-    return all(_attributes_conform(tuple(map(p.get, TYPED_ATTRS)))
-               for section in root.iterchildren("parameters") for p in section.iterchildren("parameter"))
+    # parameters repeat their attributes (type uint32, default 0, ...): each distinct tuple is judged once
+    distinct = {tuple(map(p.get, TYPED_ATTRS)) for section in root.iterchildren("parameters")
+                for p in section.iterchildren("parameter")}
+    return all(map(_attributes_conform, distinct))
 
 
 def _attributes_conform(values: tuple[str | None, ...]) -> bool:

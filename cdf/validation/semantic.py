@@ -51,6 +51,11 @@ def _line(el) -> int | None:
     return getattr(el, "sourceline", None)
 
 
+def _child(el, tag: str):
+    """The first child with this tag, or None (el.find(tag) without ElementPath's parsing of the path)."""
+    return next(el.iterchildren(tag), None)
+
+
 def _missing(**attributes: str | None) -> str:
     """'name and value': the names of the attributes that are None, joined for a message."""
     return " and ".join(a for a, v in attributes.items() if v is None)
@@ -65,6 +70,22 @@ class _Params:
         for p in elements:
             self.by_name.setdefault(p.get("name"), p)
         self.by_name.pop(None, None)
+        self._range_targets: dict[str, _RangeTarget] = {}
+        self._parsed: dict[tuple[str, str], tuple] = {}
+
+    def parse(self, text: str, ptype: str) -> tuple:
+        """parse_typed, once per text and type in the document: option values (0, 1, 2, ...) repeat in every
+        parameter, and parsing costs about as much as libxml2 spends building the option's element."""
+        key = (text, ptype)
+        if key not in self._parsed:
+            self._parsed[key] = parse_typed(text, ptype)
+        return self._parsed[key]
+
+    def range_target(self, name: str) -> _RangeTarget:
+        """What a <parameterrange> needs of the parameter `name`, worked out once (many ranges share one)."""
+        if name not in self._range_targets:
+            self._range_targets[name] = _range_target(self.by_name[name], self.parse)
+        return self._range_targets[name]
 
 
 class _RangeTarget(NamedTuple):
@@ -76,13 +97,13 @@ class _RangeTarget(NamedTuple):
     numeric: bool
 
 
-def _range_target(p) -> _RangeTarget:
+def _range_target(p, parse) -> _RangeTarget:
     ptype = (p.get("type") or "").lower()
-    options = p.find("options")
-    values = None if options is None else [o.get("value") for o in options.findall("option")
+    options = _child(p, "options")
+    values = None if options is None else [o.get("value") for o in options.iterchildren("option")
                                            if o.get("value") is not None]
     numeric = ptype in NUMERIC_TYPES
-    parsed = [parse_typed(v, ptype) for v in values] if numeric and values is not None else []
+    parsed = [parse(v, ptype) for v in values] if numeric and values is not None else []
     return _RangeTarget(ptype, values, frozenset(v for v, why in parsed if why is None), numeric)
 
 
@@ -98,7 +119,7 @@ def check_document(root, data: bytes) -> Iterator[Hit]:
         yield from _check_definition(definition)
     if parameters is None:
         return
-    elements = parameters.findall("parameter")
+    elements = list(parameters.iterchildren("parameter"))
     if not elements:
         yield Hit("CDF108", _line(parameters), None, "no <parameter> (QGC rejects a file where none loads)")
     if len(elements) > 65535:
@@ -125,7 +146,7 @@ def _check_encoding(data: bytes) -> Iterator[Hit]:
 
 def _section(root, tag: str):
     """The section as QGC finds it: a direct child of the root, else the first one anywhere below it."""
-    direct = root.find(tag)
+    direct = _child(root, tag)
     if direct is not None:
         return direct
     nested = next(root.iter(tag), None) if root.tag != tag else None
@@ -145,7 +166,7 @@ def _check_definition(d) -> Iterator[Hit]:
         yield Hit("CDF107", _line(d), None,
                   f"version={version!r} is not an integer 0-65535 (cam_definition_version is uint16)")
     for tag in ("model", "vendor"):
-        el = d.find(tag)
+        el = _child(d, tag)
         if el is None:
             yield Hit("CDF104", _line(d), None, f"<definition> has no <{tag}> child (QGC and MAVSDK reject the file)")
         elif not el.text:
@@ -162,33 +183,54 @@ def _check_definition(d) -> Iterator[Hit]:
 
 # ---- one <parameter> ---------------------------------------------------------------------------------------
 
+class _Parameter(NamedTuple):
+    """What the checks read of one <parameter>, read once."""
+
+    el: object
+    attrs: dict[str, str]
+    name: str | None
+    line: int | None
+    description: object | None  # the first <description> child
+    options_el: object | None  # the first <options> child
+    options: list  # the <option>s inside it
+    stray_options: list  # <option> children of the parameter itself
+    updates: object | None  # the first <updates> child
+
+
+def _read_parameter(p) -> _Parameter:
+    attrs = dict(p.attrib)
+    options_el = _child(p, "options")
+    options = list(options_el.iterchildren("option")) if options_el is not None else []
+    return _Parameter(p, attrs, attrs.get("name"), p.sourceline, _child(p, "description"), options_el, options,
+                      list(p.iterchildren("option")), _child(p, "updates"))
+
+
 def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
-    name = p.get("name")
-    options_el = p.find("options")
-    options = options_el.findall("option") if options_el is not None else []
-    yield from _check_name(p, seen)
+    param = _read_parameter(p)
+    yield from _check_name(param, seen)
     # the attributes' findings come before the options' CDF121s (findings are sorted by line and rule later)
-    verdict = _attribute_rules(tuple(map(p.get, TYPED_ATTRS)), options_el is not None)
+    verdict = _attribute_rules(tuple(map(param.attrs.get, TYPED_ATTRS)), param.options_el is not None)
     for rule, message in verdict.findings:
-        yield Hit(rule, p.sourceline, name, message)
-    yield from _check_description(p)
-    if any(k.lower() == "decimalplaces" and k != "decimalPlaces" for k in p.keys()):
-        yield Hit("CDF207", p.sourceline, name, "attribute must be spelled decimalPlaces (QGC ignores other spellings)")
-    yield from _check_options(p, options_el, options, verdict)
-    yield from _check_bool_triggers(p, options, verdict.ptype)
-    yield from _check_control(p, options, verdict.ptype)
-    updates = p.find("updates")
-    if updates is not None:
-        yield from _check_updates(updates, name, params)
-    for o in options:
-        yield from _check_option_refs(o, name, verdict.ptype, params)
+        yield Hit(rule, param.line, param.name, message)
+    yield from _check_description(param)
+    if any(k.lower() == "decimalplaces" and k != "decimalPlaces" for k in param.attrs):
+        yield Hit("CDF207", param.line, param.name, "attribute must be spelled decimalPlaces (QGC ignores other spellings)")
+    yield from _check_options(param, verdict, params)
+    if verdict.ptype == "bool":
+        yield from _check_bool_triggers(param)
+    yield from _check_control(param, verdict.ptype)
+    if param.updates is not None:
+        yield from _check_updates(param.updates, param.name, params)
+    for o in param.options:
+        if len(o):  # only an option with children can hold exclusions or ranges
+            yield from _check_option_refs(o, param.name, verdict.ptype, params)
 
 
-def _check_name(p, seen: dict) -> Iterator[Hit]:
+def _check_name(param: _Parameter, seen: dict) -> Iterator[Hit]:
     """Name and type present (CDF109), the name fit for PARAM_EXT (CDF116, CDF118) and unique (CDF117)."""
-    name, line = p.get("name"), p.sourceline
-    if name is None or p.get("type") is None:
-        yield Hit("CDF109", line, name, f"<parameter> has no {_missing(name=name, type=p.get('type'))} "
+    name, line, ptype = param.name, param.line, param.attrs.get("type")
+    if name is None or ptype is None:
+        yield Hit("CDF109", line, name, f"<parameter> has no {_missing(name=name, type=ptype)} "
                                         "(QGC and MAVSDK reject the file)")
     if name is None:
         return
@@ -275,31 +317,30 @@ def _range_rules(ptype: str, typed: dict, texts: tuple[str | None, ...], has_opt
             yield "CDF129", f"default {default_text} is not on the step grid {lo_t} + n*{st_t}"
 
 
-def _check_description(p) -> Iterator[Hit]:
-    desc = p.find("description")
+def _check_description(param: _Parameter) -> Iterator[Hit]:
+    desc = param.description
     if desc is None:
-        yield Hit("CDF114", p.sourceline, p.get("name"), "no <description> child (QGC and MAVSDK reject the file)")
+        yield Hit("CDF114", param.line, param.name, "no <description> child (QGC and MAVSDK reject the file)")
     elif not desc.text:
-        yield Hit("CDF105", desc.sourceline, p.get("name"), "<description> is empty (MAVSDK crashes on empty text)")
+        yield Hit("CDF105", desc.sourceline, param.name, "<description> is empty (MAVSDK crashes on empty text)")
 
 
-def _check_options(p, options_el, options: list, verdict: AttributeVerdict) -> Iterator[Hit]:
+def _check_options(param: _Parameter, verdict: AttributeVerdict, params: _Params) -> Iterator[Hit]:
     """Options outside <options> (CDF122), each option's name and value (CDF123, CDF120, CDF121), duplicate
     values (CDF124) and the default among them (CDF125)."""
-    name = p.get("name")
-    stray = p.findall("option")
+    name, stray = param.name, param.stray_options
     if stray:
         yield Hit("CDF122", _line(stray[0]), name, f"{len(stray)} <option> element(s) directly under <parameter>, "
                                                     "not inside <options> (MAVSDK does not see them)")
     values: list = []  # the options' typed values
-    for o in options:
+    for o in param.options:
         oname, oval = o.get("name"), o.get("value")
         if oname is None or oval is None:
             yield Hit("CDF123", _line(o), name, f"<option> without {_missing(name=oname, value=oval)} "
                                                 "(QGC rejects the file, MAVSDK skips the parameter)")
         if oval is None or not verdict.numeric:
             continue
-        v, why = parse_typed(oval, verdict.ptype)
+        v, why = params.parse(oval, verdict.ptype)
         if why:
             yield Hit("CDF120", _line(o), name, f"option value: {why}")
             continue
@@ -308,33 +349,31 @@ def _check_options(p, options_el, options: list, verdict: AttributeVerdict) -> I
         values.append(v)
     if len(set(values)) < len(values):
         dups = sorted(repr(v) for v in set(values) if values.count(v) > 1)
-        yield Hit("CDF124", _line(options_el), name, f"option value(s) {', '.join(dups)} appear more than once")
-    if verdict.numeric and verdict.default is not None and options_el is not None:
+        yield Hit("CDF124", _line(param.options_el), name, f"option value(s) {', '.join(dups)} appear more than once")
+    if verdict.numeric and verdict.default is not None and param.options_el is not None:
         hits = values.count(verdict.default)
         if hits != 1:
-            listed = ", ".join(o.get("value") or "?" for o in options)
-            yield Hit("CDF125", p.sourceline, name,
-                      f"default {p.get('default')!r} matches {'no' if hits == 0 else hits} option value(s) [{listed}] "
-                      "(MAVSDK rejects the whole file: 'No default found')")
+            listed = ", ".join(o.get("value") or "?" for o in param.options)
+            yield Hit("CDF125", param.line, name,
+                      f"default {param.attrs['default']!r} matches {'no' if hits == 0 else hits} option value(s) "
+                      f"[{listed}] (MAVSDK rejects the whole file: 'No default found')")
 
 
-def _check_bool_triggers(p, options: list, ptype: str) -> Iterator[Hit]:
-    if ptype != "bool":
-        return
-    for o in options:
+def _check_bool_triggers(param: _Parameter) -> Iterator[Hit]:
+    for o in param.options:
         if next(o.iter("exclude", "parameterrange"), None) is not None:
-            yield Hit("CDF126", _line(o), p.get("name"), "exclusions/ranges keyed on a bool option never fire in QGC "
-                                                         "(it renders bools as true/false); use uint8 with options")
+            yield Hit("CDF126", _line(o), param.name, "exclusions/ranges keyed on a bool option never fire in QGC "
+                                                      "(it renders bools as true/false); use uint8 with options")
             return
 
 
-def _check_control(p, options: list, ptype: str) -> Iterator[Hit]:
+def _check_control(param: _Parameter, ptype: str) -> Iterator[Hit]:
     """A readonly control that never sends (CDF213), CAM_MODE as QGC uses it (CDF208), reserved names (CDF209)."""
-    name, line, control = p.get("name"), p.sourceline, p.get("control")
-    if options and p.get("readonly") == "1" and control != "0":
+    name, line, control = param.name, param.line, param.attrs.get("control")
+    if param.options and param.attrs.get("readonly") == "1" and control != "0":
         yield Hit("CDF213", line, name, 'readonly="1" with options but not control="0": a control that never sends')
     if name == "CAM_MODE":
-        if control != "0" or sorted(o.get("value") or "" for o in options) != ["0", "1"]:
+        if control != "0" or sorted(o.get("value") or "" for o in param.options) != ["0", "1"]:
             yield Hit("CDF208", line, name, 'CAM_MODE should be control="0" with options 0 (photo) and 1 (video); '
                                             "QGC then sets modes via PARAM_EXT_SET, so the camera must serve it")
     elif name in RESERVED and ptype in ("bool", "custom", "string"):
@@ -344,7 +383,7 @@ def _check_control(p, options: list, ptype: str) -> Iterator[Hit]:
 # ---- cross-references ----------------------------------------------------------------------------------------
 
 def _check_updates(updates, name, params: _Params) -> Iterator[Hit]:
-    for u in updates.findall("update"):
+    for u in updates.iterchildren("update"):
         if not u.text:
             yield Hit("CDF105", _line(u), name, "<update> is empty (MAVSDK crashes on empty text)")
             continue
@@ -390,16 +429,16 @@ def _check_parameterrange(pr, name, params: _Params) -> Iterator[Hit]:
         yield Hit("CDF203", _line(pr), name, f"<parameterrange> targets {why} "
                                              "(MAVSDK skips the parameter: 'Unknown roption type')")
         return
-    restricted = _range_target(params.by_name[target])
+    restricted = params.range_target(target)
     if restricted.values is None:
         yield Hit("CDF204", _line(pr), name, f"range target {target} has no <options> to restrict")
-    yield from _check_roptions(pr.findall("roption"), name, target, restricted)
+    yield from _check_roptions(pr.iterchildren("roption"), name, target, restricted, params)
     cond = pr.get("condition")
     if cond is not None:
         yield from _check_condition(cond, pr, name, params)
 
 
-def _check_roptions(roptions: list, name, target: str, restricted: _RangeTarget) -> Iterator[Hit]:
+def _check_roptions(roptions, name, target: str, restricted: _RangeTarget, params: _Params) -> Iterator[Hit]:
     for r in roptions:
         rname, rval = r.get("name"), r.get("value")
         if rname is None or rval is None:
@@ -407,7 +446,7 @@ def _check_roptions(roptions: list, name, target: str, restricted: _RangeTarget)
                                                 "(QGC rejects the file, MAVSDK skips the parameter)")
             continue
         if restricted.numeric:
-            v, why = parse_typed(rval, restricted.type)
+            v, why = params.parse(rval, restricted.type)
             if why:
                 yield Hit("CDF120", _line(r), name, f"roption value for {target} ({restricted.type}): {why}")
             elif restricted.values is not None and v not in restricted.typed:
@@ -456,21 +495,22 @@ def _localization_strings(params: _Params) -> tuple[set[str], set[str]]:
     texts: set[str] = set()
     structural: set[str] = set()
     for p in params.elements:
-        desc = p.find("description")
+        desc = _child(p, "description")
         if desc is not None and desc.text:
             texts.add(desc.text)
         structural.update(v for v in (p.get("name"), p.get("type"), p.get("default")) if v)
         for o in p.iter("option", "roption"):
-            if o.get("name"):
-                texts.add(o.get("name"))
-            if o.get("value"):
-                structural.add(o.get("value"))
+            oname, ovalue = o.get("name"), o.get("value")
+            if oname:
+                texts.add(oname)
+            if ovalue:
+                structural.add(ovalue)
         structural.update(e.text.strip() for e in p.iter("exclude", "update") if e.text)
     return texts, structural
 
 
 def _check_localization(root, params: _Params, definition) -> Iterator[Hit]:
-    locs = root.findall("localization")
+    locs = list(root.iterchildren("localization"))
     if not locs:
         return
     if len(locs) > 1:
@@ -478,10 +518,10 @@ def _check_localization(root, params: _Params, definition) -> Iterator[Hit]:
     texts, structural = _localization_strings(params)
     if definition is not None:
         for tag in ("model", "vendor"):
-            el = definition.find(tag)
+            el = _child(definition, tag)
             if el is not None and el.text:
                 structural.add(el.text.strip())
-    for loc in locs[0].findall("locale"):
+    for loc in locs[0].iterchildren("locale"):
         lname = loc.get("name")
         if lname is None:
             yield Hit("CDF210", _line(loc), None, "<locale> without name")
@@ -489,7 +529,7 @@ def _check_localization(root, params: _Params, definition) -> Iterator[Hit]:
             yield Hit("CDF210", _line(loc), None, f"locale name {lname!r} is not ll_CC (e.g. de_DE): "
                                                   "QGC matches the full name or its first 3 characters")
         unmatched: list[tuple[object, str]] = []  # (element, original); only the first one's line is used
-        for s in loc.findall("strings"):
+        for s in loc.iterchildren("strings"):
             orig, trans = s.get("original"), s.get("translated")
             if orig is None or trans is None:
                 yield Hit("CDF210", _line(s), None, "<strings> needs original and translated")
@@ -511,50 +551,58 @@ def _check_localization(root, params: _Params, definition) -> Iterator[Hit]:
 
 # ---- vocabulary (CDF211) -------------------------------------------------------------------------------------
 
-def _check_vocabulary(root) -> Iterator[Hit]:
+def _check_vocabulary(root) -> list[Hit]:
     """Unknown elements (reported once, at the top of the unknown subtree), stray text inside elements that
     hold only elements, and unknown attributes (once per element and attribute name, in document order).
 
     Each element taken from `pending` is checked with its children: a child that holds nothing is checked
     on the spot, the others wait in `pending` (last in, first out) and are read later."""
     if root.tag not in VOCABULARY:
-        return
+        return []
+    hits: list[Hit] = []
     unknown_attributes: dict[tuple[str, str], None] = {}
-    yield from _element_hits(root, unknown_attributes)
+    _check_element(root, root.tag, hits, unknown_attributes)
     pending = [root]
     while pending:
         el = pending.pop()
+        tag = el.tag
         if el is not root:
-            yield from _element_hits(el, unknown_attributes)
-        text_element = VOCABULARY[el.tag].text
+            _check_element(el, tag, hits, unknown_attributes)
+        text_element = VOCABULARY[tag].text
         for c in el:
+            ctag = c.tag
             if not text_element:
-                yield from _stray_text(c.tail, c, el)
-            if c.tag in CDF_TAGS:
+                tail = c.tail
+                if tail and not tail.isspace():
+                    hits.append(_stray_text(tail, c, el))
+            if ctag in CDF_TAGS:
                 if text_element or len(c):
                     pending.append(c)
                 else:
-                    yield from _element_hits(c, unknown_attributes)
-            elif isinstance(c.tag, str):  # not a comment or processing instruction
-                yield Hit("CDF211", _line(c), owning_parameter(c), f"element <{c.tag}> inside <{el.tag}> is not "
-                                                                   "part of the format (ignored by QGC and MAVSDK)")
-    yield from _unknown_attribute_hits(root, unknown_attributes)
+                    _check_element(c, ctag, hits, unknown_attributes)
+            elif isinstance(ctag, str):  # not a comment or processing instruction
+                hits.append(Hit("CDF211", _line(c), owning_parameter(c), f"element <{ctag}> inside <{tag}> is not "
+                                                                         "part of the format (ignored by QGC and MAVSDK)"))
+    return hits + _unknown_attribute_hits(root, unknown_attributes)
 
 
-def _element_hits(el, unknown_attributes: dict) -> Iterator[Hit]:
+def _check_element(el, tag: str, hits: list[Hit], unknown_attributes: dict) -> None:
     """Of one CDF element itself: its unknown attributes (noted, reported at the end) and stray text."""
-    spec = VOCABULARY[el.tag]
-    for a in el.keys():
-        if a not in spec.attributes and a.lower() != "decimalplaces":  # a misspelt decimalPlaces is CDF207
-            unknown_attributes[(el.tag, a)] = None
+    spec = VOCABULARY[tag]
+    keys = el.keys()
+    if not spec.attributes.issuperset(keys):
+        for a in keys:
+            if a not in spec.attributes and a.lower() != "decimalplaces":  # a misspelt decimalPlaces is CDF207
+                unknown_attributes[(tag, a)] = None
     if not spec.text:
-        yield from _stray_text(el.text, el, el)
+        text = el.text
+        if text and not text.isspace():
+            hits.append(_stray_text(text, el, el))
 
 
-def _stray_text(text: str | None, at, inside) -> Iterator[Hit]:
-    if text and not text.isspace():
-        yield Hit("CDF211", _line(at), owning_parameter(inside), f"stray text {text.strip()[:30]!r} inside "
-                                                                 f"<{inside.tag}> (ignored by all parsers)")
+def _stray_text(text: str, at, inside) -> Hit:
+    return Hit("CDF211", _line(at), owning_parameter(inside), f"stray text {text.strip()[:30]!r} inside "
+                                                              f"<{inside.tag}> (ignored by all parsers)")
 
 
 def _unknown_attribute_hits(root, pairs) -> list[Hit]:
