@@ -20,17 +20,15 @@ from pathlib import Path
 from typing import Any, Callable, Iterable
 
 from cdf.errors import CdfError, clip, shown
+from cdf.paramtypes import INT_RANGES, NUMERIC_TYPES, mavsdk_range
 
 TABLES_DIR = Path(__file__).resolve().parent / "tables"
 
 PARAM_NAME_MAX = 16  # PARAM_EXT_* param_id is char[16] (common.xml)
-CDF_TYPES = ("uint8", "int8", "uint16", "int16", "uint32", "int32", "uint64", "int64", "float", "double")
-INTEGER_RANGES = {
-    "uint8": (0, 255), "int8": (-128, 127), "uint16": (0, 65535), "int16": (-32768, 32767),
-    # MAVSDK parses uint32 with std::stoi: values above 2**31-1 throw, so the usable range is int32's top.
-    "uint32": (0, 2**31 - 1), "int32": (-(2**31), 2**31 - 1),
-    "uint64": (0, 2**63 - 1), "int64": (-(2**63), 2**63 - 1),
-}
+# The numeric types a setting may have (no bool: QGC renders it true/false, so exclusions keyed on it never fire)
+CDF_TYPES = tuple(t for t in NUMERIC_TYPES if t != "bool")
+# The values MAVSDK reads of each integer type: a uint32 above 2**31-1 throws in std::stoi, so int32's top it is.
+INTEGER_RANGES = {t: mavsdk_range(t) for t in INT_RANGES if t != "bool"}
 
 
 @dataclass(frozen=True)

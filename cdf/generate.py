@@ -35,7 +35,7 @@ from decimal import Decimal
 from pathlib import Path
 from typing import Iterable
 
-from cdf.catalogue import INTEGER_RANGES, PARAM_NAME_MAX, Camera, Catalogue, Setting, short_list
+from cdf.catalogue import CDF_TYPES, INTEGER_RANGES, PARAM_NAME_MAX, Camera, Catalogue, Setting, short_list
 from cdf.errors import CdfError
 
 TEMPLATE = "camera_definition.xml.j2"
@@ -43,8 +43,9 @@ LOCALES_DIR = Path(__file__).resolve().parent / "tables" / "locales"
 # QGC matches locales as ll_CC (lower-cased, '-' -> '_'), falling back to the first three characters
 # ("de_"): a bare "de" never matches (reference §3.4).
 LOCALE_NAME = re.compile(r"^[a-z]{2}_[A-Z]{2}$")
-# Types both parsers handle fully (no uint16: MAVSDK; no bool: QGC exclusions; no string/custom: MAVSDK skips).
-GENERATED_TYPES = ("uint8", "int8", "int16", "uint32", "int32", "uint64", "int64", "float", "double")
+# Types both parsers handle fully: the catalogue's (no bool: QGC exclusions; no string/custom: MAVSDK skips)
+# but uint16, which MAVSDK's camera plugin mishandles.
+GENERATED_TYPES = tuple(t for t in CDF_TYPES if t != "uint16")
 # Characters that would need an XML entity in an attribute or text (QGC's byte-wise localisation and
 # MAVSDK, which shows entities literally, both need the raw text).
 XML_SPECIAL = frozenset('&<>"\'')

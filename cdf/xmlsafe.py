@@ -205,19 +205,12 @@ def read_source(source: str | Path, *, timeout_s: float = HTTP_TIMEOUT_S) -> byt
     return read_file(s)
 
 
-def parse_xml(data: bytes, name: str, *, check_depth: bool = True, keep_blank_text: bool = True):
-    """Parse with lxml, hardened. Returns (root element or None, problems).
-
-    check_depth=False leaves the MAX_DEPTH test to the caller (too_deep), for a caller that can often
-    tell without it: libxml2 itself refuses nesting deeper than 256, and recursive code must not run on
-    the tree before the test. keep_blank_text=False drops the whitespace-only text between elements
-    (libxml2's "ignorable" whitespace: never text next to other text, never the only content of an
-    element): a tree with a third fewer nodes, parsed about 15 % faster than one that keeps them."""
+def parse_xml(data: bytes, name: str):
+    """Parse with lxml, hardened. Returns (root element or None, problems)."""
     from lxml import etree
 
     parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False, huge_tree=False,
-                             dtd_validation=False, remove_comments=False, collect_ids=False,
-                             remove_blank_text=not keep_blank_text)
+                             dtd_validation=False, remove_comments=False, collect_ids=False)
     problems: list[LoadProblem] = []
     try:
         root = etree.fromstring(data, parser)
@@ -236,11 +229,9 @@ def parse_xml(data: bytes, name: str, *, check_depth: bool = True, keep_blank_te
     if tree.docinfo.doctype or tree.docinfo.internalDTD is not None:
         problems.append(LoadProblem("CDF005", "document has a DTD (<!DOCTYPE>); it was not loaded and no "
                                               "entity was expanded", 1))
-    if check_depth and too_deep(root):
+    if too_deep(root):
         return None, (*problems, TOO_DEEP)
-    if _may_exceed(data) and int(_shape_xpaths()[0](root)) > MAX_ELEMENTS:
-        if not check_depth and too_deep(root):  # the depth finding comes first, as with check_depth
-            return None, (*problems, TOO_DEEP)
+    if int(_shape_xpaths()[0](root)) > MAX_ELEMENTS:
         return None, (*problems, LoadProblem("CDF006", f"more than {MAX_ELEMENTS} elements; real definitions have "
                                                        "under 900 (schema validation time grows with the count)"))
     return root, tuple(problems)
@@ -250,27 +241,14 @@ TOO_DEEP = LoadProblem("CDF006", f"elements nest more than {MAX_DEPTH} deep")
 
 
 def too_deep(root) -> bool:
-    """Whether elements nest more than MAX_DEPTH deep (an XPath in C, 0.09x a parse)."""
+    """Whether elements nest more than MAX_DEPTH deep."""
     return _shape_xpaths()[1](root)
-
-
-def _may_exceed(data: bytes) -> bool:
-    """False when the bytes alone show that the document has at most MAX_ELEMENTS elements (the XPath
-    count costs 0.15x a parse, the bytes 0.01x to 0.04x): each element has its own start tag of at least
-    three characters, a character is at least one byte, and in a document that starts with the byte "<"
-    (ASCII-compatible encodings, UTF-16LE, UTF-32LE) every "<" character holds the byte "<" (other
-    characters may add more: an upper bound all the same)."""
-    if len(data) <= 3 * MAX_ELEMENTS:
-        return False
-    return not data.startswith((b"<", b"\xef\xbb\xbf<")) or data.count(b"<") > MAX_ELEMENTS
 
 
 @functools.lru_cache(maxsize=1)
 def _shape_xpaths():
-    """Compiled once per process: compiling these costs more than evaluating them on a real file."""
+    """The element count and the depth test, compiled once per process (compiling costs more than
+    evaluating them on a real file). An element MAX_DEPTH + 1 levels down exists iff the nesting is too deep."""
     from lxml import etree
 
-    # a plain count: linear in the elements like the parse that built them, and 5x cheaper than the
-    # capped count((//*)[position() <= N]), which first builds and filters the whole node set;
-    # an element MAX_DEPTH + 1 levels down exists iff the nesting is too deep
     return etree.XPath("count(//*)"), etree.XPath("boolean(/" + "*/" * MAX_DEPTH + "*)")

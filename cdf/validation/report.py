@@ -1,4 +1,4 @@
-"""Values the validator returns: a Finding per problem, a Report per file."""
+"""Values the validator returns: a Finding per problem, a Report per file (and the Hit the checks yield)."""
 
 from __future__ import annotations
 
@@ -8,9 +8,18 @@ from typing import NamedTuple
 from cdf.validation.rules import RULES_BY_ID, Severity
 
 
+class Hit(NamedTuple):
+    """A finding before the profile gives it a severity."""
+
+    rule: str
+    line: int | None
+    parameter: str | None
+    message: str
+
+
 class Finding(NamedTuple):
-    """One problem: the rule it breaks, its severity in the report's profile, where, and what. (A named
-    tuple: built, hashed and compared in C; a report removes duplicates by hash.)"""
+    """One problem: the rule it breaks, its severity in the report's profile, where, and what (hashable:
+    a report lists each finding once)."""
 
     rule: str
     severity: Severity

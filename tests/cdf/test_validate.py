@@ -396,3 +396,24 @@ def test_unknown_attribute_on_options_with_children_is_reported_at_the_first():
                '<options><option name="a" value="0"/></options></parameter>')
     (f,) = [f for f in findings(data) if f.rule == "CDF211"]
     assert f.line == 8 and f.parameter == "X" and "option@colour" in f.message
+
+
+def test_the_xsd_states_the_parameter_types_of_the_one_type_table():
+    # mavlinkcamera.xsd spells the types out for xmlschema; cdf/paramtypes.py is what the code reads
+    from lxml import etree
+
+    from cdf.paramtypes import INT_RANGES, KNOWN_TYPES, NUMERIC_TYPES
+    from cdf.validation.schema import XSD_PATH
+
+    xs = {"xs": "http://www.w3.org/2001/XMLSchema"}
+    xsd = etree.parse(str(XSD_PATH))
+    names = xsd.xpath("//xs:simpleType[@name='paramTypeName']//xs:enumeration/@value", namespaces=xs)
+    assert tuple(names) == KNOWN_TYPES
+    alternatives = xsd.xpath("//xs:alternative/@test", namespaces=xs)
+    assert sorted(t.split("'")[1] for t in alternatives) == sorted(NUMERIC_TYPES)
+    for ptype, (lo, hi) in INT_RANGES.items():
+        if ptype == "bool":
+            continue  # lex_bool is the pattern [01]
+        lex = xsd.xpath(f"//xs:simpleType[@name='lex_{ptype}']/xs:restriction", namespaces=xs)[0]
+        assert (int(lex.find("xs:minInclusive", xs).get("value")),
+                int(lex.find("xs:maxInclusive", xs).get("value"))) == (lo, hi), ptype
