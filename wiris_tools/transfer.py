@@ -706,7 +706,7 @@ def load_for_upload(path: str, mission_type: int = MISSION_TYPE_MISSION, *, part
         compiled = compile_plan(str(p), firmware=firmware)
         try:
             from missions.measure.report import report
-            errors = report(compiled)["errors"]
+            errors = [e.to_json() for e in report(compiled).errors]
         except ImportError:
             errors = []
         except PlanError as err:  # from measuring the mission (a photo budget): about the plan as a whole

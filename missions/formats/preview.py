@@ -18,13 +18,16 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 import math
 from pathlib import Path
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 from xml.sax.saxutils import escape
 
 import numpy as np
 
 from missions.compiled import Compiled
 from missions.errors import PlanError
+
+if TYPE_CHECKING:
+    from missions.measure.report import MissionReport
 
 MAP_W, MAP_H = 1000, 800          # map area in pixels
 PANEL_W = 430                     # legend panel to the right
@@ -97,7 +100,7 @@ def _fmt_time(s: float) -> str:
     return f"{s // 3600} h {s % 3600 // 60:02d} min" if s >= 3600 else f"{s // 60} min {s % 60:02d} s"
 
 
-def build_picture(compiled: Compiled, sim: Any = None, rep: dict | None = None) -> Picture:
+def build_picture(compiled: Compiled, sim: Any = None, rep: MissionReport | None = None) -> Picture:
     from missions.measure.flight import simulate
     from missions.measure.report import footprint_ring, report
 
@@ -206,7 +209,7 @@ def build_picture(compiled: Compiled, sim: Any = None, rep: dict | None = None) 
 
     rows, legend = _legend(compiled, rep, len(fps), len(photos), fp_stride)
     shapes.extend(legend)
-    warn = tuple(w["message"] if isinstance(w, dict) else str(w) for w in rep.get("warnings", []))
+    warn = tuple(w.message for w in rep.warnings)
     return Picture(MAP_W + PANEL_W, MAP_H, tuple(shapes), compiled.name, tuple(rows), warn)
 
 
@@ -246,25 +249,26 @@ def _pct(v: float | None) -> str:
     return NONE if v is None else f"{100 * v:.1f} %"
 
 
-def _legend(compiled: Compiled, rep: dict, n_fp: int, n_ph: int, fp_stride: int) -> tuple[list[tuple[str, str]], list[Shape]]:
+def _legend(compiled: Compiled, rep: MissionReport, n_fp: int, n_ph: int, fp_stride: int) -> tuple[list[tuple[str, str]], list[Shape]]:
     rows: list[tuple[str, str]] = [
-        ("firmware", f"{rep['firmware']} {compiled.frame}"),
-        ("mission items", f"{rep['mission_items']} (limit {rep['item_limit']}, {rep['parts']} part"
-                          f"{'s' if rep['parts'] != 1 else ''})"),
-        ("path", f"{rep['path_length_m'] / 1000:.2f} km"),
-        ("flight time", f"{_fmt_time(rep['flight_time_s'])} (QGC: {_fmt_time(rep.get('flight_time_qgc_s') or 0)})"),
-        ("area", f"{rep['area_m2'] / 10000:.2f} ha" if rep.get("area_m2") else NONE),
+        ("firmware", f"{rep.firmware} {compiled.frame}"),
+        ("mission items", f"{rep.mission_items} (limit {rep.item_limit}, {rep.parts} part"
+                          f"{'s' if rep.parts != 1 else ''})"),
+        ("path", f"{rep.path_length_m / 1000:.2f} km"),
+        ("flight time", f"{_fmt_time(rep.flight_time_s)} (QGC: {_fmt_time(rep.flight_time_qgc_s or 0)})"),
+        ("area", f"{rep.area_m2 / 10000:.2f} ha" if rep.area_m2 else NONE),
     ]
-    for name, n in rep["photos"].items():
+    for name, n in rep.photos.items():
         rows.append((f"photos {name}", str(n)))
-        g = rep["gsd_cm"].get(name)
+        g = rep.gsd_cm.get(name)
         if g:
-            rows.append((f"GSD {name}", f"{g[0]:.2f} cm/px" if abs(g[1] - g[0]) < 0.005 else f"{g[0]:.2f} to {g[1]:.2f} cm/px"))
-    for name, c in rep.get("coverage", {}).items():
-        ov = rep["overlap"].get(name, {})
+            rows.append((f"GSD {name}", f"{g.min_cm:.2f} cm/px" if abs(g.max_cm - g.min_cm) < 0.005
+                         else f"{g.min_cm:.2f} to {g.max_cm:.2f} cm/px"))
+    for name, c in rep.coverage.items():
+        ov = rep.overlap[name]
         rows.append((f"coverage {name}", _pct(c)))
-        rows.append((f"overlap {name}", f"front {_pct(ov.get('front_min'))}, side {_pct(ov.get('side_min'))} (min)"))
-    rows.append(("warnings / errors", f"{len(rep['warnings'])} / {len(rep['errors'])}"))
+        rows.append((f"overlap {name}", f"front {_pct(ov.front_min)}, side {_pct(ov.side_min)} (min)"))
+    rows.append(("warnings / errors", f"{len(rep.warnings)} / {len(rep.errors)}"))
 
     x0 = MAP_W + 18
     shapes = [Shape("polygon", ((MAP_W, 0), (MAP_W + PANEL_W, 0), (MAP_W + PANEL_W, MAP_H), (MAP_W, MAP_H)),
@@ -297,9 +301,8 @@ def _legend(compiled: Compiled, rep: dict, n_fp: int, n_ph: int, fp_stride: int)
         shapes.append(Shape("text", ((x0 + col, y),), text=v, size=13, fill=COLOURS["text"], bold=True, layer="legend"))
         y += 20
     codes: dict[str, int] = {}
-    for w in rep["warnings"]:
-        c = w["code"] if isinstance(w, dict) else "warning"
-        codes[c] = codes.get(c, 0) + 1
+    for w in rep.warnings:
+        codes[w.code] = codes.get(w.code, 0) + 1
     if codes:
         y += 10
         shapes.append(Shape("text", ((x0, y),), text="warnings", size=13, bold=True, fill="#a05a00", layer="legend"))
@@ -432,13 +435,12 @@ def render_png(pic: Picture, path: Path, supersample: int = 2) -> None:
 
 # ------------------------------------------------------------------------------------------------ HTML
 
-def render_html(pic: Picture, rep: dict) -> str:
+def render_html(pic: Picture, rep: MissionReport) -> str:
     from markupsafe import Markup
     from templates import render
 
     return render("preview.html.j2", title=pic.title, svg=Markup(render_svg(pic)), rows=pic.rows,
-                  warnings=pic.warnings, errors=[e["message"] for e in rep.get("errors", [])],
-                  areas=rep.get("areas", []))
+                  warnings=pic.warnings, errors=[e.message for e in rep.errors], areas=rep.areas)
 
 
 def write_preview(compiled: Compiled, out: str | Path) -> Path:

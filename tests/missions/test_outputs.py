@@ -53,7 +53,7 @@ def test_every_output_is_written_and_reads_back(small, tmp_path):
     assert w_home[0] == pytest.approx(small.home[0], abs=1e-7)
     # the report file is the report
     rep = json.loads((out / "small.report.json").read_text())
-    assert rep == json.loads(json.dumps(report(small)))
+    assert rep == json.loads(json.dumps(report(small).to_json()))
     # GeoJSON: one photo feature per measured photo, footprints, area, path
     fc = json.loads((out / "small.geojson").read_text())
     kinds = [f["properties"]["kind"] for f in fc["features"]]
