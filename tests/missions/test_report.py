@@ -26,6 +26,29 @@ def test_report_has_the_binding_fields():
     assert lo == hi == pytest.approx(THERMAL.gsd_cm(40.0), rel=1e-3)
 
 
+
+def test_the_report_is_a_frozen_value_and_its_json_keeps_the_documented_order():
+    """check --json and NAME.report.json are the report's to_json(): plain JSON values, keys in this order."""
+    import dataclasses
+    import json
+
+    rep = report(handmade())
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        rep.errors = ()
+    with pytest.raises(TypeError):
+        rep.coverage["thermal"] = 0.0       # its tables are read-only too
+    doc = rep.to_json()
+    assert list(doc) == ["plan", "name", "firmware", "frame", "mission_items", "item_limit", "parts", "part_items",
+                         "photos", "path_length_m", "climb_m", "flight_time_s", "flight_time_qgc_s",
+                         "max_altitude_m", "area_m2", "gsd_cm", "coverage", "overlap", "areas", "warnings", "errors"]
+    assert list(doc["areas"][0]) == ["step", "kind", "area_m2", "altitude_m", "trigger", "requested", "coverage",
+                                     "overlap", "photos", "outside_m", "over_gaps_m", "over_gaps_camera_m",
+                                     "photos_in_zones"]
+    assert json.loads(json.dumps(doc, allow_nan=False)) == doc
+    assert doc["overlap"]["thermal"] == {"front_min": rep.overlap["thermal"].front_min,
+                                         "side_min": rep.overlap["thermal"].side_min}
+    assert doc["warnings"] == [{"code": w.code, "message": w.message} for w in rep.warnings]
+
 def test_full_lawnmower_covers_and_meets_the_overlap():
     rep = report(handmade())
     assert rep.coverage["thermal"] >= 0.995
