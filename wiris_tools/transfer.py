@@ -834,7 +834,7 @@ def _compiled_without_errors(p, firmware: str | None):
     compiled = compile_plan(str(p), firmware=firmware)
     try:
         from missions.measure.report import report
-        errors = report(compiled)["errors"]
+        errors = [e.to_json() for e in report(compiled).errors]
     except ImportError:
         errors = []
     except PlanError as err:  # from measuring the mission (a photo budget): about the plan as a whole

@@ -17,11 +17,15 @@ home, flat ground assumed as in the report). Every feature has a `kind` property
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from missions.compiled import Compiled
 from missions.formats.jsonfinite import finite
 from missions.measure.flight import Simulation
+
+if TYPE_CHECKING:
+    from missions.measure.report import MissionReport
+
 
 # A 100 km² survey has ~10^6 photos; a GIS tool opening a GeoJSON of a million rectangles is unusable.
 # Past this count, footprints are left out (the collection says so); photo points are always written.
@@ -38,13 +42,13 @@ def _command_name(cmd: int) -> str:
     return entry.name if entry is not None else str(cmd)
 
 
-def feature_collection(compiled: Compiled, sim: Simulation, rep: dict) -> dict:
+def feature_collection(compiled: Compiled, sim: Simulation, rep: MissionReport) -> dict:
     home_amsl = compiled.home[2]
     feats: list[dict] = []
     for a in compiled.areas:
         rings_by_poly = a.area.latlon_rings()
         coords = [[[[_r7(lon), _r7(lat)] for lat, lon in ring] for ring in rings] for rings in rings_by_poly]
-        row = next((r for r in rep.get("areas", []) if r["step"] == a.step), {})
+        row = next((r.to_json() for r in rep.areas if r.step == a.step), {})
         feats.append({"type": "Feature",
                       "properties": {"kind": "area", "step": a.step, "area_kind": a.kind,
                                      "payloads": list(a.payloads), "altitude_m": a.altitude_m,
@@ -57,8 +61,8 @@ def feature_collection(compiled: Compiled, sim: Simulation, rep: dict) -> dict:
                               "geometry": {"type": "Polygon", "coordinates": [hole]}})
     line = [[_r7(lon), _r7(lat), round(home_amsl + v.alt_m, 2)] for (lat, lon), v in zip(sim.latlon, sim.vertices)]
     feats.append({"type": "Feature",
-                  "properties": {"kind": "path", "length_m": rep["path_length_m"], "flight_time_s": rep["flight_time_s"],
-                                 "flight_time_qgc_s": rep.get("flight_time_qgc_s")},
+                  "properties": {"kind": "path", "length_m": rep.path_length_m, "flight_time_s": rep.flight_time_s,
+                                 "flight_time_qgc_s": rep.flight_time_qgc_s},
                   "geometry": {"type": "LineString", "coordinates": line}})
     feats.append({"type": "Feature", "properties": {"kind": "home", "alt_amsl_m": home_amsl},
                   "geometry": {"type": "Point", "coordinates": [_r7(compiled.home[1]), _r7(compiled.home[0]), home_amsl]}})

@@ -54,11 +54,14 @@ import re
 import shutil
 import stat
 import tempfile
-from typing import Callable, Iterable, Iterator, NamedTuple
+from typing import TYPE_CHECKING, Callable, Iterable, Iterator, NamedTuple
 
 from cdf.paths import require_directory
 from missions.compiled import Compiled
 from missions.errors import PlanError
+
+if TYPE_CHECKING:
+    from missions.measure.report import MissionReport
 
 
 def _json_text(obj) -> str:
@@ -84,7 +87,7 @@ def _params_text(compiled: Compiled) -> str:
     return format_params(compiled)
 
 
-def _writers(compiled: Compiled, rep: dict, sim) -> list[tuple[str, Callable[[Path], None]]]:
+def _writers(compiled: Compiled, rep: MissionReport, sim) -> list[tuple[str, Callable[[Path], None]]]:
     from missions.formats import planfile, wpl
     from missions.formats.geojson import dumps_collection, feature_collection
     from missions.formats.kml import render_kml
@@ -99,7 +102,7 @@ def _writers(compiled: Compiled, rep: dict, sim) -> list[tuple[str, Callable[[Pa
         (f"{name}.kml", lambda p: p.write_text(render_kml(fc), encoding="utf-8")),
         (f"{name}.setup.json", lambda p: p.write_text(_json_text(setup_document(compiled)), encoding="utf-8")),
         (f"{name}.params", lambda p: p.write_text(_params_text(compiled), encoding="utf-8")),
-        (f"{name}.report.json", lambda p: p.write_text(_json_text(rep), encoding="utf-8")),
+        (f"{name}.report.json", lambda p: p.write_text(_json_text(rep.to_json()), encoding="utf-8")),
     ]
     if compiled.lua:
         out.append((f"{name}.lua", lambda p: p.write_text(compiled.lua, encoding="utf-8")))
@@ -383,7 +386,7 @@ def _make_output_dir(out_dir: Path) -> None:
                         hint="its parent must be a writable directory") from None
 
 
-def write_outputs(compiled: Compiled, out_dir: str | Path, rep: dict | None = None, sim=None) -> list[Path]:
+def write_outputs(compiled: Compiled, out_dir: str | Path, rep: MissionReport | None = None, sim=None) -> list[Path]:
     """Write every output file of `compiled` into `out_dir`; return their paths (in the order above, the
     manifest last)."""
     from missions.measure.flight import simulate

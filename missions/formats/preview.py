@@ -18,13 +18,16 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 import math
 from pathlib import Path
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 from xml.sax.saxutils import escape
 
 import numpy as np
 
 from missions.compiled import Compiled
 from missions.errors import PlanError
+
+if TYPE_CHECKING:
+    from missions.measure.report import MissionReport
 
 MAP_W, MAP_H = 1000, 800          # map area in pixels
 PANEL_W = 430                     # legend panel to the right
@@ -97,118 +100,176 @@ def _fmt_time(s: float) -> str:
     return f"{s // 3600} h {s % 3600 // 60:02d} min" if s >= 3600 else f"{s // 60} min {s % 60:02d} s"
 
 
-def build_picture(compiled: Compiled, sim: Any = None, rep: dict | None = None) -> Picture:
+XY = tuple[float, float]
+
+
+@dataclass(frozen=True)
+class _MapContent:
+    """What the map shows, in the simulation's metres."""
+
+    areas: tuple[tuple[tuple[XY, ...], ...], ...]   # per polygon: its outer ring, then its holes
+    path: tuple[XY, ...]
+    photos: tuple[Any, ...]                         # missions.measure.flight.Photo
+    footprints: tuple[tuple[XY, ...], ...]          # of every fp_stride-th photo, for its first payload
+    fp_stride: int
+
+    def points(self) -> list[XY]:
+        return ([pt for rings in self.areas for ring in rings for pt in ring] + list(self.path)
+                + [pt for r in self.footprints for pt in r])
+
+
+@dataclass(frozen=True)
+class _Frame:
+    """Metres in the simulation's plane to map pixels: north up, the content centred and fitted."""
+
+    scale: float            # pixels per metre
+    cx: float               # the content's centre (metres) ...
+    cy: float
+    mx: float               # ... drawn here (pixels)
+    my: float
+
+    @staticmethod
+    def fitting(pts: Sequence[XY]) -> _Frame:
+        xs = np.array([p[0] for p in pts] or [0.0])
+        ys = np.array([p[1] for p in pts] or [0.0])
+        x0, x1, y0, y1 = float(xs.min()), float(xs.max()), float(ys.min()), float(ys.max())
+        span = max(x1 - x0, y1 - y0, 10.0)
+        # the map keeps a free band at the bottom for the scale bar and at the left for the north arrow
+        left, right, top, bottom = PAD + 30, MAP_W - PAD, PAD, MAP_H - PAD - 30
+        scale = min((right - left) / max(x1 - x0, span * 0.05), (bottom - top) / max(y1 - y0, span * 0.05))
+        return _Frame(scale, (x0 + x1) / 2, (y0 + y1) / 2, (left + right) / 2, (top + bottom) / 2)
+
+    def px(self, x: float, y: float) -> XY:
+        return (round(self.mx + (x - self.cx) * self.scale, 2), round(self.my - (y - self.cy) * self.scale, 2))
+
+    def ring(self, ring: Sequence[XY]) -> tuple[XY, ...]:
+        return tuple(self.px(*q) for q in ring)
+
+
+def build_picture(compiled: Compiled, sim: Any = None, rep: MissionReport | None = None) -> Picture:
+    """The preview's display list: the map from the simulated flight, the legend from the measured report."""
     from missions.measure.flight import simulate
-    from missions.measure.report import footprint_ring, report
+    from missions.measure.report import report
 
     sim = sim or simulate(compiled)
     rep = rep or report(compiled, sim)
-    proj = sim.projection
+    content = _map_content(compiled, sim)
+    frame = _Frame.fitting(content.points())
+    shapes = [*_footprint_shapes(content.footprints, frame), *_area_shapes(content.areas, frame),
+              *_path_shapes(content.path, frame), *_photo_shapes(compiled, content.photos, frame),
+              *_waypoint_shapes(compiled, sim, frame), *_home_shapes(compiled, sim.projection, frame),
+              *_scale_bar_shapes(frame.scale), *_north_arrow_shapes()]
+    rows, legend = _legend(compiled, rep, content.fp_stride)
+    shapes.extend(legend)
+    warn = tuple(w.message for w in rep.warnings)
+    return Picture(MAP_W + PANEL_W, MAP_H, tuple(shapes), compiled.name, tuple(rows), warn)
 
-    # geometry in the simulation's metres
+
+def _map_content(compiled: Compiled, sim: Any) -> _MapContent:
+    from missions.measure.report import footprint_ring
+
+    proj = sim.projection
     areas = []
     for a in compiled.areas:
         for rings in a.area.latlon_rings():
             xy_rings = []
             for ring in rings:
-                lat = [p[0] for p in ring]
-                lon = [p[1] for p in ring]
-                x, y = proj.to_xy(lat, lon)
-                xy_rings.append(list(zip(x.tolist(), y.tolist())))
-            areas.append(xy_rings)
-    path = [(v.x, v.y) for v in sim.vertices]
-    photos = list(sim.photos)
+                x, y = proj.to_xy([p[0] for p in ring], [p[1] for p in ring])
+                xy_rings.append(tuple(zip(x.tolist(), y.tolist())))
+            areas.append(tuple(xy_rings))
+    photos = tuple(sim.photos)
     fp_stride = max(1, math.ceil(len(photos) / MAX_FOOTPRINTS))
-    fps = []
-    for p in photos[::fp_stride]:
-        first = p.payloads[0] if p.payloads else None
-        if first is not None:
-            fps.append(footprint_ring(p, compiled.payload(first)))
+    fps = tuple(tuple(footprint_ring(p, compiled.payload(p.payloads[0]))) for p in photos[::fp_stride] if p.payloads)
+    return _MapContent(tuple(areas), tuple((v.x, v.y) for v in sim.vertices), photos, fps, fp_stride)
 
-    pts = [pt for rings in areas for ring in rings for pt in ring] + path + [pt for r in fps for pt in r]
-    xs = np.array([p[0] for p in pts] or [0.0])
-    ys = np.array([p[1] for p in pts] or [0.0])
-    x0, x1, y0, y1 = float(xs.min()), float(xs.max()), float(ys.min()), float(ys.max())
-    span = max(x1 - x0, y1 - y0, 10.0)
-    # the map keeps a free band at the bottom for the scale bar and at the left for the north arrow
-    left, right, top, bottom = PAD + 30, MAP_W - PAD, PAD, MAP_H - PAD - 30
-    scale = min((right - left) / max(x1 - x0, span * 0.05), (bottom - top) / max(y1 - y0, span * 0.05))
-    cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
-    mx, my = (left + right) / 2, (top + bottom) / 2
 
-    def px(x: float, y: float) -> tuple[float, float]:
-        return (round(mx + (x - cx) * scale, 2), round(my - (y - cy) * scale, 2))
-
-    shapes: list[Shape] = []
+def _footprint_shapes(fps: Sequence[Sequence[XY]], f: _Frame) -> list[Shape]:
     outline = COLOURS["footprint_line"] if len(fps) <= 300 else None   # hundreds of outlines are a smear
-    for r in fps:
-        shapes.append(Shape("polygon", tuple(px(*q) for q in r), fill=COLOURS["footprint_fill"], fill_opacity=0.10,
-                            stroke=outline, stroke_width=0.5, layer="footprints"))
+    return [Shape("polygon", f.ring(r), fill=COLOURS["footprint_fill"], fill_opacity=0.10, stroke=outline,
+                  stroke_width=0.5, layer="footprints") for r in fps]
+
+
+def _area_shapes(areas: Sequence[Sequence[Sequence[XY]]], f: _Frame) -> list[Shape]:
+    """Each area polygon, its holes drawn again in red on top."""
+    shapes = []
     for rings in areas:
-        shapes.append(Shape("polygon", tuple(px(*q) for q in rings[0]), tuple(tuple(px(*q) for q in h) for h in rings[1:]),
+        shapes.append(Shape("polygon", f.ring(rings[0]), tuple(f.ring(h) for h in rings[1:]),
                             fill=COLOURS["area_fill"], fill_opacity=0.22, stroke=COLOURS["area_line"], stroke_width=2,
                             layer="area"))
-        for h in rings[1:]:
-            shapes.append(Shape("polygon", tuple(px(*q) for q in h), fill=COLOURS["gap_fill"], fill_opacity=0.25,
-                                stroke=COLOURS["gap_line"], stroke_width=2, layer="gaps"))
-    if len(path) > 1:
-        shapes.append(Shape("polyline", tuple(px(*q) for q in path), stroke=COLOURS["path"], stroke_width=2,
-                            layer="path"))
-        shapes.extend(_arrows([px(*q) for q in path]))
-    # dots sized to the photo spacing on screen, so that a dense line of photos does not hide the path
+        shapes.extend(Shape("polygon", f.ring(h), fill=COLOURS["gap_fill"], fill_opacity=0.25,
+                            stroke=COLOURS["gap_line"], stroke_width=2, layer="gaps") for h in rings[1:])
+    return shapes
+
+
+def _path_shapes(path: Sequence[XY], f: _Frame) -> list[Shape]:
+    if len(path) <= 1:
+        return []
+    return [Shape("polyline", f.ring(path), stroke=COLOURS["path"], stroke_width=2, layer="path"),
+            *_arrows(list(f.ring(path)))]
+
+
+def _photo_shapes(compiled: Compiled, photos: Sequence[Any], f: _Frame) -> list[Shape]:
+    """Photo dots sized to the photo spacing on screen, so that a dense line of photos does not hide the path."""
     dot_stride = max(1, math.ceil(len(photos) / MAX_PHOTO_DOTS))
     gaps = [math.hypot(b.x - a.x, b.y - a.y) for a, b in zip(photos, photos[1:]) if a.span == b.span]
-    gap_px = float(np.median(gaps)) * scale if gaps else 10.0
+    gap_px = float(np.median(gaps)) * f.scale if gaps else 10.0
     if gap_px * dot_stride < 2.5:
         dot_stride = max(dot_stride, math.ceil(2.5 / max(gap_px, 1e-6)))
     r_dot = min(2.2, max(0.6, 0.3 * gap_px * dot_stride))
-    for p in photos[::dot_stride]:
-        shapes.append(Shape("circle", (px(p.x, p.y),), fill=_photo_colour(compiled, p.payloads), radius=r_dot,
-                            layer="photos"))
-    # numbered NAV waypoints, when few enough to read
+    return [Shape("circle", (f.px(p.x, p.y),), fill=_photo_colour(compiled, p.payloads), radius=r_dot,
+                  layer="photos") for p in photos[::dot_stride]]
+
+
+def _waypoint_shapes(compiled: Compiled, sim: Any, f: _Frame) -> list[Shape]:
+    """Numbered NAV waypoints (mission seq), when few enough to read; a label that would overlap one already
+    drawn is left out."""
     nav = []
     seen: set[int] = set()
-    seq_base = 1 if compiled.firmware == "ardupilot" else 0
     for v in sim.vertices:
         if v.item >= 0 and v.item not in seen:
             seen.add(v.item)
             nav.append(v)
-    if len(nav) <= MAX_WAYPOINT_LABELS:
-        placed: list[tuple[float, float]] = []
-        for v in nav:
-            q = px(v.x, v.y)
-            shapes.append(Shape("circle", (q,), fill="#ffffff", stroke=COLOURS["waypoint"], stroke_width=1.5,
-                                radius=4, layer="waypoints"))
-            if all(math.hypot(q[0] - a, q[1] - b) > 14 for a, b in placed):
-                shapes.append(Shape("text", ((q[0] + 6, q[1] - 6),), text=str(v.item + seq_base), size=12,
-                                    fill=COLOURS["waypoint"], bold=True, layer="waypoints"))
-                placed.append(q)
-    hx, hy = proj.point_to_xy(compiled.home[0], compiled.home[1])
-    h = px(hx, hy)
-    shapes.append(Shape("polygon", ((h[0], h[1] - 9), (h[0] + 8, h[1] + 6), (h[0] - 8, h[1] + 6)),
-                        fill=COLOURS["home"], stroke="#ffffff", stroke_width=1.5, layer="home"))
-    shapes.append(Shape("text", ((h[0] + 10, h[1] + 14),), text="H", size=14, fill=COLOURS["home"], bold=True,
-                        layer="home"))
+    if len(nav) > MAX_WAYPOINT_LABELS:
+        return []
+    seq_base = 1 if compiled.firmware == "ardupilot" else 0
+    shapes = []
+    placed: list[XY] = []
+    for v in nav:
+        q = f.px(v.x, v.y)
+        shapes.append(Shape("circle", (q,), fill="#ffffff", stroke=COLOURS["waypoint"], stroke_width=1.5,
+                            radius=4, layer="waypoints"))
+        if all(math.hypot(q[0] - a, q[1] - b) > 14 for a, b in placed):
+            shapes.append(Shape("text", ((q[0] + 6, q[1] - 6),), text=str(v.item + seq_base), size=12,
+                                fill=COLOURS["waypoint"], bold=True, layer="waypoints"))
+            placed.append(q)
+    return shapes
 
-    # scale bar (bottom left) and north arrow (top left)
+
+def _home_shapes(compiled: Compiled, proj: Any, f: _Frame) -> list[Shape]:
+    h = f.px(*proj.point_to_xy(compiled.home[0], compiled.home[1]))
+    return [Shape("polygon", ((h[0], h[1] - 9), (h[0] + 8, h[1] + 6), (h[0] - 8, h[1] + 6)),
+                  fill=COLOURS["home"], stroke="#ffffff", stroke_width=1.5, layer="home"),
+            Shape("text", ((h[0] + 10, h[1] + 14),), text="H", size=14, fill=COLOURS["home"], bold=True,
+                  layer="home")]
+
+
+def _scale_bar_shapes(scale: float) -> list[Shape]:
+    """A scale bar of a round length, about a quarter of the map wide, bottom left."""
     bar_m = _nice_length((MAP_W * 0.25) / scale)
     bar_px = bar_m * scale
     bx, by = PAD, MAP_H - 22
-    shapes.append(Shape("polyline", ((bx, by - 6), (bx, by), (bx + bar_px, by), (bx + bar_px, by - 6)),
-                        stroke=COLOURS["text"], stroke_width=2.5, layer="scale"))
-    shapes.append(Shape("text", ((bx + bar_px / 2, by - 9),), text=_fmt_len(bar_m), size=13, anchor="middle",
-                        fill=COLOURS["text"], layer="scale"))
+    return [Shape("polyline", ((bx, by - 6), (bx, by), (bx + bar_px, by), (bx + bar_px, by - 6)),
+                  stroke=COLOURS["text"], stroke_width=2.5, layer="scale"),
+            Shape("text", ((bx + bar_px / 2, by - 9),), text=_fmt_len(bar_m), size=13, anchor="middle",
+                  fill=COLOURS["text"], layer="scale")]
+
+
+def _north_arrow_shapes() -> list[Shape]:
     nx, ny = PAD, PAD + 10
-    shapes.append(Shape("polygon", ((nx, ny - 22), (nx + 9, ny + 6), (nx, ny), (nx - 9, ny + 6)),
-                        fill=COLOURS["text"], layer="north"))
-    shapes.append(Shape("text", ((nx, ny + 22),), text="N", size=14, anchor="middle", bold=True,
-                        fill=COLOURS["text"], layer="north"))
-
-    rows, legend = _legend(compiled, rep, len(fps), len(photos), fp_stride)
-    shapes.extend(legend)
-    warn = tuple(w["message"] if isinstance(w, dict) else str(w) for w in rep.get("warnings", []))
-    return Picture(MAP_W + PANEL_W, MAP_H, tuple(shapes), compiled.name, tuple(rows), warn)
-
+    return [Shape("polygon", ((nx, ny - 22), (nx + 9, ny + 6), (nx, ny), (nx - 9, ny + 6)),
+                  fill=COLOURS["text"], layer="north"),
+            Shape("text", ((nx, ny + 22),), text="N", size=14, anchor="middle", bold=True,
+                  fill=COLOURS["text"], layer="north")]
 
 def _photo_colour(compiled: Compiled, payloads: Sequence[str]) -> str:
     """Photos are coloured by the first payload that takes them (plan order), so two cameras can be told apart."""
@@ -246,47 +307,17 @@ def _pct(v: float | None) -> str:
     return NONE if v is None else f"{100 * v:.1f} %"
 
 
-def _legend(compiled: Compiled, rep: dict, n_fp: int, n_ph: int, fp_stride: int) -> tuple[list[tuple[str, str]], list[Shape]]:
-    rows: list[tuple[str, str]] = [
-        ("firmware", f"{rep['firmware']} {compiled.frame}"),
-        ("mission items", f"{rep['mission_items']} (limit {rep['item_limit']}, {rep['parts']} part"
-                          f"{'s' if rep['parts'] != 1 else ''})"),
-        ("path", f"{rep['path_length_m'] / 1000:.2f} km"),
-        ("flight time", f"{_fmt_time(rep['flight_time_s'])} (QGC: {_fmt_time(rep.get('flight_time_qgc_s') or 0)})"),
-        ("area", f"{rep['area_m2'] / 10000:.2f} ha" if rep.get("area_m2") else NONE),
-    ]
-    for name, n in rep["photos"].items():
-        rows.append((f"photos {name}", str(n)))
-        g = rep["gsd_cm"].get(name)
-        if g:
-            rows.append((f"GSD {name}", f"{g[0]:.2f} cm/px" if abs(g[1] - g[0]) < 0.005 else f"{g[0]:.2f} to {g[1]:.2f} cm/px"))
-    for name, c in rep.get("coverage", {}).items():
-        ov = rep["overlap"].get(name, {})
-        rows.append((f"coverage {name}", _pct(c)))
-        rows.append((f"overlap {name}", f"front {_pct(ov.get('front_min'))}, side {_pct(ov.get('side_min'))} (min)"))
-    rows.append(("warnings / errors", f"{len(rep['warnings'])} / {len(rep['errors'])}"))
-
+def _legend(compiled: Compiled, rep: MissionReport, fp_stride: int) -> tuple[list[tuple[str, str]], list[Shape]]:
+    """The legend panel right of the map: title, colour keys, the report's key figures, warning codes. Returns the
+    figures too (the HTML shows them as a table)."""
+    rows = _legend_rows(compiled, rep)
     x0 = MAP_W + 18
     shapes = [Shape("polygon", ((MAP_W, 0), (MAP_W + PANEL_W, 0), (MAP_W + PANEL_W, MAP_H), (MAP_W, MAP_H)),
                     fill=COLOURS["panel"], stroke="#cccccc", layer="legend"),
               Shape("text", ((x0, 34),), text=compiled.name, size=19, bold=True, fill=COLOURS["text"], layer="legend")]
     y = 62
-    keys = [("area", COLOURS["area_fill"], "area to cover"), ("gap", COLOURS["gap_fill"], "hole / exclusion"),
-            ("fp", COLOURS["footprint_fill"], "photo footprint" + (f" (every {fp_stride}th)" if fp_stride > 1 else "")),
-            ("path", COLOURS["path"], "flight path, arrows = direction"),
-            *[("photo", _photo_colour(compiled, (p.name,)),
-               "photo position" + (f" ({p.name})" if len(compiled.payloads) > 1 else ""))
-              for p in compiled.payloads[:3]],
-            ("wp", COLOURS["waypoint"], "waypoint (mission seq)"), ("home", COLOURS["home"], "home (H)")]
-    for kind, colour, label in keys:
-        if kind == "path":
-            shapes.append(Shape("polyline", ((x0, y - 4), (x0 + 22, y - 4)), stroke=colour, stroke_width=3, layer="legend"))
-        elif kind in ("photo", "wp"):
-            shapes.append(Shape("circle", ((x0 + 11, y - 4),), fill=colour if kind == "photo" else "#ffffff",
-                                stroke=colour, stroke_width=1.5, radius=4, layer="legend"))
-        else:
-            shapes.append(Shape("polygon", ((x0, y - 11), (x0 + 22, y - 11), (x0 + 22, y + 3), (x0, y + 3)),
-                                fill=colour, fill_opacity=0.45, stroke=colour, layer="legend"))
+    for kind, colour, label in _legend_keys(compiled, fp_stride):
+        shapes.append(_key_swatch(kind, colour, x0, y))
         shapes.append(Shape("text", ((x0 + 32, y),), text=label, size=13, fill=COLOURS["text"], layer="legend"))
         y += 21
     y += 12
@@ -296,21 +327,72 @@ def _legend(compiled: Compiled, rep: dict, n_fp: int, n_ph: int, fp_stride: int)
         shapes.append(Shape("text", ((x0, y),), text=k, size=13, fill=COLOURS["muted"], layer="legend"))
         shapes.append(Shape("text", ((x0 + col, y),), text=v, size=13, fill=COLOURS["text"], bold=True, layer="legend"))
         y += 20
-    codes: dict[str, int] = {}
-    for w in rep["warnings"]:
-        c = w["code"] if isinstance(w, dict) else "warning"
-        codes[c] = codes.get(c, 0) + 1
-    if codes:
-        y += 10
-        shapes.append(Shape("text", ((x0, y),), text="warnings", size=13, bold=True, fill="#a05a00", layer="legend"))
-        for c, n in codes.items():
-            y += 18
-            if y > MAP_H - 12:
-                break
-            shapes.append(Shape("text", ((x0 + 8, y),), text=f"{c}" + (f" (x{n})" if n > 1 else ""), size=12,
-                                fill="#a05a00", layer="legend"))
+    shapes.extend(_warning_code_shapes(rep, x0, y))
     return rows, shapes
 
+
+def _legend_rows(compiled: Compiled, rep: MissionReport) -> list[tuple[str, str]]:
+    """The report's key figures, as (key, value) text."""
+    rows: list[tuple[str, str]] = [
+        ("firmware", f"{rep.firmware} {compiled.frame}"),
+        ("mission items", f"{rep.mission_items} (limit {rep.item_limit}, {rep.parts} part"
+                          f"{'s' if rep.parts != 1 else ''})"),
+        ("path", f"{rep.path_length_m / 1000:.2f} km"),
+        ("flight time", f"{_fmt_time(rep.flight_time_s)} (QGC: {_fmt_time(rep.flight_time_qgc_s or 0)})"),
+        ("area", f"{rep.area_m2 / 10000:.2f} ha" if rep.area_m2 else NONE),
+    ]
+    for name, n in rep.photos.items():
+        rows.append((f"photos {name}", str(n)))
+        g = rep.gsd_cm.get(name)
+        if g:
+            rows.append((f"GSD {name}", f"{g.min_cm:.2f} cm/px" if abs(g.max_cm - g.min_cm) < 0.005
+                         else f"{g.min_cm:.2f} to {g.max_cm:.2f} cm/px"))
+    for name, c in rep.coverage.items():
+        ov = rep.overlap[name]
+        rows.append((f"coverage {name}", _pct(c)))
+        rows.append((f"overlap {name}", f"front {_pct(ov.front_min)}, side {_pct(ov.side_min)} (min)"))
+    rows.append(("warnings / errors", f"{len(rep.warnings)} / {len(rep.errors)}"))
+    return rows
+
+
+def _legend_keys(compiled: Compiled, fp_stride: int) -> list[tuple[str, str, str]]:
+    """(kind of swatch, colour, label) of each thing the map draws."""
+    return [("area", COLOURS["area_fill"], "area to cover"), ("gap", COLOURS["gap_fill"], "hole / exclusion"),
+            ("fp", COLOURS["footprint_fill"], "photo footprint" + (f" (every {fp_stride}th)" if fp_stride > 1 else "")),
+            ("path", COLOURS["path"], "flight path, arrows = direction"),
+            *[("photo", _photo_colour(compiled, (p.name,)),
+               "photo position" + (f" ({p.name})" if len(compiled.payloads) > 1 else ""))
+              for p in compiled.payloads[:3]],
+            ("wp", COLOURS["waypoint"], "waypoint (mission seq)"), ("home", COLOURS["home"], "home (H)")]
+
+
+def _key_swatch(kind: str, colour: str, x0: float, y: float) -> Shape:
+    """A key's sample: a line for the path, a dot for photos and waypoints, a patch for areas."""
+    if kind == "path":
+        return Shape("polyline", ((x0, y - 4), (x0 + 22, y - 4)), stroke=colour, stroke_width=3, layer="legend")
+    if kind in ("photo", "wp"):
+        return Shape("circle", ((x0 + 11, y - 4),), fill=colour if kind == "photo" else "#ffffff",
+                     stroke=colour, stroke_width=1.5, radius=4, layer="legend")
+    return Shape("polygon", ((x0, y - 11), (x0 + 22, y - 11), (x0 + 22, y + 3), (x0, y + 3)),
+                 fill=colour, fill_opacity=0.45, stroke=colour, layer="legend")
+
+
+def _warning_code_shapes(rep: MissionReport, x0: float, y: float) -> list[Shape]:
+    """The warnings' codes with their counts, below the figures, as many as fit the panel."""
+    codes: dict[str, int] = {}
+    for w in rep.warnings:
+        codes[w.code] = codes.get(w.code, 0) + 1
+    if not codes:
+        return []
+    y += 10
+    shapes = [Shape("text", ((x0, y),), text="warnings", size=13, bold=True, fill="#a05a00", layer="legend")]
+    for c, n in codes.items():
+        y += 18
+        if y > MAP_H - 12:
+            break
+        shapes.append(Shape("text", ((x0 + 8, y),), text=f"{c}" + (f" (x{n})" if n > 1 else ""), size=12,
+                            fill="#a05a00", layer="legend"))
+    return shapes
 
 # ------------------------------------------------------------------------------------------------ SVG
 
@@ -367,78 +449,91 @@ def _rgb(hex_colour: str) -> tuple[int, int, int]:
     return int(h[0:2], 16), int(h[2:4], 16), int(h[4:6], 16)
 
 
+def _by_layer(shapes: Sequence[Shape]) -> list[list[Shape]]:
+    """The shapes in runs of one layer, in drawing order."""
+    runs: list[list[Shape]] = []
+    for s in shapes:
+        if not runs or runs[-1][0].layer != s.layer:
+            runs.append([])
+        runs[-1].append(s)
+    return runs
+
+
+def _png_polygon(draw: Any, s: Shape, k: int, font: Callable[[float, bool], Any]) -> None:
+    fill = _rgb(s.fill) + (int(255 * s.fill_opacity),) if s.fill else None
+    draw.polygon(_scaled(s.points, k), fill=fill)
+    for hole in s.holes:
+        draw.polygon(_scaled(hole, k), fill=(0, 0, 0, 0))
+    if s.stroke:
+        for ring in (s.points, *s.holes):
+            pts = _scaled(ring, k)
+            draw.line(pts + [pts[0]], fill=_rgb(s.stroke) + (255,), width=max(1, round(s.stroke_width * k)),
+                      joint="curve")
+
+
+def _png_polyline(draw: Any, s: Shape, k: int, font: Callable[[float, bool], Any]) -> None:
+    draw.line(_scaled(s.points, k), fill=_rgb(s.stroke) + (255,), width=max(1, round(s.stroke_width * k)),
+              joint="curve")
+
+
+def _png_circle(draw: Any, s: Shape, k: int, font: Callable[[float, bool], Any]) -> None:
+    (x, y), = s.points
+    r = s.radius * k
+    draw.ellipse((x * k - r, y * k - r, x * k + r, y * k + r),
+                 fill=_rgb(s.fill) + (255,) if s.fill else None,
+                 outline=_rgb(s.stroke) + (255,) if s.stroke else None,
+                 width=max(1, round(s.stroke_width * k)) if s.stroke else 0)
+
+
+def _png_text(draw: Any, s: Shape, k: int, font: Callable[[float, bool], Any]) -> None:
+    (x, y), = s.points
+    anchor = {"start": "ls", "middle": "ms", "end": "rs"}[s.anchor]
+    colour = _rgb(s.fill or COLOURS["text"]) + (255,)
+    # Pillow's built-in font has no bold face: a bold text is drawn with a one-pixel stroke of its colour
+    draw.text((x * k, y * k), s.text, font=font(s.size, s.bold), fill=colour, anchor=anchor,
+              stroke_width=1 if s.bold else 0, stroke_fill=colour)
+
+
+def _scaled(points: Sequence[tuple[float, float]], k: int) -> list[tuple[float, float]]:
+    return [(x * k, y * k) for x, y in points]
+
+
+_PNG_DRAW: dict[str, Callable[[Any, Shape, int, Callable[[float, bool], Any]], None]] = {
+    "polygon": _png_polygon, "polyline": _png_polyline, "circle": _png_circle, "text": _png_text}
+
+
 def render_png(pic: Picture, path: Path, supersample: int = 2) -> None:
+    """Draw `pic` at `supersample` times its size, each layer on its own overlay (so its opacities blend with
+    what is below it, not with itself), then reduce it: smooth lines without anti-aliasing in Pillow's draw."""
     from PIL import Image, ImageDraw, ImageFont
 
     k = supersample
     base = Image.new("RGBA", (pic.width * k, pic.height * k), _rgb(COLOURS["background"]) + (255,))
     fonts: dict[tuple[float, bool], Any] = {}
 
-    def font(size: float, bold: bool):
-        key = (size, bold)
-        if key not in fonts:
-            fonts[key] = ImageFont.load_default(size=size * k)
-        return fonts[key]
+    def font(size: float, bold: bool) -> Any:
+        if (size, bold) not in fonts:
+            fonts[size, bold] = ImageFont.load_default(size=size * k)
+        return fonts[size, bold]
 
-    def sc(points):
-        return [(x * k, y * k) for x, y in points]
-
-    layer = None
-    overlay = None
-    draw = None
-
-    def flush():
-        nonlocal base
-        if overlay is not None:
-            base = Image.alpha_composite(base, overlay)
-
-    for s in pic.shapes:
-        if s.layer != layer:
-            flush()
-            overlay = Image.new("RGBA", base.size, (0, 0, 0, 0))
-            draw = ImageDraw.Draw(overlay)
-            layer = s.layer
-        assert draw is not None
-        if s.kind == "polygon":
-            fill = _rgb(s.fill) + (int(255 * s.fill_opacity),) if s.fill else None
-            draw.polygon(sc(s.points), fill=fill)
-            for hole in s.holes:
-                draw.polygon(sc(hole), fill=(0, 0, 0, 0))
-            if s.stroke:
-                for ring in (s.points, *s.holes):
-                    pts = sc(ring)
-                    draw.line(pts + [pts[0]], fill=_rgb(s.stroke) + (255,), width=max(1, round(s.stroke_width * k)),
-                              joint="curve")
-        elif s.kind == "polyline":
-            draw.line(sc(s.points), fill=_rgb(s.stroke) + (255,), width=max(1, round(s.stroke_width * k)), joint="curve")
-        elif s.kind == "circle":
-            (x, y), = s.points
-            r = s.radius * k
-            draw.ellipse((x * k - r, y * k - r, x * k + r, y * k + r),
-                         fill=_rgb(s.fill) + (255,) if s.fill else None,
-                         outline=_rgb(s.stroke) + (255,) if s.stroke else None,
-                         width=max(1, round(s.stroke_width * k)) if s.stroke else 0)
-        elif s.kind == "text":
-            (x, y), = s.points
-            anchor = {"start": "ls", "middle": "ms", "end": "rs"}[s.anchor]
-            colour = _rgb(s.fill or COLOURS["text"]) + (255,)
-            f = font(s.size, s.bold)
-            draw.text((x * k, y * k), s.text, font=f, fill=colour, anchor=anchor,
-                      stroke_width=1 if s.bold else 0, stroke_fill=colour)
-    flush()
+    for run in _by_layer(pic.shapes):
+        overlay = Image.new("RGBA", base.size, (0, 0, 0, 0))
+        draw = ImageDraw.Draw(overlay)
+        for s in run:
+            if s.kind in _PNG_DRAW:
+                _PNG_DRAW[s.kind](draw, s, k, font)
+        base = Image.alpha_composite(base, overlay)
     img = base.convert("RGB").resize((pic.width, pic.height), Image.Resampling.LANCZOS)
     img.save(path, format="PNG", optimize=True)
 
-
 # ------------------------------------------------------------------------------------------------ HTML
 
-def render_html(pic: Picture, rep: dict) -> str:
+def render_html(pic: Picture, rep: MissionReport) -> str:
     from markupsafe import Markup
     from templates import render
 
     return render("preview.html.j2", title=pic.title, svg=Markup(render_svg(pic)), rows=pic.rows,
-                  warnings=pic.warnings, errors=[e["message"] for e in rep.get("errors", [])],
-                  areas=rep.get("areas", []))
+                  warnings=pic.warnings, errors=[e.message for e in rep.errors], areas=rep.areas)
 
 
 def write_preview(compiled: Compiled, out: str | Path) -> Path:

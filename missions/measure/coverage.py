@@ -52,7 +52,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Any, Sequence
+from typing import Any, NamedTuple, Sequence
 
 import numpy as np
 
@@ -223,6 +223,28 @@ def _parallel_lateral(S: np.ndarray, E: np.ndarray, H: np.ndarray, a: np.ndarray
     return lat[ok], a[ok]
 
 
+class _RunLines(NamedTuple):
+    """The line as flown of each measured run of a bent line (`_run_lines`), one row per run."""
+
+    a: np.ndarray             # the run's index
+    single: np.ndarray        # the run is a single photo
+    start: np.ndarray         # xy of its first photo
+    d: np.ndarray             # unit vector along its line
+    n: np.ndarray             # unit normal to it
+    length_m: np.ndarray      # from its first photo to its last, along d
+
+
+def _along_line(span: np.ndarray, i: np.ndarray, step: int) -> np.ndarray:
+    """The photo `step` places from photo i on its line (span), or i itself where the line ends first."""
+    j = np.clip(i + step, 0, len(span) - 1)
+    return np.where(span[j] == span[i], j, i)
+
+
+def _in_corner(h: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """Whether the heading turns more than _CHAIN_TURN_DEG from photo i to photo j."""
+    return np.degrees(np.abs(np.angle(np.exp(1j * (h[j] - h[i]))))) > _CHAIN_TURN_DEG
+
+
 def _bent_lateral(xy: np.ndarray, h: np.ndarray, span: np.ndarray, s: np.ndarray, e: np.ndarray, a: np.ndarray,
                   fp: Footprint) -> tuple[np.ndarray, np.ndarray]:
     """For runs `a` of lines that bend (s/e: first and last photo index of each run): signed lateral offset of
@@ -233,60 +255,72 @@ def _bent_lateral(xy: np.ndarray, h: np.ndarray, span: np.ndarray, s: np.ndarray
     round), a single photo's from the photo before it to the photo after it (a photo's own heading turns with
     every kink of a GPS track). A single photo in a corner, or a run whose nearest photo on a side is in one,
     is not measured on that side (_CHAIN_TURN_DEG)."""
-    import shapely
-
     if len(a) == 0:
         return np.zeros(0), np.zeros(0, int)
-    last = len(xy) - 1
+    lines = _run_lines(xy, h, span, s, e, a)
+    r, q = _photos_beside(xy, h, span, s, lines, fp)
+    return _nearest_each_side(xy, h, span, lines, r, q, fp)
 
-    def along_line(i: np.ndarray, step: int) -> np.ndarray:
-        j = np.clip(i + step, 0, last)
-        return np.where(span[j] == span[i], j, i)
 
-    def corner(i: np.ndarray, j: np.ndarray) -> np.ndarray:
-        return np.degrees(np.abs(np.angle(np.exp(1j * (h[j] - h[i]))))) > _CHAIN_TURN_DEG
+def _run_lines(xy: np.ndarray, h: np.ndarray, span: np.ndarray, s: np.ndarray, e: np.ndarray,
+               a: np.ndarray) -> _RunLines:
+    """The line as flown of runs `a`, without the single photos in a corner (their line has no one direction).
 
-    # A run of two photos or more is straight (one heading, collinear): its line as flown is the run itself, and it
-    # is in no corner however the line turns beyond its ends. Judged by the photos beyond its ends, a side of a
-    # loop or a leg of a corridor between two bends sat "in a corner" and was never measured: on a loop both outer
-    # lines (each bent round every corner) then went unmeasured, a line of them flown half a spacing too far out
-    # unseen. A single photo's line runs from the photo before it to the one after it.
+    A run of two photos or more is straight (one heading, collinear): its line as flown is the run itself, and it
+    is in no corner however the line turns beyond its ends. Were it judged by the photos beyond its ends, a side
+    of a loop or a leg of a corridor between two bends would sit "in a corner" and never be measured: a loop's
+    outer lines, each bent round every corner, would go unmeasured, flown half a spacing too far out unseen. A
+    single photo's line runs from the photo before it to the one after it."""
     single = s[a] == e[a]
-    i0 = np.where(single, along_line(s[a], -1), s[a])
-    i1 = np.where(single, along_line(e[a], 1), e[a])
+    i0 = np.where(single, _along_line(span, s[a], -1), s[a])
+    i1 = np.where(single, _along_line(span, e[a], 1), e[a])
     t = xy[i1] - xy[i0]
     tl = np.hypot(t[:, 0], t[:, 1])
-    ok = (tl > 1e-9) & ~(single & corner(i0, i1))
+    ok = (tl > 1e-9) & ~(single & _in_corner(h, i0, i1))
     a, t, tl, single = a[ok], t[ok], tl[ok], single[ok]
     d = t / tl[:, None]
-    n = np.column_stack([d[:, 1], -d[:, 0]])
-    S = xy[s[a]]
-    la = ((xy[e[a]] - S) * d).sum(1)
+    start = xy[s[a]]
+    return _RunLines(a, single, start, d, np.column_stack([d[:, 1], -d[:, 0]]), ((xy[e[a]] - start) * d).sum(1))
+
+
+def _photos_beside(xy: np.ndarray, h: np.ndarray, span: np.ndarray, s: np.ndarray, lines: _RunLines,
+                   fp: Footprint) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs (r, q): photo q of another line lies in the window beside line r (along-track from half a footprint
+    before it to half a footprint after it, a footprint's width to each side) and, when r is a straight run,
+    heads along it.
+
+    A straight run's side neighbours run alongside it: a photo of another line heading more than _CHAIN_TURN_DEG
+    off the run's heading (either way round) is on another leg of a bend. An acute bend puts the other leg's
+    photos within half a footprint of the run's end, off to one side; taken as a neighbour, such a photo would
+    read the run's edge line lower than flown (56 % against 60 %: its one real neighbour is on its other side)."""
+    import shapely
+
+    d, n, start = lines.d, lines.n, lines.start
     half = fp.along_m / 2.0
-    # the window beside each run: along-track from half a footprint before it to half a footprint after it,
-    # a footprint's width to each side
-    lo, hi = S - d * half, S + d * (la + half)[:, None]
+    lo, hi = start - d * half, start + d * (lines.length_m + half)[:, None]
     ring = np.stack([lo - n * fp.across_m, hi - n * fp.across_m, hi + n * fp.across_m, lo + n * fp.across_m,
                      lo - n * fp.across_m], axis=1)
     tree = shapely.STRtree(shapely.points(xy))
     r, q = tree.query(shapely.polygons(ring), predicate="intersects")
-    # A straight run's side neighbours run alongside it: a photo of another line heading more than _CHAIN_TURN_DEG
-    # off the run's heading (either way round) is on another leg of a bend. An acute bend puts the other leg's
-    # photos within half a footprint of the run's end, off to one side, and the run's edge line read 56 % against
-    # the 60 % flown (its one neighbour is on its other side).
-    along = np.abs(np.sin(h[q] - h[s[a[r]]])) < math.sin(math.radians(_CHAIN_TURN_DEG))
-    other = (span[q] != span[s[a[r]]]) & (single[r] | along)
-    r, q = r[other], q[other]
-    w = xy[q] - S[r]
-    lat = (w * n[r]).sum(1)
+    first_photo = s[lines.a[r]]
+    along = np.abs(np.sin(h[q] - h[first_photo])) < math.sin(math.radians(_CHAIN_TURN_DEG))
+    other = (span[q] != span[first_photo]) & (lines.single[r] | along)
+    return r[other], q[other]
+
+
+def _nearest_each_side(xy: np.ndarray, h: np.ndarray, span: np.ndarray, lines: _RunLines, r: np.ndarray,
+                       q: np.ndarray, fp: Footprint) -> tuple[np.ndarray, np.ndarray]:
+    """Of the pairs (r, q), the signed lateral offset of q across line r for the nearest q on each side of each
+    line (nearer than a footprint's width), unless that photo is in a corner; and the lines' runs."""
+    lat = ((xy[q] - lines.start[r]) * lines.n[r]).sum(1)
     near = (np.abs(lat) > 1e-3) & (np.abs(lat) < fp.across_m)
     r, q, lat = r[near], q[near], lat[near]
     order = np.lexsort((np.abs(lat), lat > 0, r))
     r, q, lat = r[order], q[order], lat[order]
     first = np.ones(len(r), bool)
     first[1:] = (r[1:] != r[:-1]) | ((lat[1:] > 0) != (lat[:-1] > 0))
-    keep = first & ~corner(along_line(q, -1), along_line(q, 1))
-    return lat[keep], a[r[keep]]
+    keep = first & ~_in_corner(h, _along_line(span, q, -1), _along_line(span, q, 1))
+    return lat[keep], lines.a[r[keep]]
 
 
 def outside_length_m(path_xy: np.ndarray, area: Any) -> float:

@@ -122,7 +122,7 @@ class Simulation:
     trigger_intervals: tuple[TriggerInterval, ...] = ()
     notes: tuple[Note, ...] = ()               # found while simulating
     ends_on_ground: bool = False
-    camera_on: tuple[tuple[int, int], ...] = ()  # vertex ranges flown with distance or interval triggering on
+    camera_on: tuple[CameraOn, ...] = ()       # stretches flown with distance or interval triggering on
 
     @property
     def xy(self) -> np.ndarray:
@@ -300,6 +300,14 @@ class Note(NamedTuple):
 
     code: str
     message: str
+
+
+class CameraOn(NamedTuple):
+    """A stretch flown with distance or interval triggering on: from path vertex `start` to vertex `end`, so the
+    path segments `start` .. `end - 1` (a slice of the segments, as of the vertices)."""
+
+    start: int
+    end: int
 
 
 # --------------------------------------------------------------------------------------------- flying the items
@@ -567,7 +575,7 @@ def simulate(compiled: Compiled) -> Simulation:
         flight_time_s=float(times[-1] + verts[-1].hold_s), flight_time_qgc_s=_qgc_flight_time(compiled, verts, seg),
         vertex_times_s=tuple(times.tolist()), trigger_intervals=tuple(_trigger_intervals(compiled, flight, verts)),
         notes=tuple(flight.notes), ends_on_ground=flight.on_ground,
-        camera_on=tuple((s.start, s.end) for s in spans))
+        camera_on=tuple(CameraOn(s.start, s.end) for s in spans))
 
 
 def _qgc_flight_time(compiled: Compiled, verts: Sequence[Vertex], seg: np.ndarray) -> float:

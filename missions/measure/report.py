@@ -1,7 +1,7 @@
 """The measured report of a compiled mission, from the re-flight of its items (`missions.measure.flight`).
 
     sim = simulate(compiled)        # missions.measure.flight
-    rep = report(compiled, sim)     # the `wiris mission check --json` object (cli.md's binding fields + more)
+    rep = report(compiled, sim)     # a MissionReport; rep.to_json() is the `wiris mission check --json` object
 
 How the flight is measured:
 * Measuring: per survey/corridor step and payload with `missions.measure.coverage`, in one metric plane (the first
@@ -25,20 +25,217 @@ How the flight is measured:
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 import math
-from typing import Any, Sequence
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any, Iterable, Mapping, Sequence, TypeVar
 
 import numpy as np
 
-from missions.compiled import Compiled, PayloadInfo
+from missions.compiled import AreaInfo, Compiled, PayloadInfo
 from missions.measure.flight import Photo, Simulation, simulate
 from missions.plan.schema import MAX_AGL_M
+
+if TYPE_CHECKING:
+    from missions.geometry.triggers import PhotoPoint
 
 # Coverage below this is worth a warning: the examples and the tests hold the compiler to it.
 COVERAGE_TARGET = 0.995
 # Measured minimum overlaps within this of the request are rounding at the edges, not a planning fault.
 OVERLAP_SLACK = 0.01
 
+K = TypeVar("K")
+V = TypeVar("V")
+
+
+def _frozen(table: Mapping[K, V]) -> Mapping[K, V]:
+    """A read-only copy: the report is a value, its tables too."""
+    return MappingProxyType(dict(table))
+
+
+def _r(v: float, nd: int = 4) -> float:
+    """`v` rounded as the report shows it."""
+    return round(float(v), nd)
+
+
+def _r_or_none(v: float | None, nd: int = 4) -> float | None:
+    return None if v is None else _r(v, nd)
+
+
+# --------------------------------------------------------------------------------------------- the report's values
+
+@dataclass(frozen=True)
+class Finding:
+    """A warning or an error of the report: `code` is stable (scripts match on it), `message` says what and where."""
+
+    code: str
+    message: str
+
+    def to_json(self) -> dict[str, str]:
+        return {"code": self.code, "message": self.message}
+
+
+@dataclass(frozen=True)
+class OverlapMin:
+    """The lowest front and side overlap measured (fractions); None where no pair of photos was measured."""
+
+    front_min: float | None
+    side_min: float | None
+
+    def rounded(self) -> OverlapMin:
+        return OverlapMin(_r_or_none(self.front_min), _r_or_none(self.side_min))
+
+    def to_json(self) -> dict[str, float | None]:
+        return {"front_min": self.front_min, "side_min": self.side_min}
+
+
+@dataclass(frozen=True)
+class GsdRange:
+    """Ground sample distance of a payload's photos at its lowest and at its highest photo (cm/px)."""
+
+    min_cm: float
+    max_cm: float
+
+    def to_json(self) -> list[float]:
+        return [self.min_cm, self.max_cm]
+
+
+@dataclass(frozen=True)
+class RequestedOverlap:
+    """The overlaps a step's plan asks for (fractions)."""
+
+    front: float
+    side: float
+
+    def to_json(self) -> dict[str, float]:
+        return {"front": self.front, "side": self.side}
+
+
+@dataclass(frozen=True)
+class StepPath:
+    """Metres of flown path measured for a step: its own outside its area, and the whole flight's inside its
+    holes and exclusion zones (and how many of those with the camera on)."""
+
+    outside_m: float
+    over_gaps_m: float
+    over_gaps_camera_m: float
+
+    def rounded(self) -> StepPath:
+        return StepPath(_r(self.outside_m, 1), _r(self.over_gaps_m, 1), _r(self.over_gaps_camera_m, 1))
+
+    def to_json(self) -> dict[str, float]:
+        return {"outside_m": self.outside_m, "over_gaps_m": self.over_gaps_m,
+                "over_gaps_camera_m": self.over_gaps_camera_m}
+
+
+@dataclass(frozen=True)
+class AreaRow:
+    """One survey or corridor step as the report shows it (an entry of `areas`): the tables are per payload."""
+
+    step: int
+    kind: str
+    area_m2: float
+    altitude_m: float
+    trigger: str
+    requested: RequestedOverlap
+    coverage: Mapping[str, float]
+    overlap: Mapping[str, OverlapMin]
+    photos: Mapping[str, int]                 # the step's own photos
+    path: StepPath | None                     # None: the step has no payload, its path was not measured
+    photos_in_zones: Mapping[str, int]        # the whole flight's photos centred inside the step's zones
+
+    def to_json(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"step": self.step, "kind": self.kind, "area_m2": self.area_m2,
+                               "altitude_m": self.altitude_m, "trigger": self.trigger,
+                               "requested": self.requested.to_json(), "coverage": dict(self.coverage),
+                               "overlap": {n: o.to_json() for n, o in self.overlap.items()},
+                               "photos": dict(self.photos)}
+        if self.path is not None:
+            out.update(self.path.to_json())
+            out["photos_in_zones"] = dict(self.photos_in_zones)
+        return out
+
+
+@dataclass(frozen=True)
+class MissionReport:
+    """The measured report of a compiled mission. `to_json()` is `wiris mission check --json` and
+    NAME.report.json (cli.md's binding fields, then the rest), rounded as shown there."""
+
+    plan: str
+    name: str
+    firmware: str
+    frame: str
+    mission_items: int
+    item_limit: int
+    parts: int
+    part_items: tuple[int, ...]
+    photos: Mapping[str, int]                 # per payload, the whole flight
+    path_length_m: float
+    climb_m: float
+    flight_time_s: float
+    flight_time_qgc_s: float
+    max_altitude_m: float
+    area_m2: float
+    gsd_cm: Mapping[str, GsdRange | None]     # None: the payload takes no photo above the ground
+    coverage: Mapping[str, float]             # per payload, the steps' weighted by their area
+    overlap: Mapping[str, OverlapMin]         # per payload, the lowest of the steps'
+    areas: tuple[AreaRow, ...]
+    warnings: tuple[Finding, ...]
+    errors: tuple[Finding, ...]
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "plan": self.plan,
+            "name": self.name,
+            "firmware": self.firmware,
+            "frame": self.frame,
+            "mission_items": self.mission_items,
+            "item_limit": self.item_limit,
+            "parts": self.parts,
+            "part_items": list(self.part_items),
+            "photos": dict(self.photos),
+            "path_length_m": self.path_length_m,
+            "climb_m": self.climb_m,
+            "flight_time_s": self.flight_time_s,
+            "flight_time_qgc_s": self.flight_time_qgc_s,
+            "max_altitude_m": self.max_altitude_m,
+            "area_m2": self.area_m2,
+            "gsd_cm": {n: None if g is None else g.to_json() for n, g in self.gsd_cm.items()},
+            "coverage": dict(self.coverage),
+            "overlap": {n: o.to_json() for n, o in self.overlap.items()},
+            "areas": [a.to_json() for a in self.areas],
+            "warnings": [w.to_json() for w in self.warnings],
+            "errors": [e.to_json() for e in self.errors],
+        }
+
+
+@dataclass(frozen=True)
+class PlanFinding:
+    """What is wrong with a plan that does not compile, and where (file:line:col) and what to do, when known."""
+
+    message: str
+    where: str | None = None
+    hint: str | None = None
+    code: str = "plan"
+
+    def to_json(self) -> dict[str, str | None]:
+        return {"code": self.code, "message": self.message, "where": self.where, "hint": self.hint}
+
+
+@dataclass(frozen=True)
+class UncompiledReport:
+    """`check --json` for a plan that does not compile: the binding keys, nothing measured, the errors located."""
+
+    plan: str
+    errors: tuple[PlanFinding, ...]
+
+    def to_json(self) -> dict[str, Any]:
+        return {"plan": self.plan, "firmware": None, "mission_items": 0, "item_limit": None, "parts": 0,
+                "photos": {}, "path_length_m": None, "flight_time_s": None, "area_m2": None, "gsd_cm": {},
+                "coverage": {}, "overlap": {}, "warnings": [], "errors": [e.to_json() for e in self.errors]}
+
+
+# --------------------------------------------------------------------------------------------- measuring
 
 def area_geometry(area: Any, proj: Any) -> Any:
     """`area` (missions.geometry.area.Area) as a shapely geometry in projection `proj` (re-projected through
@@ -57,8 +254,6 @@ def area_geometry(area: Any, proj: Any) -> Any:
     return polys[0] if len(polys) == 1 else MultiPolygon(polys)
 
 
-# --------------------------------------------------------------------------------------------- measuring
-
 def footprint_ring(photo: Photo, payload: PayloadInfo) -> list[tuple[float, float]]:
     """The photo's footprint corners in the simulation's metres (x, y), closed ring."""
     across, along = payload.footprint_m(max(photo.alt_m, 0.0))
@@ -72,73 +267,135 @@ def footprint_ring(photo: Photo, payload: PayloadInfo) -> list[tuple[float, floa
     return [(float(p[0]), float(p[1])) for p in pts]
 
 
-def _measure_area(area_info: Any, payload: PayloadInfo, photos: Sequence[Photo], sim: Simulation,
-                  path: np.ndarray | None = None) -> dict:
-    """Coverage and overlaps of one payload's photos over one area, in the area's own projection.
+@dataclass(frozen=True)
+class PayloadMeasure:
+    """One payload's photos measured over one step, unrounded (`_measure_payload`)."""
 
-    Coverage counts every photo whose footprint can reach the area: a neighbouring step's photo covers ground
-    too. The overlaps and the photo count take the photos the step took (`area_info.items`), the metres outside
-    the area the path segments it flew (`path`, a mask over the simulation's segments, `_step_paths`): another
-    step's photos and path are measured against its own area. Without a range (an AreaInfo built by hand) the
-    photos near the area and the whole path stand in for them. The zones are checked against the whole flight:
-    an exclusion is ground not to fly over or photograph, whichever step does it."""
-    import shapely
-    from missions.measure.coverage import coverage_fraction, footprint_polygons, min_front_overlap, min_side_overlap
-    from missions.geometry.footprint import Footprint
-    from missions.geometry.triggers import PhotoPoint
+    name: str
+    coverage: float
+    overlap: OverlapMin
+    photos: int               # the step's own
+    photos_in_zones: int      # the whole flight's, centred inside the step's zones
 
-    proj = sim.projection
-    geom = area_geometry(area_info.area, proj)
-    result: dict[str, Any] = {"coverage": 0.0, "front_min": None, "side_min": None, "photos": 0}
-    if photos:
-        x = np.array([p.x for p in photos])
-        y = np.array([p.y for p in photos])
-        alts = np.array([max(p.alt_m, 0.0) for p in photos])
-        # photos whose footprint can reach the area (others cover other ground)
-        reach = max(payload.footprint_m(1.0)) * alts        # footprints scale with altitude
-        near = np.nonzero(shapely.dwithin(shapely.points(x, y), geom, reach))[0]
-    else:
-        x = y = alts = np.zeros(0)
-        near = np.zeros(0, int)
-    if area_info.items is not None:
-        first, end = area_info.items
-        own = np.array([k for k, p in enumerate(photos) if first <= p.item < end], dtype=int)
-    else:
-        own = near
 
-    def by_altitude(idx: np.ndarray) -> dict[float, list[int]]:
-        """One Footprint per altitude; photos keep their mission order within a group."""
+@dataclass(frozen=True)
+class StepMeasure:
+    """One step measured, unrounded: per payload, and its path (None: no payload, nothing measured)."""
+
+    area: AreaInfo
+    payloads: tuple[PayloadMeasure, ...]
+    path: StepPath | None
+
+
+@dataclass(frozen=True)
+class _PhotoArrays:
+    """One payload's photos as arrays in the simulation's metres, altitudes clamped at the ground."""
+
+    photos: Sequence[Photo]
+    x: np.ndarray
+    y: np.ndarray
+    alt: np.ndarray
+
+    @staticmethod
+    def of(photos: Sequence[Photo]) -> _PhotoArrays:
+        if not photos:
+            return _PhotoArrays(photos, np.zeros(0), np.zeros(0), np.zeros(0))
+        return _PhotoArrays(photos, np.array([p.x for p in photos]), np.array([p.y for p in photos]),
+                            np.array([max(p.alt_m, 0.0) for p in photos]))
+
+    def reaching(self, geom: Any, payload: PayloadInfo) -> np.ndarray:
+        """Indices of the photos whose footprint can reach `geom` (the others cover other ground)."""
+        import shapely
+
+        if not self.photos:
+            return np.zeros(0, int)
+        reach = max(payload.footprint_m(1.0)) * self.alt        # footprints scale with altitude
+        return np.nonzero(shapely.dwithin(shapely.points(self.x, self.y), geom, reach))[0]
+
+    def taken_during(self, items: tuple[int, int]) -> np.ndarray:
+        """Indices of the photos taken while the mission executes items [first, end)."""
+        first, end = items
+        return np.array([k for k, p in enumerate(self.photos) if first <= p.item < end], dtype=int)
+
+    def by_altitude(self, idx: np.ndarray) -> dict[float, list[int]]:
+        """The photos `idx` above the ground grouped by altitude (one Footprint per group), in mission order."""
         groups: dict[float, list[int]] = {}
         for k in idx.tolist():
-            if alts[k] > 0:
-                groups.setdefault(round(float(alts[k]), 2), []).append(k)
+            if self.alt[k] > 0:
+                groups.setdefault(round(float(self.alt[k]), 2), []).append(k)
         return groups
 
-    def points(ks: list[int]) -> list[PhotoPoint]:
-        return [PhotoPoint(float(x[k]), float(y[k]), photos[k].heading_deg, photos[k].span) for k in ks]
+    def points(self, ks: list[int]) -> list[PhotoPoint]:
+        from missions.geometry.triggers import PhotoPoint
 
-    groups = by_altitude(near)
+        return [PhotoPoint(float(self.x[k]), float(self.y[k]), self.photos[k].heading_deg, self.photos[k].span)
+                for k in ks]
+
+
+def _coverage(geom: Any, ph: _PhotoArrays, groups: dict[float, list[int]], payload: PayloadInfo) -> float:
+    """Fraction of `geom` under the footprints of the photos `groups` (by altitude): the union over all groups."""
+    import shapely
+    from missions.geometry.footprint import Footprint
+    from missions.measure.coverage import coverage_fraction, footprint_polygons
+
     if len(groups) == 1:
         (alt, ks), = groups.items()
-        result["coverage"] = coverage_fraction(geom, points(ks), Footprint(*payload.footprint_m(alt)))[1]
-    elif groups and geom.area > 0:
-        polys = [footprint_polygons(np.column_stack([x[ks], y[ks]]), np.radians([photos[k].heading_deg for k in ks]),
-                                    Footprint(*payload.footprint_m(alt))) for alt, ks in groups.items()]
-        union = shapely.union_all(np.concatenate(polys))
-        result["coverage"] = float(shapely.intersection(geom, union).area / geom.area)
+        return coverage_fraction(geom, ph.points(ks), Footprint(*payload.footprint_m(alt)))[1]
+    if not groups or geom.area <= 0:
+        return 0.0
+    polys = [footprint_polygons(np.column_stack([ph.x[ks], ph.y[ks]]),
+                                np.radians([ph.photos[k].heading_deg for k in ks]),
+                                Footprint(*payload.footprint_m(alt))) for alt, ks in groups.items()]
+    union = shapely.union_all(np.concatenate(polys))
+    return float(shapely.intersection(geom, union).area / geom.area)
+
+
+def _lowest(values: Iterable[float | None]) -> float | None:
+    return min((v for v in values if v is not None), default=None)
+
+
+def _min_overlaps(ph: _PhotoArrays, groups: dict[float, list[int]], payload: PayloadInfo) -> OverlapMin:
+    """The lowest front and side overlap of the photos `groups` (by altitude; pairs within a group)."""
+    from missions.geometry.footprint import Footprint
+    from missions.measure.coverage import min_front_overlap, min_side_overlap
+
     fronts, sides = [], []
-    for alt, ks in by_altitude(own).items():
+    for alt, ks in groups.items():
         fp = Footprint(*payload.footprint_m(alt))
-        fronts.append(min_front_overlap(points(ks), fp))
-        sides.append(min_side_overlap(points(ks), fp))
-    result["front_min"] = min((f for f in fronts if f is not None), default=None)
-    result["side_min"] = min((s for s in sides if s is not None), default=None)
-    result["photos"] = int(len(own))
-    result["outside_m"] = _outside_m(sim.xy, path, geom)
-    zones = _zones(area_info.area, proj)
-    result["over_gaps_m"], result["over_gaps_camera_m"] = _over_zones_m(sim, zones)
-    result["photos_in_zones"] = _photos_in(zones, photos)
-    return result
+        fronts.append(min_front_overlap(ph.points(ks), fp))
+        sides.append(min_side_overlap(ph.points(ks), fp))
+    return OverlapMin(_lowest(fronts), _lowest(sides))
+
+
+def _measure_payload(area_info: AreaInfo, geom: Any, zones: Any, name: str, payload: PayloadInfo,
+                     photos: Sequence[Photo]) -> PayloadMeasure:
+    """Coverage and overlaps of one payload's photos over one step's area `geom`.
+
+    Coverage counts every photo whose footprint can reach the area: a neighbouring step's photo covers ground
+    too. The overlaps and the photo count take the photos the step took (`area_info.items`): another step's
+    photos are measured against its own area. Without a range (an AreaInfo built by hand) the photos near the
+    area stand in for them. The zones are checked against every photo: an exclusion is ground not to
+    photograph, whichever step does it."""
+    ph = _PhotoArrays.of(photos)
+    near = ph.reaching(geom, payload)
+    own = near if area_info.items is None else ph.taken_during(area_info.items)
+    return PayloadMeasure(name, _coverage(geom, ph, ph.by_altitude(near), payload),
+                          _min_overlaps(ph, ph.by_altitude(own), payload), int(len(own)), _photos_in(zones, photos))
+
+
+def _measure_step(compiled: Compiled, area_info: AreaInfo, path: np.ndarray | None,
+                  photos_of: Mapping[str, Sequence[Photo]], sim: Simulation) -> StepMeasure:
+    """One step's payloads and path, in the simulation's projection. The metres outside the area take the path
+    segments the step flew (`path`, a mask over the simulation's segments, `_step_paths`; None: the whole path);
+    the metres over its zones the whole flight, whichever step flies there."""
+    if not area_info.payloads:
+        return StepMeasure(area_info, (), None)
+    geom = area_geometry(area_info.area, sim.projection)
+    zones = _zones(area_info.area, sim.projection)
+    payloads = tuple(_measure_payload(area_info, geom, zones, n, compiled.payload(n), photos_of.get(n, []))
+                     for n in area_info.payloads)
+    over_m, over_camera_m = _over_zones_m(sim, zones)
+    return StepMeasure(area_info, payloads, StepPath(_outside_m(sim.xy, path, geom), over_m, over_camera_m))
 
 
 def _step_paths(compiled: Compiled, sim: Simulation) -> list[np.ndarray | None]:
@@ -202,8 +459,8 @@ def _over_zones_m(sim: Simulation, zones: Any) -> tuple[float, float]:
     if hit.any():
         inside[hit] = shapely.length(shapely.intersection(segs[hit], core))
     on = np.zeros(len(segs), bool)
-    for s0, s1 in sim.camera_on:
-        on[s0:s1] = True
+    for stretch in sim.camera_on:
+        on[stretch.start:stretch.end] = True
     return float(inside.sum()), float(inside[on].sum())
 
 
@@ -218,158 +475,191 @@ def _photos_in(zones: Any, photos: Sequence[Photo]) -> int:
     return int(shapely.contains_xy(core, [p.x for p in photos], [p.y for p in photos]).sum())
 
 
-def _r(v: float | None, nd: int = 4) -> float | None:
-    return None if v is None else round(float(v), nd)
+# --------------------------------------------------------------------------------------------- the report
 
-
-def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | None = None) -> dict:
-    """The measured report (`wiris mission check --json`)."""
+def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | None = None) -> MissionReport:
+    """The measured report (its `to_json()` is `wiris mission check --json`)."""
     sim = sim or simulate(compiled)
-    warnings: list[dict] = [{"code": w.code, "message": w.message} for w in compiled.warnings]
-    errors: list[dict] = []
     names = [p.name for p in compiled.payloads]
     photos_of = {n: [p for p in sim.photos if n in p.payloads] for n in names}
-    seq_base = 1 if compiled.firmware == "ardupilot" else 0
+    steps = [_measure_step(compiled, a, path, photos_of, sim)
+             for a, path in zip(compiled.areas, _step_paths(compiled, sim))]
+    rows = tuple(_area_row(s) for s in steps)
+    return MissionReport(
+        plan=plan_path or compiled.name,
+        name=compiled.name,
+        firmware=compiled.firmware,
+        frame=compiled.frame,
+        mission_items=len(compiled.items),
+        item_limit=compiled.item_limit,
+        parts=len(compiled.parts),
+        part_items=tuple(len(p) for p in compiled.parts),
+        photos=_frozen({n: len(photos_of[n]) for n in names}),
+        path_length_m=_r(sim.path_length_m, 1),
+        climb_m=_r(sim.climb_m, 1),
+        flight_time_s=_r(sim.flight_time_s, 1),
+        flight_time_qgc_s=_r(sim.flight_time_qgc_s, 1),
+        max_altitude_m=_r(max((v.alt_m for v in sim.vertices), default=0.0), 2),
+        area_m2=_r(sum(a.area.area_m2 for a in compiled.areas), 1),
+        gsd_cm=_gsd_ranges(compiled, photos_of),
+        coverage=_mission_coverage(steps),
+        overlap=_mission_overlap(steps),
+        areas=rows,
+        warnings=tuple(_warnings(compiled, sim, steps, rows)),
+        errors=tuple(_errors(compiled)),
+    )
 
-    # areas: coverage and overlap per payload, measured against what each step must cover
-    area_rows = []
-    cov_acc: dict[str, list[tuple[float, float]]] = {}
-    ov_acc: dict[str, dict[str, list[float]]] = {}
-    for a, path in zip(compiled.areas, _step_paths(compiled, sim)):
-        row: dict[str, Any] = {"step": a.step, "kind": a.kind, "area_m2": _r(a.area.area_m2, 1),
-                               "altitude_m": _r(a.altitude_m, 2), "trigger": a.trigger,
-                               "requested": {"front": a.front_overlap, "side": a.side_overlap},
-                               "coverage": {}, "overlap": {}, "photos": {}}
-        for pname in a.payloads:
-            pay = compiled.payload(pname)
-            m = _measure_area(a, pay, photos_of.get(pname, []), sim, path)
-            row["coverage"][pname] = _r(m["coverage"], 5)
-            row["overlap"][pname] = {"front_min": _r(m["front_min"]), "side_min": _r(m["side_min"])}
-            row["photos"][pname] = m["photos"]
-            row["outside_m"] = _r(m["outside_m"], 1)
-            row["over_gaps_m"] = _r(m["over_gaps_m"], 1)
-            row["over_gaps_camera_m"] = _r(m["over_gaps_camera_m"], 1)
-            row.setdefault("photos_in_zones", {})[pname] = m["photos_in_zones"]
-            cov_acc.setdefault(pname, []).append((m["coverage"], a.area.area_m2))
-            acc = ov_acc.setdefault(pname, {"front": [], "side": []})
-            if m["front_min"] is not None:
-                acc["front"].append(m["front_min"])
-            if m["side_min"] is not None:
-                acc["side"].append(m["side_min"])
-            where = f"step {a.step} ({a.kind}), payload {pname}"
-            if m["coverage"] < COVERAGE_TARGET:
-                warnings.append({"code": "coverage_low",
-                                 "message": f"{where}: measured coverage {100 * m['coverage']:.2f} % "
-                                            f"(target {100 * COVERAGE_TARGET:.1f} %)"})
-            if a.trigger != "hover" and m["front_min"] is not None and m["front_min"] < a.front_overlap - OVERLAP_SLACK:
-                warnings.append({"code": "front_overlap_low",
-                                 "message": f"{where}: minimum front overlap {100 * m['front_min']:.1f} % "
-                                            f"< requested {100 * a.front_overlap:.0f} %"})
-            if m["side_min"] is not None and m["side_min"] < a.side_overlap - OVERLAP_SLACK:
-                warnings.append({"code": "side_overlap_low",
-                                 "message": f"{where}: minimum side overlap {100 * m['side_min']:.1f} % "
-                                            f"< requested {100 * a.side_overlap:.0f} %"})
-        if row.get("over_gaps_m", 0) > 1.0:
-            warnings.append({"code": "path_over_exclusion", "message": _over_zones_text(a, row)})
-        area_rows.append(row)
-    coverage = {n: _r(sum(c * A for c, A in v) / sum(A for _, A in v), 5) if sum(A for _, A in v) > 0 else 0.0
-                for n, v in cov_acc.items()}
-    overlap = {n: {"front_min": _r(min(v["front"])) if v["front"] else None,
-                   "side_min": _r(min(v["side"])) if v["side"] else None} for n, v in ov_acc.items()}
 
-    gsd = {}
-    for n in names:
-        ph = photos_of[n]
-        if ph:
-            pay = compiled.payload(n)
-            alts = [p.alt_m for p in ph if p.alt_m > 0]
-            gsd[n] = [_r(pay.gsd_cm(min(alts)), 3), _r(pay.gsd_cm(max(alts)), 3)] if alts else None
-        else:
-            gsd[n] = None
+def _area_row(step: StepMeasure) -> AreaRow:
+    a = step.area
+    return AreaRow(step=a.step, kind=a.kind, area_m2=_r(a.area.area_m2, 1), altitude_m=_r(a.altitude_m, 2),
+                   trigger=a.trigger, requested=RequestedOverlap(a.front_overlap, a.side_overlap),
+                   coverage=_frozen({m.name: _r(m.coverage, 5) for m in step.payloads}),
+                   overlap=_frozen({m.name: m.overlap.rounded() for m in step.payloads}),
+                   photos=_frozen({m.name: m.photos for m in step.payloads}),
+                   path=None if step.path is None else step.path.rounded(),
+                   photos_in_zones=_frozen({m.name: m.photos_in_zones for m in step.payloads}))
 
-    # safety and feasibility
-    max_alt = max((v.alt_m for v in sim.vertices), default=0.0)
-    high = [v for v in sim.vertices if v.alt_m > MAX_AGL_M + 1e-6]
-    # the compiler already warned with the plan's file:line:col when the plan asks for it
-    if high and not any(w.code == "altitude_above_120m" for w in compiled.warnings):
-        v = max(high, key=lambda v: v.alt_m)
-        warnings.append({"code": "altitude_above_120m",
-                         "message": f"item {v.item + seq_base} flies at {v.alt_m:.1f} m above home, above the "
-                                    f"{MAX_AGL_M:.0f} m most rules allow without a permit"})
-    for code, msg in sim.notes:
-        warnings.append({"code": code, "message": msg})
+
+def _mission_coverage(steps: Sequence[StepMeasure]) -> Mapping[str, float]:
+    """Per payload, the steps' coverage weighted by their area."""
+    by_payload: dict[str, list[tuple[float, float]]] = {}
+    for s in steps:
+        for m in s.payloads:
+            by_payload.setdefault(m.name, []).append((m.coverage, s.area.area.area_m2))
+
+    def weighted(pairs: list[tuple[float, float]]) -> float:
+        total_m2 = sum(A for _, A in pairs)
+        return _r(sum(c * A for c, A in pairs) / total_m2, 5) if total_m2 > 0 else 0.0
+
+    return _frozen({n: weighted(pairs) for n, pairs in by_payload.items()})
+
+
+def _mission_overlap(steps: Sequence[StepMeasure]) -> Mapping[str, OverlapMin]:
+    """Per payload, the lowest of the steps' overlaps."""
+    by_payload: dict[str, list[OverlapMin]] = {}
+    for s in steps:
+        for m in s.payloads:
+            by_payload.setdefault(m.name, []).append(m.overlap)
+    return _frozen({n: OverlapMin(_lowest(o.front_min for o in ov), _lowest(o.side_min for o in ov)).rounded()
+                    for n, ov in by_payload.items()})
+
+
+def _gsd_ranges(compiled: Compiled, photos_of: Mapping[str, Sequence[Photo]]) -> Mapping[str, GsdRange | None]:
+    out: dict[str, GsdRange | None] = {}
+    for n, photos in photos_of.items():
+        alts = [p.alt_m for p in photos if p.alt_m > 0]
+        pay = compiled.payload(n)
+        out[n] = GsdRange(_r(pay.gsd_cm(min(alts)), 3), _r(pay.gsd_cm(max(alts)), 3)) if alts else None
+    return _frozen(out)
+
+
+def _seq_base(compiled: Compiled) -> int:
+    """The mission sequence number of compiled.items[0] as the ground station shows it (ArduPilot's 0 is home)."""
+    return 1 if compiled.firmware == "ardupilot" else 0
+
+
+# --------------------------------------------------------------------------------------------- warnings and errors
+
+def _warnings(compiled: Compiled, sim: Simulation, steps: Sequence[StepMeasure],
+              rows: Sequence[AreaRow]) -> list[Finding]:
+    """Every warning, in the report's order: the compiler's, each step's measured shortfalls, then the flight's."""
+    warnings = [Finding(w.code, w.message) for w in compiled.warnings]
+    for step, row in zip(steps, rows):
+        warnings.extend(_step_warnings(step, row))
+    warnings.extend(_altitude_warnings(compiled, sim))
+    warnings.extend(Finding(n.code, n.message) for n in sim.notes)
     if compiled.items and not sim.ends_on_ground:
-        warnings.append({"code": "no_landing", "message": "the mission ends in the air (no RTL or LAND): the "
-                                                           "vehicle will hold at the last waypoint"})
-    if len(compiled.parts) > 1 and not any(w["code"] == "mission_split" for w in warnings):
-        warnings.append({"code": "mission_split",
-                         "message": f"{len(compiled.items)} items exceed the limit of {compiled.item_limit}: "
-                                    f"split into {len(compiled.parts)} parts, flown one after another"})
-    for k, part in enumerate(compiled.parts):
-        if len(part) > compiled.item_limit:
-            errors.append({"code": "item_limit",
-                           "message": f"part {k + 1} has {len(part)} items, more than the limit of {compiled.item_limit}"})
-    if not compiled.items:
-        errors.append({"code": "empty_mission", "message": "the mission has no items"})
-    fast: dict[str, list[tuple[float, int]]] = {}
-    for pname, _value, secs, src in sim.trigger_intervals:
-        pay = compiled.payload(pname)
-        if pay.min_interval_s and secs < pay.min_interval_s - 1e-9:
-            fast.setdefault(pname, []).append((secs, src))
-    for pname, spans in fast.items():
-        secs, src = min(spans)
-        pay = compiled.payload(pname)
-        warnings.append({"code": "trigger_interval_short",
-                         "message": f"{pname} would shoot every {secs:.2f} s ("
-                                    + (f"item {src + seq_base}" if src >= 0 else "its own overlap mode")
-                                    + (f" and {len(spans) - 1} more camera-on legs" if len(spans) > 1 else "")
-                                    + f"), faster than the camera's minimum of {pay.min_interval_s:g} s at "
-                                      f"{compiled.speed_mps:g} m/s — photos will be lost; fly slower or reduce "
-                                      "the front overlap"})
-    if not any(w["code"] == "assumed_optics" for w in warnings):
+        warnings.append(Finding("no_landing", "the mission ends in the air (no RTL or LAND): the vehicle will hold "
+                                              "at the last waypoint"))
+    if len(compiled.parts) > 1 and not any(w.code == "mission_split" for w in warnings):
+        warnings.append(Finding("mission_split", f"{len(compiled.items)} items exceed the limit of "
+                                                 f"{compiled.item_limit}: split into {len(compiled.parts)} parts, "
+                                                 "flown one after another"))
+    warnings.extend(_trigger_interval_warnings(compiled, sim))
+    if not any(w.code == "assumed_optics" for w in warnings):
         warnings.extend(_optics_warnings(compiled))
-
-    return {
-        "plan": plan_path or compiled.name,
-        "name": compiled.name,
-        "firmware": compiled.firmware,
-        "frame": compiled.frame,
-        "mission_items": len(compiled.items),
-        "item_limit": compiled.item_limit,
-        "parts": len(compiled.parts),
-        "part_items": [len(p) for p in compiled.parts],
-        "photos": {n: len(photos_of[n]) for n in names},
-        "path_length_m": _r(sim.path_length_m, 1),
-        "climb_m": _r(sim.climb_m, 1),
-        "flight_time_s": _r(sim.flight_time_s, 1),
-        "flight_time_qgc_s": _r(sim.flight_time_qgc_s, 1),
-        "max_altitude_m": _r(max_alt, 2),
-        "area_m2": _r(sum(a.area.area_m2 for a in compiled.areas), 1),
-        "gsd_cm": gsd,
-        "coverage": coverage,
-        "overlap": overlap,
-        "areas": area_rows,
-        "warnings": warnings,
-        "errors": errors,
-    }
+    return warnings
 
 
-def _over_zones_text(a: Any, row: dict) -> str:
+def _step_warnings(step: StepMeasure, row: AreaRow) -> list[Finding]:
+    """Coverage and overlaps below the step's request (measured, unrounded), and its path over its zones (as
+    the row shows it)."""
+    a = step.area
+    out = []
+    for m in step.payloads:
+        where = f"step {a.step} ({a.kind}), payload {m.name}"
+        front, side = m.overlap.front_min, m.overlap.side_min
+        if m.coverage < COVERAGE_TARGET:
+            out.append(Finding("coverage_low", f"{where}: measured coverage {100 * m.coverage:.2f} % "
+                                               f"(target {100 * COVERAGE_TARGET:.1f} %)"))
+        if a.trigger != "hover" and front is not None and front < a.front_overlap - OVERLAP_SLACK:
+            out.append(Finding("front_overlap_low", f"{where}: minimum front overlap {100 * front:.1f} % "
+                                                    f"< requested {100 * a.front_overlap:.0f} %"))
+        if side is not None and side < a.side_overlap - OVERLAP_SLACK:
+            out.append(Finding("side_overlap_low", f"{where}: minimum side overlap {100 * side:.1f} % "
+                                                   f"< requested {100 * a.side_overlap:.0f} %"))
+    if row.path is not None and row.path.over_gaps_m > 1.0:
+        out.append(Finding("path_over_exclusion", _over_zones_text(row, row.path)))
+    return out
+
+
+def _over_zones_text(row: AreaRow, path: StepPath) -> str:
     """The path_over_exclusion message: how much, and on what — camera-on legs or the flight between them."""
-    total, cam = row["over_gaps_m"], row.get("over_gaps_camera_m") or 0.0
-    shots = ", ".join(f"{n} {k}" for n, k in (row.get("photos_in_zones") or {}).items() if k)
+    total, cam = path.over_gaps_m, path.over_gaps_camera_m
+    shots = ", ".join(f"{n} {k}" for n, k in row.photos_in_zones.items() if k)
     parts = []
     if cam > 0.05:
         parts.append(f"{cam:.1f} m on camera-on legs" + (f" (photos centred inside: {shots})" if shots else ""))
     if total - cam > 0.05:
         parts.append(f"{total - cam:.1f} m with the camera off: turnarounds, connections, transits, take-off or "
                      "return")
-    return (f"step {a.step} ({a.kind}): the flown path runs {total:.0f} m inside the area's holes or exclusion "
+    return (f"step {row.step} ({row.kind}): the flown path runs {total:.0f} m inside the area's holes or exclusion "
             f"zones — {'; '.join(parts)}. Check that overflight is allowed")
 
 
-def _optics_warnings(compiled: Compiled) -> list[dict]:
+def _altitude_warnings(compiled: Compiled, sim: Simulation) -> list[Finding]:
+    """The highest vertex above MAX_AGL_M, unless the compiler already warned (with the plan's file:line:col)."""
+    high = [v for v in sim.vertices if v.alt_m > MAX_AGL_M + 1e-6]
+    if not high or any(w.code == "altitude_above_120m" for w in compiled.warnings):
+        return []
+    v = max(high, key=lambda v: v.alt_m)
+    return [Finding("altitude_above_120m", f"item {v.item + _seq_base(compiled)} flies at {v.alt_m:.1f} m above "
+                                           f"home, above the {MAX_AGL_M:.0f} m most rules allow without a permit")]
+
+
+def _trigger_interval_warnings(compiled: Compiled, sim: Simulation) -> list[Finding]:
+    """Per payload, the shortest trigger interval below the camera's minimum, and how many more legs are."""
+    fast: dict[str, list[tuple[float, int]]] = {}
+    for t in sim.trigger_intervals:
+        pay = compiled.payload(t.payload)
+        if pay.min_interval_s and t.seconds < pay.min_interval_s - 1e-9:
+            fast.setdefault(t.payload, []).append((t.seconds, t.item))
     out = []
+    for pname, spans in fast.items():
+        secs, src = min(spans)
+        pay = compiled.payload(pname)
+        out.append(Finding("trigger_interval_short",
+                           f"{pname} would shoot every {secs:.2f} s ("
+                           + (f"item {src + _seq_base(compiled)}" if src >= 0 else "its own overlap mode")
+                           + (f" and {len(spans) - 1} more camera-on legs" if len(spans) > 1 else "")
+                           + f"), faster than the camera's minimum of {pay.min_interval_s:g} s at "
+                             f"{compiled.speed_mps:g} m/s — photos will be lost; fly slower or reduce the front "
+                             "overlap"))
+    return out
+
+
+def _errors(compiled: Compiled) -> list[Finding]:
+    """What makes the mission unflyable: a part over the vehicle's item limit, no item at all."""
+    out = [Finding("item_limit", f"part {k + 1} has {len(part)} items, more than the limit of {compiled.item_limit}")
+           for k, part in enumerate(compiled.parts) if len(part) > compiled.item_limit]
+    if not compiled.items:
+        out.append(Finding("empty_mission", "the mission has no items"))
+    return out
+
+
+def _optics_warnings(compiled: Compiled) -> list[Finding]:
+    out: list[Finding] = []
     try:
         from cdf.catalogue import catalogue
         cat = catalogue()
@@ -381,75 +671,79 @@ def _optics_warnings(compiled: Compiled) -> list[dict]:
         except Exception:
             continue
         if imager is not None and imager.assumed:
-            out.append({"code": "assumed_optics",
-                        "message": f"{p.name}: {', '.join(imager.assumed)} of {p.camera_id}/{p.imager} are assumed, "
-                                   "not from a published source — footprints, GSD and overlap depend on them; "
-                                   "check them against your camera's datasheet"})
+            out.append(Finding("assumed_optics",
+                               f"{p.name}: {', '.join(imager.assumed)} of {p.camera_id}/{p.imager} are assumed, not "
+                               "from a published source — footprints, GSD and overlap depend on them; check them "
+                               "against your camera's datasheet"))
     return out
 
 
 # --------------------------------------------------------------------------------------------- text forms
 
-def summary_lines(rep: dict) -> list[str]:
+def _overlap_text(ov: OverlapMin) -> tuple[str, str]:
+    """Front and side minimum overlap as percent, or a dash where none was measured."""
+    f = "–" if ov.front_min is None else f"{100 * ov.front_min:.1f} %"
+    s = "–" if ov.side_min is None else f"{100 * ov.side_min:.1f} %"
+    return f, s
+
+
+def _findings_lines(rep: MissionReport) -> list[str]:
+    return ([f"warning [{w.code}]: {w.message}" for w in rep.warnings]
+            + [f"error [{e.code}]: {e.message}" for e in rep.errors])
+
+
+def summary_lines(rep: MissionReport) -> list[str]:
     """A few lines for `wiris mission compile`."""
-    mins, secs = divmod(int(round(rep["flight_time_s"] or 0)), 60)
-    lines = [f"{rep['name']}: {rep['firmware']} {rep['frame']}, {rep['mission_items']} items "
-             f"(limit {rep['item_limit']}, {rep['parts']} part{'s' if rep['parts'] != 1 else ''}), "
-             f"{rep['path_length_m'] / 1000:.2f} km, ~{mins} min {secs:02d} s"]
-    for name, n in rep["photos"].items():
+    mins, secs = divmod(int(round(rep.flight_time_s or 0)), 60)
+    lines = [f"{rep.name}: {rep.firmware} {rep.frame}, {rep.mission_items} items "
+             f"(limit {rep.item_limit}, {rep.parts} part{'s' if rep.parts != 1 else ''}), "
+             f"{rep.path_length_m / 1000:.2f} km, ~{mins} min {secs:02d} s"]
+    for name, n in rep.photos.items():
         extra = ""
-        if name in rep["coverage"]:
-            ov = rep["overlap"][name]
-            f = "–" if ov["front_min"] is None else f"{100 * ov['front_min']:.1f} %"
-            s = "–" if ov["side_min"] is None else f"{100 * ov['side_min']:.1f} %"
-            extra = f", coverage {100 * rep['coverage'][name]:.2f} %, min overlap front {f} side {s}"
+        if name in rep.coverage:
+            f, s = _overlap_text(rep.overlap[name])
+            extra = f", coverage {100 * rep.coverage[name]:.2f} %, min overlap front {f} side {s}"
         lines.append(f"  {name}: {n} photos{extra}")
-    for w in rep["warnings"]:
-        lines.append(f"warning [{w['code']}]: {w['message']}")
-    for e in rep["errors"]:
-        lines.append(f"error [{e['code']}]: {e['message']}")
-    return lines
+    return lines + _findings_lines(rep)
 
 
-def format_report(rep: dict) -> str:
+def _gsd_text(g: GsdRange | None) -> str:
+    if not g:
+        return ""
+    if abs(g.max_cm - g.min_cm) < 0.005:
+        return f", GSD {g.min_cm:.2f} cm/px"
+    return f", GSD {g.min_cm:.2f}–{g.max_cm:.2f} cm/px"
+
+
+def format_report(rep: MissionReport) -> str:
     """The human-readable report of `wiris mission check`."""
-    rows = [("plan", rep["plan"]), ("firmware", f"{rep['firmware']} {rep['frame']}"),
-            ("mission items", f"{rep['mission_items']} (limit {rep['item_limit']}; "
-                              + ("fits in one upload)" if rep["parts"] == 1 else
-                                 f"{rep['parts']} parts of {', '.join(str(n) for n in rep['part_items'])} items)")),
-            ("path length", f"{rep['path_length_m']:.0f} m (climb {rep['climb_m']:.0f} m)"),
-            ("flight time", f"{rep['flight_time_s'] / 60:.1f} min (QGC's estimate: {rep['flight_time_qgc_s'] / 60:.1f} min)"),
-            ("highest point", f"{rep['max_altitude_m']:.1f} m above home"),
-            ("area", f"{rep['area_m2']:.0f} m² ({rep['area_m2'] / 10000:.2f} ha)" if rep["area_m2"] else
+    parts = ("fits in one upload)" if rep.parts == 1 else
+             f"{rep.parts} parts of {', '.join(str(n) for n in rep.part_items)} items)")
+    rows = [("plan", rep.plan), ("firmware", f"{rep.firmware} {rep.frame}"),
+            ("mission items", f"{rep.mission_items} (limit {rep.item_limit}; " + parts),
+            ("path length", f"{rep.path_length_m:.0f} m (climb {rep.climb_m:.0f} m)"),
+            ("flight time", f"{rep.flight_time_s / 60:.1f} min (QGC's estimate: {rep.flight_time_qgc_s / 60:.1f} min)"),
+            ("highest point", f"{rep.max_altitude_m:.1f} m above home"),
+            ("area", f"{rep.area_m2:.0f} m² ({rep.area_m2 / 10000:.2f} ha)" if rep.area_m2 else
                      "none (no survey or corridor)")]
-    for name, n in rep["photos"].items():
-        g = rep["gsd_cm"].get(name)
-        gs = "" if not g else (f", GSD {g[0]:.2f} cm/px" if abs(g[1] - g[0]) < 0.005 else f", GSD {g[0]:.2f}–{g[1]:.2f} cm/px")
-        rows.append((f"photos {name}", f"{n}{gs}"))
-    for name, c in rep["coverage"].items():
-        ov = rep["overlap"][name]
-        f = "–" if ov["front_min"] is None else f"{100 * ov['front_min']:.1f} %"
-        s = "–" if ov["side_min"] is None else f"{100 * ov['side_min']:.1f} %"
+    for name, n in rep.photos.items():
+        rows.append((f"photos {name}", f"{n}{_gsd_text(rep.gsd_cm.get(name))}"))
+    for name, c in rep.coverage.items():
+        f, s = _overlap_text(rep.overlap[name])
         rows.append((f"coverage {name}", f"{100 * c:.2f} % (minimum overlap: front {f}, side {s})"))
-    for a in rep.get("areas", []):
-        rows.append((f"step {a['step']} {a['kind']}", f"{a['area_m2']:.0f} m² at {a['altitude_m']:g} m, "
-                                                      f"{a.get('outside_m', 0):.0f} m flown outside the area"))
+    for a in rep.areas:
+        outside_m = a.path.outside_m if a.path is not None else 0
+        rows.append((f"step {a.step} {a.kind}", f"{a.area_m2:.0f} m² at {a.altitude_m:g} m, "
+                                                f"{outside_m:.0f} m flown outside the area"))
     width = max(len(k) for k, _ in rows)
-    out = [f"{k.ljust(width)}  {v}" for k, v in rows]
-    for w in rep["warnings"]:
-        out.append(f"warning [{w['code']}]: {w['message']}")
-    for e in rep["errors"]:
-        out.append(f"error [{e['code']}]: {e['message']}")
-    if not rep["warnings"] and not rep["errors"]:
+    out = [f"{k.ljust(width)}  {v}" for k, v in rows] + _findings_lines(rep)
+    if not rep.warnings and not rep.errors:
         out.append("no warnings")
     return "\n".join(out)
 
 
-def error_report(plan_path: str, err: Exception) -> dict:
-    """`check --json` for a plan that does not compile: the binding keys, nothing measured, the errors located."""
+def error_report(plan_path: str, err: Exception) -> UncompiledReport:
+    """`check --json` for a plan that does not compile (its `to_json()`): the errors located."""
     problems = getattr(err, "problems", None) or [err]
-    errors = [{"code": "plan", "message": getattr(p, "message", str(p)), "where": getattr(p, "where", None),
-               "hint": getattr(p, "hint", None)} for p in problems]
-    return {"plan": plan_path, "firmware": None, "mission_items": 0, "item_limit": None, "parts": 0, "photos": {},
-            "path_length_m": None, "flight_time_s": None, "area_m2": None, "gsd_cm": {}, "coverage": {},
-            "overlap": {}, "warnings": [], "errors": errors}
+    return UncompiledReport(plan_path, tuple(PlanFinding(getattr(p, "message", str(p)), getattr(p, "where", None),
+                                                         getattr(p, "hint", None)) for p in problems))

@@ -290,8 +290,8 @@ def test_a_high_waypoint_is_warned_about_once(tmp_path):
     c = build(tmp_path, lambda d: d["mission"].insert(-1, {"waypoint": {"lat": 50.1105, "lon": 14.5035,
                                                                         "alt_m": 130}}))
     rep = report(c)
-    high = [w for w in rep["warnings"] if w["code"] == "altitude_above_120m"]
-    assert len(high) == 1 and ".yaml:" in high[0]["message"]
+    high = [w for w in rep.warnings if w.code == "altitude_above_120m"]
+    assert len(high) == 1 and ".yaml:" in high[0].message
 
 
 @pytest.mark.parametrize("frame,first,p1", [("plane", "NAV_TAKEOFF", 15.0), ("vtol", "NAV_VTOL_TAKEOFF", 0.0),

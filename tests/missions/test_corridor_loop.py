@@ -45,8 +45,8 @@ def test_a_loop_starting_at_a_corner_covers_its_whole_corridor(tmp_path, line):
     # the outside of the turn: the outer lines stopped short of the start corner and the wedge of the corridor's
     # round outer corner there was never photographed (report: coverage 0.99891, both ways round).
     rep = report(_compile(tmp_path, line))
-    assert rep["coverage"]["thermal"] >= 0.99995
-    assert not rep["errors"]
+    assert rep.coverage["thermal"] >= 0.99995
+    assert not rep.errors
 
 
 # WIRIS Pro 640×512, 17 µm pixels, 13 mm lens at 40 m: the reviewer's plan

@@ -41,11 +41,11 @@ def compiled_examples(tmp_path_factory):
 @pytest.mark.parametrize("name", [p.stem for p in EXAMPLES])
 def test_example_compiles_and_covers(compiled_examples, name):
     c, rep, files = compiled_examples[name]
-    assert rep["errors"] == []
+    assert rep.to_json()["errors"] == []
     assert len(c.parts) == 1 and len(c.items) <= c.item_limit
-    for payload, cov in rep["coverage"].items():
+    for payload, cov in rep.coverage.items():
         assert cov >= 0.995, (payload, cov)
-    for payload, n in rep["photos"].items():
+    for payload, n in rep.photos.items():
         assert n > 0, payload
     assert f"{c.name}.plan" in files and f"{c.name}.report.json" in files
 

@@ -118,25 +118,25 @@ def test_path_over_exclusions_touching_or_splitting_the_boundary_is_reported(zon
     c = _with_zone(zone)
     assert not any(p.interiors for p in c.areas[0].area.polygons)
     rep = report(c)
-    row = rep["areas"][0]
-    assert row["over_gaps_m"] > 1.0          # was 0: only holes inside the area counted
-    w = [w for w in rep["warnings"] if w["code"] == "path_over_exclusion"]
-    assert len(w) == 1 and "camera-on legs" in w[0]["message"]
+    row = rep.areas[0]
+    assert row.path.over_gaps_m > 1.0          # was 0: only holes inside the area counted
+    w = [w for w in rep.warnings if w.code == "path_over_exclusion"]
+    assert len(w) == 1 and "camera-on legs" in w[0].message
     lines = sum(1 for it in c.items if it.command == mavlink.MAV_CMD_DO_SET_CAM_TRIGG_DIST and it.param1 > 0)
     if camera_m is not None:       # every line crosses the strip with its camera on
         # (the report measures deeper than 5 cm inside: 10 cm less per crossing)
-        assert row["over_gaps_camera_m"] == pytest.approx(lines * (camera_m - 0.1), abs=0.1)
-    assert row["over_gaps_camera_m"] > 1.0
-    assert row["photos_in_zones"]["thermal"] > 0
+        assert row.path.over_gaps_camera_m == pytest.approx(lines * (camera_m - 0.1), abs=0.1)
+    assert row.path.over_gaps_camera_m > 1.0
+    assert row.photos_in_zones["thermal"] > 0
 
 
 def test_path_over_exclusion_names_the_camera_off_part_only_when_it_is_there() -> None:
     rep = report(handmade(size_m=160.0, hole_m=40.0))
-    msg = next(w["message"] for w in rep["warnings"] if w["code"] == "path_over_exclusion")
+    msg = next(w.message for w in rep.warnings if w.code == "path_over_exclusion")
     # the lawn-mower's legs fly straight through the hole; nothing else does (the message said "transits")
     assert "camera-on legs" in msg and "camera off" not in msg and "transits" not in msg
-    row = rep["areas"][0]
-    assert row["over_gaps_m"] == pytest.approx(row["over_gaps_camera_m"], abs=0.1)
+    row = rep.areas[0]
+    assert row.path.over_gaps_m == pytest.approx(row.path.over_gaps_camera_m, abs=0.1)
 
 
 def test_a_sliver_between_an_exclusion_and_the_boundary_is_not_a_part_of_its_own() -> None:

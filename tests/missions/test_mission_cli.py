@@ -165,14 +165,16 @@ def test_split_mission_is_a_warning_not_an_error(tmp_path):
 
 def test_compile_writes_nothing_when_the_measured_report_has_errors(tmp_path, monkeypatch):
     """A mission the report finds unflyable (e.g. a part over the item limit) is printed, not written."""
+    from dataclasses import replace
+
     import missions.measure.report as report_module
 
     real_report = report_module.report
 
     def report_with_an_error(*args, **kwargs):
         rep = real_report(*args, **kwargs)
-        rep["errors"].append({"code": "item_limit", "message": "part 1 has 701 items, over the limit of 700"})
-        return rep
+        extra = report_module.Finding("item_limit", "part 1 has 701 items, over the limit of 700")
+        return replace(rep, errors=rep.errors + (extra,))
 
     monkeypatch.setattr(report_module, "report", report_with_an_error)
     out = tmp_path / "out"

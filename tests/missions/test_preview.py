@@ -102,7 +102,7 @@ def test_html_is_self_contained(mission, tmp_path):
     assert "http://" not in text.replace("http://www.w3.org/2000/svg", "")
     assert "https://" not in text and "<script" not in text and "<link" not in text
     rep = report(mission)
-    assert f"{100 * rep['coverage']['thermal']:.2f} %" in text
+    assert f"{100 * rep.coverage['thermal']:.2f} %" in text
 
 
 def test_a_preview_is_an_ordinary_file(mission, tmp_path):

@@ -16,7 +16,7 @@ from missions.measure.report import report
 
 
 def test_report_has_the_binding_fields():
-    rep = report(handmade())
+    rep = report(handmade()).to_json()
     for key in ("plan", "firmware", "mission_items", "item_limit", "parts", "photos", "path_length_m",
                 "flight_time_s", "area_m2", "gsd_cm", "coverage", "overlap", "warnings", "errors"):
         assert key in rep
@@ -26,12 +26,35 @@ def test_report_has_the_binding_fields():
     assert lo == hi == pytest.approx(THERMAL.gsd_cm(40.0), rel=1e-3)
 
 
+
+def test_the_report_is_a_frozen_value_and_its_json_keeps_the_documented_order():
+    """check --json and NAME.report.json are the report's to_json(): plain JSON values, keys in this order."""
+    import dataclasses
+    import json
+
+    rep = report(handmade())
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        rep.errors = ()
+    with pytest.raises(TypeError):
+        rep.coverage["thermal"] = 0.0       # its tables are read-only too
+    doc = rep.to_json()
+    assert list(doc) == ["plan", "name", "firmware", "frame", "mission_items", "item_limit", "parts", "part_items",
+                         "photos", "path_length_m", "climb_m", "flight_time_s", "flight_time_qgc_s",
+                         "max_altitude_m", "area_m2", "gsd_cm", "coverage", "overlap", "areas", "warnings", "errors"]
+    assert list(doc["areas"][0]) == ["step", "kind", "area_m2", "altitude_m", "trigger", "requested", "coverage",
+                                     "overlap", "photos", "outside_m", "over_gaps_m", "over_gaps_camera_m",
+                                     "photos_in_zones"]
+    assert json.loads(json.dumps(doc, allow_nan=False)) == doc
+    assert doc["overlap"]["thermal"] == {"front_min": rep.overlap["thermal"].front_min,
+                                         "side_min": rep.overlap["thermal"].side_min}
+    assert doc["warnings"] == [{"code": w.code, "message": w.message} for w in rep.warnings]
+
 def test_full_lawnmower_covers_and_meets_the_overlap():
     rep = report(handmade())
-    assert rep["coverage"]["thermal"] >= 0.995
-    assert rep["overlap"]["thermal"]["front_min"] == pytest.approx(0.8, abs=0.005)
-    assert rep["overlap"]["thermal"]["side_min"] == pytest.approx(0.7, abs=0.005)
-    assert not rep["errors"]
+    assert rep.coverage["thermal"] >= 0.995
+    assert rep.overlap["thermal"].front_min == pytest.approx(0.8, abs=0.005)
+    assert rep.overlap["thermal"].side_min == pytest.approx(0.7, abs=0.005)
+    assert not rep.errors
 
 
 def _without_lines(c, lines):
@@ -51,18 +74,18 @@ def test_coverage_falls_when_trigger_items_are_deleted():
     # seven neighbouring lines (side overlap 70 %: fewer leave no gap a footprint does not close)
     cut = _without_lines(full, range(n_on // 2 - 3, n_on // 2 + 4))
     after = report(cut)
-    assert after["photos"]["thermal"] < before["photos"]["thermal"]
-    assert after["coverage"]["thermal"] < before["coverage"]["thermal"] - 0.05
-    assert any(w["code"] == "coverage_low" for w in after["warnings"])
+    assert after.photos["thermal"] < before.photos["thermal"]
+    assert after.coverage["thermal"] < before.coverage["thermal"] - 0.05
+    assert any(w.code == "coverage_low" for w in after.warnings)
     # the stop items still shoot once each (param3 = 1): 18 photos, one per line end
     ends = report(_without_lines(full, range(n_on)))
-    assert ends["photos"]["thermal"] == n_on
+    assert ends.photos["thermal"] == n_on
     # no trigger item at all: nothing photographed, nothing covered
     items = tuple(it for it in full.items if it.command != mavlink.MAV_CMD_DO_SET_CAM_TRIGG_DIST)
     bare = Compiled(full.name, full.firmware, full.frame, full.home, full.speed_mps, items, (items,),
                     full.item_limit, full.payloads, full.areas, full.setup)
     none = report(bare)
-    assert none["photos"]["thermal"] == 0 and none["coverage"]["thermal"] == 0.0
+    assert none.photos["thermal"] == 0 and none.coverage["thermal"] == 0.0
 
 
 def test_photos_follow_the_distance_trigger():
@@ -84,27 +107,27 @@ def test_hover_capture_photos_and_hold_time():
     hov_c = handmade(hover=True)
     hov = report(hov_c)
     captures = sum(1 for it in hov_c.items if it.command == mavlink.MAV_CMD_IMAGE_START_CAPTURE)
-    assert hov["photos"]["thermal"] == captures
+    assert hov.photos["thermal"] == captures
     # every hover point holds 2 s and stops: a hover survey takes longer than flying through
-    assert hov["flight_time_s"] > dist["flight_time_s"] + 2 * captures
-    assert hov["flight_time_qgc_s"] >= 2 * captures
+    assert hov.flight_time_s > dist.flight_time_s + 2 * captures
+    assert hov.flight_time_qgc_s >= 2 * captures
 
 
 def test_flight_time_model_is_not_shorter_than_qgc_statistic():
     rep = report(handmade())
     # QGC: horizontal distance / speed + holds; ours adds acceleration, corners and the climb
-    assert rep["flight_time_s"] > rep["flight_time_qgc_s"]
-    assert rep["flight_time_qgc_s"] == pytest.approx(rep["path_length_m"] / 6.0, rel=0.05)
+    assert rep.flight_time_s > rep.flight_time_qgc_s
+    assert rep.flight_time_qgc_s == pytest.approx(rep.path_length_m / 6.0, rel=0.05)
 
 
 def test_altitude_and_interval_warnings():
     high = report(handmade(alt=130.0))
-    assert any(w["code"] == "altitude_above_120m" for w in high["warnings"])
+    assert any(w.code == "altitude_above_120m" for w in high.warnings)
     fast = report(handmade(speed=12.0))
-    assert any(w["code"] == "trigger_interval_short" for w in fast["warnings"])
+    assert any(w.code == "trigger_interval_short" for w in fast.warnings)
     slow = report(handmade(speed=4.0))
-    assert not any(w["code"] == "trigger_interval_short" for w in slow["warnings"])
-    assert any(w["code"] == "assumed_optics" for w in slow["warnings"])
+    assert not any(w.code == "trigger_interval_short" for w in slow.warnings)
+    assert any(w.code == "assumed_optics" for w in slow.warnings)
 
 
 def test_item_limit_error_when_a_part_is_too_long():
@@ -112,7 +135,7 @@ def test_item_limit_error_when_a_part_is_too_long():
     small = Compiled(c.name, c.firmware, c.frame, c.home, c.speed_mps, c.items, (c.items,), 50,
                      c.payloads, c.areas, c.setup)
     rep = report(small)
-    assert any(e["code"] == "item_limit" for e in rep["errors"])
+    assert any(e.code == "item_limit" for e in rep.errors)
 
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
@@ -140,7 +163,7 @@ def test_rededge_in_overlap_mode_shoots_by_itself(tmp_path):
     assert wiris and all(p.cause >= 0 for p in wiris)
     # it shoots wherever it is at the survey altitude (in the turns too), never while climbing
     assert all(abs(p.alt_m - c.areas[0].altitude_m) <= 5.0 for p in own)
-    assert report(c, sim)["coverage"]["multispectral"] >= 0.995
+    assert report(c, sim).coverage["multispectral"] >= 0.995
 
 
 def test_rededge_in_overlap_mode_shoots_above_its_target_too(tmp_path):
@@ -167,11 +190,11 @@ def test_rededge_on_external_trigger_is_not_reached_by_ardupilot(tmp_path):
     plan = _field_variant(tmp_path, external=True)
     ap = report(compile_plan(plan))
     # ArduPilot's DO_SET_CAM_TRIGG_DIST drives its camera instances; the RedEdge is none of them
-    assert ap["photos"]["multispectral"] == 0 and ap["coverage"]["multispectral"] == 0.0
-    assert any(w["code"] == "coverage_low" and "multispectral" in w["message"] for w in ap["warnings"])
+    assert ap.photos["multispectral"] == 0 and ap.coverage["multispectral"] == 0.0
+    assert any(w.code == "coverage_low" and "multispectral" in w.message for w in ap.warnings)
     # PX4's camera_trigger sends to every camera component: the same photos as the WIRIS
     px4 = report(compile_plan(plan, firmware="px4"))
-    assert px4["photos"]["multispectral"] == px4["photos"]["thermal"] > 0
+    assert px4.photos["multispectral"] == px4.photos["thermal"] > 0
 
 
 INTERVAL_PLAN = """\
@@ -203,7 +226,7 @@ def test_px4_interval_trigger_shoots_only_while_enabled(tmp_path):
     rep = report(c, sim)
     # no photo on the climb, the transit or the way home: all at survey altitude, inside the legs' spans
     assert sim.photos and all(abs(p.alt_m - 40.0) < 1e-6 for p in sim.photos)
-    assert rep["coverage"]["thermal"] >= 0.995
+    assert rep.coverage["thermal"] >= 0.995
     # on a straight leg at cruise speed, consecutive photos are speed x interval apart
     interval = next(it.param1 for it in c.items if it.command == mavlink.MAV_CMD_DO_SET_CAM_TRIGG_INTERVAL) / 1000
     gaps = [math.hypot(b.x - a.x, b.y - a.y) for a, b in zip(sim.photos, sim.photos[1:]) if a.span == b.span]
@@ -247,10 +270,10 @@ def test_flight_time_of_one_leg_follows_the_stated_model():
                 + 600 / v + v / a                    # accelerate, cruise, stop: v/a more than at constant speed
                 + 10.0                               # hold
                 + (30 - LAND_FINAL_M) / DESCENT_MPS + LAND_FINAL_M / LAND_MPS)
-    assert rep["flight_time_s"] == pytest.approx(expected, rel=0.01)
-    assert rep["flight_time_qgc_s"] == pytest.approx(600 / v + 10.0, rel=0.01)
-    assert rep["path_length_m"] == pytest.approx(600.0, abs=0.5)
-    assert not any(w["code"] == "no_landing" for w in rep["warnings"])
+    assert rep.flight_time_s == pytest.approx(expected, rel=0.01)
+    assert rep.flight_time_qgc_s == pytest.approx(600 / v + 10.0, rel=0.01)
+    assert rep.path_length_m == pytest.approx(600.0, abs=0.5)
+    assert not any(w.code == "no_landing" for w in rep.warnings)
 
 
 @pytest.mark.parametrize("frame", ["copter", "vtol"])
@@ -277,7 +300,7 @@ def test_a_vtol_keeps_its_speed_through_turns(frame):
     corner = v / a if frame == "copter" else 0.0
     expected = (30 / CLIMB_MPS + 1200 / v + v / a + corner
                 + (30 - LAND_FINAL_M) / DESCENT_MPS + LAND_FINAL_M / LAND_MPS)
-    assert report(c)["flight_time_s"] == pytest.approx(expected, rel=0.005)
+    assert report(c).flight_time_s == pytest.approx(expected, rel=0.005)
 
 
 @pytest.fixture(scope="module")
@@ -298,8 +321,8 @@ def test_removing_trigger_items_never_adds_coverage(small_full):
     def check(drop):
         cut = _without_lines(full, sorted(drop))
         r = report(cut)
-        assert r["photos"]["thermal"] < rep["photos"]["thermal"]
-        assert r["coverage"]["thermal"] <= rep["coverage"]["thermal"] + 1e-9
+        assert r.photos["thermal"] < rep.photos["thermal"]
+        assert r.coverage["thermal"] <= rep.coverage["thermal"] + 1e-9
 
     check()
 
@@ -307,12 +330,12 @@ def test_removing_trigger_items_never_adds_coverage(small_full):
 def test_flying_over_a_hole_is_reported():
     # the hand-written lawn-mower flies straight through a 40 m hole in the middle of the area
     rep = report(handmade(size_m=160.0, hole_m=40.0))
-    row = rep["areas"][0]
-    assert row["over_gaps_m"] > 40.0
-    assert any(w["code"] == "path_over_exclusion" for w in rep["warnings"])
+    row = rep.areas[0]
+    assert row.path.over_gaps_m > 40.0
+    assert any(w.code == "path_over_exclusion" for w in rep.warnings)
     clean = report(handmade(size_m=160.0))
-    assert clean["areas"][0]["over_gaps_m"] == 0.0
-    assert not any(w["code"] == "path_over_exclusion" for w in clean["warnings"])
+    assert clean.areas[0].path.over_gaps_m == 0.0
+    assert not any(w.code == "path_over_exclusion" for w in clean.warnings)
 
 
 def _compile_yaml(tmp_path, survey: dict, firmware: str = "ardupilot"):
@@ -344,7 +367,7 @@ def test_hover_photos_of_two_lines_are_no_front_pair(tmp_path):
             dx, dy = q.x - p.x, q.y - p.y
             assert dx * math.sin(h) + dy * math.cos(h) > 0
             assert abs(dx * math.cos(h) - dy * math.sin(h)) < 0.1
-    assert report(c, sim)["overlap"]["thermal"]["front_min"] >= 0.49
+    assert report(c, sim).overlap["thermal"].front_min >= 0.49
 
 
 # A strip 7 m wide (east-west) and 55 m long, flown in hover mode with east-west lines: each line is shorter than a
@@ -370,7 +393,7 @@ def test_a_one_photo_hover_line_is_shot_along_the_line(tmp_path, firmware):
     c = _compile_yaml(tmp_path, STRIP, firmware)
     sim = simulate(c)
     assert len(sim.photos) >= 2 and len({round(p.y, 1) for p in sim.photos}) == len(sim.photos)   # one per line
-    assert report(c, sim)["areas"][0]["coverage"]["thermal"] == 1.0
+    assert report(c, sim).areas[0].coverage["thermal"] == 1.0
     assert all(_off_line_deg(p.heading_deg) < 0.01 for p in sim.photos)
     # in the mission: the vehicle comes to each photo from a position on its line, metres before it
     geod = Geod(ellps="WGS84")

@@ -61,20 +61,20 @@ def test_a_step_measures_its_own_overlaps_and_photos(tmp_path, both, k, alone):
     # so (they were the minimum over both fields' photos near it: the west field read 60 % front and 40 % side,
     # the east field's request, and counted the east field's photos along the shared edge)
     _, rep = both
-    solo = report(_compile(tmp_path, [alone], "solo"))["areas"][0]
-    row = rep["areas"][k]
-    assert row["overlap"]["thermal"]["front_min"] == pytest.approx(solo["overlap"]["thermal"]["front_min"], abs=2e-4)
-    assert row["overlap"]["thermal"]["side_min"] == pytest.approx(solo["overlap"]["thermal"]["side_min"], abs=2e-4)
-    assert row["photos"]["thermal"] == solo["photos"]["thermal"]
-    assert row["coverage"]["thermal"] >= 0.995
+    solo = report(_compile(tmp_path, [alone], "solo")).areas[0]
+    row = rep.areas[k]
+    assert row.overlap["thermal"].front_min == pytest.approx(solo.overlap["thermal"].front_min, abs=2e-4)
+    assert row.overlap["thermal"].side_min == pytest.approx(solo.overlap["thermal"].side_min, abs=2e-4)
+    assert row.photos["thermal"] == solo.photos["thermal"]
+    assert row.coverage["thermal"] >= 0.995
 
 
 def test_the_mission_overlap_is_the_lowest_of_the_steps(both):
     _, rep = both
-    rows = rep["areas"]
-    assert rows[0]["overlap"]["thermal"]["front_min"] != rows[1]["overlap"]["thermal"]["front_min"]
+    rows = rep.areas
+    assert rows[0].overlap["thermal"].front_min != rows[1].overlap["thermal"].front_min
     for key in ("front_min", "side_min"):
-        assert rep["overlap"]["thermal"][key] == min(r["overlap"]["thermal"][key] for r in rows)
+        assert getattr(rep.overlap["thermal"], key) == min(getattr(r.overlap["thermal"], key) for r in rows)
 
 
 def _expected_outside_m(c, a) -> float:
@@ -91,9 +91,9 @@ def _expected_outside_m(c, a) -> float:
 def test_outside_metres_are_the_steps_own_flight(both):
     # they were the whole mission's: the other field's lines, the take-off leg and the return, for either field
     c, rep = both
-    for a, row in zip(c.areas, rep["areas"]):
-        assert row["outside_m"] == pytest.approx(_expected_outside_m(c, a), abs=0.2)
-    assert rep["areas"][0]["outside_m"] + rep["areas"][1]["outside_m"] < rep["path_length_m"]
+    for a, row in zip(c.areas, rep.areas):
+        assert row.path.outside_m == pytest.approx(_expected_outside_m(c, a), abs=0.2)
+    assert rep.areas[0].path.outside_m + rep.areas[1].path.outside_m < rep.path_length_m
 
 
 def test_coverage_counts_a_neighbours_photos_but_the_photo_count_does_not(tmp_path):
@@ -105,14 +105,14 @@ def test_coverage_counts_a_neighbours_photos_but_the_photo_count_does_not(tmp_pa
     quiet = tuple(it.with_(param1=0.0, param3=0.0) if first <= i < end
                   and it.command == mavlink.MAV_CMD_DO_SET_CAM_TRIGG_DIST else it for i, it in enumerate(c.items))
     rep = report(replace(c, items=quiet, parts=(quiet,)))
-    row = rep["areas"][1]
-    assert row["photos"]["thermal"] == 0
-    assert row["overlap"]["thermal"] == {"front_min": None, "side_min": None}
+    row = rep.areas[1]
+    assert row.photos["thermal"] == 0
+    assert row.overlap["thermal"].to_json() == {"front_min": None, "side_min": None}
     west, east_area = c.areas[0].area, c.areas[1].area
     shared = area_geometry(west, east_area.projection).intersection(east_area.geometry).area / east_area.geometry.area
     assert 0.45 < shared < 0.55
-    assert row["coverage"]["thermal"] >= shared - 1e-3
-    assert rep["areas"][0]["coverage"]["thermal"] >= 0.995
+    assert row.coverage["thermal"] >= shared - 1e-3
+    assert rep.areas[0].coverage["thermal"] >= 0.995
 
 
 def test_a_neighbour_flying_over_an_exclusion_is_still_reported(tmp_path):
@@ -123,7 +123,7 @@ def test_a_neighbour_flying_over_an_exclusion_is_still_reported(tmp_path):
     over = [[50.1, 14.5012], [50.1, 14.5026], [50.101, 14.5026], [50.101, 14.5012]]
     west = _survey(WEST, 40, 80, 70, exclude=[sub])
     alone = report(_compile(tmp_path, [west], "alone"))
-    assert alone["areas"][0]["over_gaps_m"] < 0.1
+    assert alone.areas[0].path.over_gaps_m < 0.1
     rep = report(_compile(tmp_path, [west, _survey(over, 50, 60, 40)], "over"))
-    assert rep["areas"][0]["over_gaps_camera_m"] > 10.0 and rep["areas"][0]["photos_in_zones"]["thermal"] > 0
-    assert any(w["code"] == "path_over_exclusion" and w["message"].startswith("step 1 ") for w in rep["warnings"])
+    assert rep.areas[0].path.over_gaps_camera_m > 10.0 and rep.areas[0].photos_in_zones["thermal"] > 0
+    assert any(w.code == "path_over_exclusion" and w.message.startswith("step 1 ") for w in rep.warnings)

@@ -59,8 +59,8 @@ def compile_cmd(plan: str, out_dir: str, firmware: str | None) -> None:
         rep = report(compiled, sim, plan_path=plan)
     for line in summary_lines(rep):
         click.echo(line)
-    if rep["errors"]:   # a mission that cannot be flown is not written (`check` shows the whole report)
-        click.echo(f"not written: {len(rep['errors'])} error(s)", err=True)
+    if rep.errors:   # a mission that cannot be flown is not written (`check` shows the whole report)
+        click.echo(f"not written: {len(rep.errors)} error(s)", err=True)
         raise click.exceptions.Exit(1)
     paths = write_outputs(compiled, out_dir, rep=rep, sim=sim)
     click.echo("wrote:")
@@ -85,11 +85,11 @@ def check_cmd(plan: str, as_json: bool, firmware: str | None) -> None:
     except PlanError as err:
         if not as_json:
             raise
-        click.echo(json.dumps(error_report(plan, err), indent=1))
+        click.echo(json.dumps(error_report(plan, err).to_json(), indent=1))
         click.echo(f"error: {err}", err=True)
         raise click.exceptions.Exit(1)
-    click.echo(json.dumps(rep, indent=1, allow_nan=False) if as_json else format_report(rep))
-    if rep["errors"]:
+    click.echo(json.dumps(rep.to_json(), indent=1, allow_nan=False) if as_json else format_report(rep))
+    if rep.errors:
         raise click.exceptions.Exit(1)
 
 
