@@ -5,7 +5,7 @@ float, double and custom; `string` is a QGC extension the validator warns about.
 value decides the largest one it accepts: `ParamValue::set_from_xml` uses std::stoi for bool and the
 8-, 16- and 32-bit types (uint32 included), std::stoll for the 64-bit ones and stof/stod for floats
 (../shared/reference/camera-definition-files.md §4.2). The PARAM_EXT wire codec of the emulators
-(wiris_tools/emulate/paramext.py) knows the same names with their struct formats.
+(wiris_tools/paramext.py) derives its types from this table and adds their struct formats.
 """
 
 from __future__ import annotations

@@ -19,6 +19,8 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from cdf import paramtypes
+
 VALUE_BYTES = 128  # PARAM_EXT_*.param_value is char[128]
 
 
@@ -30,19 +32,17 @@ class WireType:
     integer: bool
 
 
-_TYPES = (
-    WireType("uint8", mavlink2.MAV_PARAM_EXT_TYPE_UINT8, "<B", True),
-    WireType("int8", mavlink2.MAV_PARAM_EXT_TYPE_INT8, "<b", True),
-    WireType("uint16", mavlink2.MAV_PARAM_EXT_TYPE_UINT16, "<H", True),
-    WireType("int16", mavlink2.MAV_PARAM_EXT_TYPE_INT16, "<h", True),
-    WireType("uint32", mavlink2.MAV_PARAM_EXT_TYPE_UINT32, "<I", True),
-    WireType("int32", mavlink2.MAV_PARAM_EXT_TYPE_INT32, "<i", True),
-    WireType("uint64", mavlink2.MAV_PARAM_EXT_TYPE_UINT64, "<Q", True),
-    WireType("int64", mavlink2.MAV_PARAM_EXT_TYPE_INT64, "<q", True),
-    WireType("float", mavlink2.MAV_PARAM_EXT_TYPE_REAL32, "<f", False),
-    WireType("double", mavlink2.MAV_PARAM_EXT_TYPE_REAL64, "<d", False),
-)
-BY_CDF = {t.cdf: t for t in _TYPES} | {"bool": WireType("bool", mavlink2.MAV_PARAM_EXT_TYPE_UINT8, "<B", True)}
+# Each wire type's MAV_PARAM_EXT_TYPE and struct format (little-endian). Which definition type travels as which
+# wire type (bool as uint8), and whether it is an integer, come from the one type table, cdf/paramtypes.py.
+_WIRE = {
+    "uint8": (mavlink2.MAV_PARAM_EXT_TYPE_UINT8, "<B"), "int8": (mavlink2.MAV_PARAM_EXT_TYPE_INT8, "<b"),
+    "uint16": (mavlink2.MAV_PARAM_EXT_TYPE_UINT16, "<H"), "int16": (mavlink2.MAV_PARAM_EXT_TYPE_INT16, "<h"),
+    "uint32": (mavlink2.MAV_PARAM_EXT_TYPE_UINT32, "<I"), "int32": (mavlink2.MAV_PARAM_EXT_TYPE_INT32, "<i"),
+    "uint64": (mavlink2.MAV_PARAM_EXT_TYPE_UINT64, "<Q"), "int64": (mavlink2.MAV_PARAM_EXT_TYPE_INT64, "<q"),
+    "float": (mavlink2.MAV_PARAM_EXT_TYPE_REAL32, "<f"), "double": (mavlink2.MAV_PARAM_EXT_TYPE_REAL64, "<d"),
+}
+_TYPES = tuple(WireType(name, *_WIRE[name], paramtypes.BY_NAME[name].range is not None) for name in _WIRE)
+BY_CDF = {t.name: WireType(t.name, *_WIRE[t.wire], t.range is not None) for t in paramtypes.TYPES if t.wire in _WIRE}
 BY_EXT = {t.ext_type: t for t in _TYPES}
 
 
