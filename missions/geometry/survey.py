@@ -41,8 +41,9 @@ Complexity (n = photos, L = lines, V = area vertices, C = boustrophedon cells, P
   bare inside segments, then plans once; above EXHAUSTIVE_ANGLE_PARTS parts it ranks ~200 angles on the bare
   inside segments measured from the edges alone and a hop per part to its nearest neighbour (O(V + crossings
   + P) each, `parts_estimate`) and plans the whole area at no more than its four best. Measured on 2 shared
-  cores: 100 km² (785k photos) plans in 4–9 s and measures in ~2 s; a jagged 2000-vertex boundary takes ~3 s at a fixed angle, ~30 s with "auto"; 20,000 small
-  triangles (P = 20,000) compile in ~25 s of CPU with "auto" (bench/bench_survey_scaling.py).
+  cores: 100 km² (785k photos) plans in 4–9 s and measures in ~2 s; a jagged 2000-vertex boundary takes ~3 s at
+  a fixed angle, ~30 s with "auto"; 20,000 small triangles (P = 20,000) compile in ~25 s of CPU with "auto"
+  (bench/bench_survey_scaling.py).
 """
 
 from __future__ import annotations
