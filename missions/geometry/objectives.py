@@ -5,7 +5,7 @@ and scores it with an objective, a plain function `objective(estimate, speed_mps
 inside the objective, so a caller can rank angles by anything the estimate carries:
 
     flight_time_s   seconds: the path at `speed_mps` plus braking and re-accelerating at every turn
-                    (`estimated_time_s`). The default: what a pilot pays for, and the survey report's estimate.
+                    (`estimated_time_s`, as in `SurveyStats.est_time_s`). The default: what a pilot pays for.
     path_length_m   metres of path (legs, turnaround stubs, connections), whatever the turns cost.
     turn_count      leg ends where the vehicle stops and turns (two per leg): fewest turns, whatever the path.
 

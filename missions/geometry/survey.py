@@ -213,6 +213,7 @@ def _order_length(legs: Sequence[Leg], order: Sequence[FlownLeg], turnaround_m: 
 def swaths_estimate(sw: SwathSet, turnaround_m: float) -> PassEstimate:
     """What flying the swaths costs: a quick leg order (two greedy starts) and its straight hops."""
     order = order_legs(sw.legs, max_starts=2)
+    # two turns per leg (its two ends)
     return PassEstimate(_order_length(sw.legs, order, turnaround_m), max(0, len(order) - 1) * 2 + 2, len(order))
 
 
@@ -238,7 +239,8 @@ class _Costs:
 
 
 def _refined(cost: _Costs, candidates: Sequence[float], steps_deg: Sequence[float]) -> float:
-    """The best candidate (ties: the smallest |angle|), then moved by each step in turn while that improves it."""
+    """The best candidate (ties: the smallest |angle|), then for each step in turn moved by it either way where
+    that scores lower."""
     best = min(candidates, key=lambda a: (cost(a), abs(a)))
     for step in steps_deg:
         for a in (best - step, best + step):
