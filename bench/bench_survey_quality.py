@@ -41,7 +41,8 @@ from areas import bench_areas, to_latlon_polygons  # noqa: E402
 from missions.geometry.area import build_area  # noqa: E402
 from missions.measure.coverage import measure  # noqa: E402
 from missions.geometry.footprint import Footprint, transect_spacing_m, trigger_distance_m  # noqa: E402
-from missions.geometry.survey import estimated_time_s, plan_survey  # noqa: E402
+from missions.geometry.objectives import estimated_time_s  # noqa: E402
+from missions.geometry.survey import plan_survey  # noqa: E402
 from missions.geometry.swaths import frame  # noqa: E402
 from missions.geometry.triggers import TriggerSpan, simulate_distance_trigger  # noqa: E402
 

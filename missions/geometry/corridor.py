@@ -38,8 +38,8 @@ from missions.geometry.footprint import Footprint, transect_spacing_m, trigger_d
 from missions.geometry.geo import LocalProjection
 from missions.geometry.route import KIND_ENTRY, KIND_EXIT, KIND_TURN_IN
 from missions.compiled import PlanWarning
-from missions.geometry.survey import (DEFAULT_EXIT_MARGIN_M, MAX_PHOTOS, SurveyStats, Waypoint,
-                             check_photo_budget, estimated_time_s)
+from missions.geometry.objectives import estimated_time_s
+from missions.geometry.survey import DEFAULT_EXIT_MARGIN_M, MAX_PHOTOS, SurveyStats, Waypoint, check_photo_budget
 from missions.geometry.swaths import DEFAULT_EDGE_MARGIN_M, line_offsets
 from missions.geometry.triggers import PhotoPoint, TriggerSpan, simulate_distance_trigger
 

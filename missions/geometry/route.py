@@ -28,11 +28,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 import heapq
 import math
-from typing import Any, Sequence
+from typing import Any, NamedTuple, Sequence
 
 import numpy as np
 
-from missions.geometry.swaths import Leg
+from missions.geometry.swaths import Leg, frame
 
 MAX_GRAPH_VERTICES = 400
 MIN_GAP_M2 = 25.0
@@ -67,12 +67,26 @@ class RoutePoint:
     leg: int = -1          # index into Route.legs, -1 for connections
 
 
+class FlownLeg(NamedTuple):
+    """One step of a leg order: which leg, and whether it is flown from v1 to v0."""
+
+    index: int
+    reversed: bool
+
+
+class CameraSpan(NamedTuple):
+    """Where a leg's camera runs: from its entry point to its exit point (indices into Route.points)."""
+
+    entry: int
+    exit: int
+
+
 @dataclass(frozen=True)
 class Route:
     points: tuple[RoutePoint, ...]
     legs: tuple[Leg, ...]                 # in flying order
     reversed_legs: tuple[bool, ...]       # flown from v1 to v0
-    spans: tuple[tuple[int, int], ...]    # (entry index, exit index) into points, one per leg
+    spans: tuple[CameraSpan, ...]         # one per leg
 
     @property
     def xy(self) -> np.ndarray:
@@ -111,12 +125,12 @@ def build_cells(legs: Sequence[Leg]) -> list[list[int]]:
     return cells
 
 
-def _cell_sequence(legs: Sequence[Leg], cell: list[int], from_start: bool, first_forward: bool) -> list[tuple[int, bool]]:
+def _cell_sequence(legs: Sequence[Leg], cell: list[int], from_start: bool, first_forward: bool) -> list[FlownLeg]:
     order = cell if from_start else cell[::-1]
     out = []
     fwd = first_forward
     for i in order:
-        out.append((i, not fwd))
+        out.append(FlownLeg(i, not fwd))
         fwd = not fwd
     return out
 
@@ -124,6 +138,13 @@ def _cell_sequence(legs: Sequence[Leg], cell: list[int], from_start: bool, first
 def _ends(leg: Leg, rev: bool) -> tuple[tuple[float, float], tuple[float, float]]:
     a, b = (leg.x0, leg.y0), (leg.x1, leg.y1)
     return (b, a) if rev else (a, b)
+
+
+class _Nearest(NamedTuple):
+    """A nearest entry: compared as (distance, index), so equal distances go to the lowest index."""
+
+    distance_m: float
+    index: int
 
 
 class _NearestEntry:
@@ -174,95 +195,112 @@ class _NearestEntry:
             out.extend(get((i, bj + r), ()))
         return out
 
-    def _nearest_of(self, idx: list[int], pos: np.ndarray) -> tuple[float, int]:
+    def _nearest_of(self, idx: list[int], pos: np.ndarray) -> _Nearest:
         ii = np.array(idx)
         dd = np.hypot(self.flat[ii, 0] - pos[0], self.flat[ii, 1] - pos[1])
         d = float(dd.min())
-        return d, int(ii[dd == d].min())
+        return _Nearest(d, int(ii[dd == d].min()))
 
-    def _nearest_left(self, pos: np.ndarray) -> tuple[float, int]:
+    def _nearest_left(self, pos: np.ndarray) -> _Nearest:
         dd = np.hypot(self.flat[:, 0] - pos[0], self.flat[:, 1] - pos[1])
         dd[~self.left] = np.inf
         k = int(np.argmin(dd))
-        return float(dd[k]), k
+        return _Nearest(float(dd[k]), k)
 
-    def _nearest_by_rings(self, pos: np.ndarray) -> tuple[float, int]:
+    def _nearest_by_rings(self, pos: np.ndarray) -> _Nearest:
         bi = int(math.floor((pos[0] - self.origin[0]) / self.h))
         bj = int(math.floor((pos[1] - self.origin[1]) / self.h))
-        best = (math.inf, -1)
+        best = _Nearest(math.inf, -1)
         r = 0           # rings 0..r scanned: what they leave lies at least r·h from pos (less rounding)
         while True:
             ring = self._ring(bi, bj, r)
             if ring:
                 best = min(best, self._nearest_of(ring, pos))
-            if best[0] < (r - 1e-6) * self.h:
+            if best.distance_m < (r - 1e-6) * self.h:
                 return best
             r += 1
             if (2 * r + 1) ** 2 > self.count:
                 return self._nearest_left(pos)
 
-    def pop(self, pos: np.ndarray) -> tuple[int, float]:
-        """(index, distance) of the nearest entry left, whose cell is then taken out."""
-        d, k = self._nearest_by_rings(pos) if self.key else self._nearest_left(pos)
-        self.remove_cell(k // 4)
-        return k, d
+    def pop(self, pos: np.ndarray) -> _Nearest:
+        """The nearest entry left, whose cell is then taken out."""
+        nearest = self._nearest_by_rings(pos) if self.key else self._nearest_left(pos)
+        self.remove_cell(nearest.index // 4)
+        return nearest
+
+
+class _CellWay(NamedTuple):
+    """One of the four ways through a cell: from its first or its last line, the first leg flown forward or back."""
+
+    legs: list[FlownLeg]
+    entry: tuple[float, float]
+    exit: tuple[float, float]
+
+
+class _Tour(NamedTuple):
+    """A greedy order of the cells: per step the flat index 4·cell + way, and the metres of the connections."""
+
+    connections_m: float
+    steps: list[int]
+
+
+def _ways_through(legs: Sequence[Leg], cell: list[int]) -> list[_CellWay]:
+    ways = []
+    for from_start in (True, False):
+        for first_forward in (True, False):
+            seq = _cell_sequence(legs, cell, from_start, first_forward)
+            ways.append(_CellWay(seq, _ends(legs[seq[0].index], seq[0].reversed)[0],
+                                 _ends(legs[seq[-1].index], seq[-1].reversed)[1]))
+    return ways
+
+
+def _greedy_tour(entries: np.ndarray, exits: np.ndarray, first: int,
+                 start_xy: tuple[float, float] | None) -> _Tour:
+    """From way `first` (a flat index), the nearest next cell entry from each exit; ties go to the lowest
+    (cell, way). `entries`, `exits`: cells × 4 ways × xy."""
+    nearest = _NearestEntry(entries.reshape(-1, 2))
+    c0, o0 = divmod(first, 4)
+    nearest.remove_cell(c0)
+    steps = [first]
+    pos = exits[c0, o0]
+    total = 0.0 if start_xy is None else float(math.dist(start_xy, entries[c0, o0]))
+    for _ in range(len(entries) - 1):
+        hit = nearest.pop(pos)
+        total += hit.distance_m
+        steps.append(hit.index)
+        pos = exits[divmod(hit.index, 4)]
+    return _Tour(total, steps)
+
+
+def _tour_starts(legs: Sequence[Leg], cells: list[list[int]], entries: np.ndarray,
+                 start_xy: tuple[float, float] | None, max_starts: int) -> list[int]:
+    """The ways (flat indices) the greedy starts from: nearest the start position, else at the extremes of the
+    sweep, the natural starts. 24 starts up to 100 cells, one above 2400: the search stays near 2400·cells steps."""
+    n = len(cells)
+    starts = list(range(4 * n))
+    if start_xy is not None:
+        starts.sort(key=lambda k: math.dist(start_xy, entries[divmod(k, 4)]))
+    else:
+        starts.sort(key=lambda k: (min(legs[i].line for i in cells[k // 4]), k % 4))
+    return starts[:max(1, min(max_starts, 2400 // max(n, 1)))]
 
 
 def order_legs(legs: Sequence[Leg], start_xy: tuple[float, float] | None = None,
-               max_starts: int = 24) -> list[tuple[int, bool]]:
-    """(leg index, reversed) in flying order."""
+               max_starts: int = 24) -> list[FlownLeg]:
+    """The legs in flying order: cell by cell, nearest next (see module doc, step 2)."""
     if not legs:
         return []
     cells = build_cells(legs)
-    options = []          # per cell: 4 (sequence, entry, exit)
-    for cell in cells:
-        opts = []
-        for fs in (True, False):
-            for ff in (True, False):
-                seq = _cell_sequence(legs, cell, fs, ff)
-                entry = _ends(legs[seq[0][0]], seq[0][1])[0]
-                exit_ = _ends(legs[seq[-1][0]], seq[-1][1])[1]
-                opts.append((seq, entry, exit_))
-        options.append(opts)
-    n = len(cells)
-    entries = np.array([[o[1] for o in opts] for opts in options])      # n×4×2
-    exits = np.array([[o[2] for o in opts] for opts in options])
-
-    flat_entries = entries.reshape(-1, 2)
-
-    def greedy(c0: int, o0: int) -> tuple[float, list[tuple[int, int]]]:
-        """Nearest next cell entry from each exit; ties go to the lowest (cell, option)."""
-        nearest = _NearestEntry(flat_entries)
-        nearest.remove_cell(c0)
-        seq = [(c0, o0)]
-        pos = exits[c0, o0]
-        total = 0.0 if start_xy is None else float(math.dist(start_xy, entries[c0, o0]))
-        for _ in range(n - 1):
-            k, d = nearest.pop(pos)
-            c, o = divmod(k, 4)
-            total += d
-            seq.append((c, o))
-            pos = exits[c, o]
-        return total, seq
-
-    starts = [(c, o) for c in range(n) for o in range(4)]
-    if start_xy is not None:
-        starts.sort(key=lambda co: math.dist(start_xy, entries[co[0], co[1]]))
-    else:
-        # cells at the extremes of the sweep are the natural starts
-        starts.sort(key=lambda co: (min(legs[i].line for i in cells[co[0]]), co[1]))
-    # 24 starts up to 100 cells, one above 2400: the search stays near 2400·cells steps
-    n_starts = max(1, min(max_starts, 2400 // max(n, 1)))
-    best = None
-    for c, o in starts[:n_starts]:
-        res = greedy(c, o)
-        if best is None or res[0] < best[0]:
-            best = res
+    ways = [_ways_through(legs, cell) for cell in cells]
+    entries = np.array([[w.entry for w in cell_ways] for cell_ways in ways])      # cells×4×2
+    exits = np.array([[w.exit for w in cell_ways] for cell_ways in ways])
+    best: _Tour | None = None
+    for first in _tour_starts(legs, cells, entries, start_xy, max_starts):
+        tour = _greedy_tour(entries, exits, first, start_xy)
+        if best is None or tour.connections_m < best.connections_m:
+            best = tour
     assert best is not None
-    out: list[tuple[int, bool]] = []
-    for c, o in best[1]:
-        out.extend(options[c][o][0])
-    return out
+    return [step for k in best.steps for step in ways[k // 4][k % 4].legs]
 
 
 class _InsidePaths:
@@ -445,89 +483,156 @@ class _Avoid:
         return self._free.path(a, b)  # type: ignore[union-attr]
 
 
+class _LegEnds(NamedTuple):
+    """A leg as flown: from `entry` to `end` (its first and last photos) heading (dx, dy), the camera off at `exit`,
+    the exit margin beyond the end."""
+
+    entry: tuple[float, float]
+    end: tuple[float, float]
+    dx: float
+    dy: float
+    exit: tuple[float, float]
+
+    @classmethod
+    def of(cls, leg: Leg, rev: bool, exit_margin_m: float) -> "_LegEnds":
+        (ax, ay), (bx, by) = _ends(leg, rev)
+        d, _n = frame(leg.angle_deg)
+        dx, dy = (-d[0], -d[1]) if rev else (d[0], d[1])
+        return cls((ax, ay), (bx, by), dx, dy, (bx + dx * exit_margin_m, by + dy * exit_margin_m))
+
+    def before(self, m: float) -> tuple[float, float]:
+        """The point `m` metres before the entry, on the line."""
+        return (self.entry[0] - self.dx * m, self.entry[1] - self.dy * m)
+
+    def beyond(self, m: float) -> tuple[float, float]:
+        """The point `m` metres beyond the end, on the line."""
+        return (self.end[0] + self.dx * m, self.end[1] + self.dy * m)
+
+
+class _Ways:
+    """How a route may get from one leg to the next: the shortest paths inside each polygon part (built on first
+    use) and the zones it keeps out of (None without any)."""
+
+    def __init__(self, geometry: Any, avoid: Any) -> None:
+        self.parts = list(geometry.geoms) if geometry.geom_type == "MultiPolygon" else [geometry]
+        self.zones = _Avoid(avoid, geometry) if avoid is not None and not avoid.is_empty else None
+        self._inside: dict[int, _InsidePaths] = {}
+
+    def inside(self, part: int) -> _InsidePaths:
+        if part not in self._inside:
+            self._inside[part] = _InsidePaths(self.parts[part], self.zones.keep_out if self.zones is not None else None)
+        return self._inside[part]
+
+    def stub_before_m(self, ends: _LegEnds, turnaround_m: float) -> float:
+        """Length of the turnaround stub before the entry: cut short where it would enter a zone, none when less
+        than MIN_STUB_M would be left."""
+        if self.zones is None or turnaround_m <= 0:
+            return turnaround_m
+        m = self.zones.clear_length(ends.entry, (-ends.dx, -ends.dy), turnaround_m)
+        return 0.0 if m < min(turnaround_m, MIN_STUB_M) else m
+
+    def stub_after_m(self, ends: _LegEnds, turnaround_m: float, exit_margin_m: float) -> float:
+        """Length of the turnaround stub beyond the end (it counts only beyond the exit), cut short likewise."""
+        if self.zones is None or turnaround_m <= exit_margin_m:
+            return turnaround_m
+        m = self.zones.clear_length(ends.end, (ends.dx, ends.dy), turnaround_m)
+        return 0.0 if m < min(turnaround_m, exit_margin_m + MIN_STUB_M) else m
+
+
+class _RouteBuilder:
+    """The route's points as its legs are added in flying order (see module doc, steps 3-5)."""
+
+    def __init__(self, ways: _Ways, turnaround_m: float, exit_margin_m: float) -> None:
+        self.ways = ways
+        self.turnaround_m = turnaround_m
+        self.exit_margin_m = exit_margin_m
+        self.points: list[RoutePoint] = []
+        self.spans: list[CameraSpan] = []
+        self.flown: list[Leg] = []
+        self.reversed: list[bool] = []
+        self.last_exit: tuple[float, float] | None = None
+
+    def add(self, leg: Leg, rev: bool) -> None:
+        """Stub in, entry, exit, stub out, after whatever connection the previous leg's exit needs."""
+        ends = _LegEnds.of(leg, rev, self.exit_margin_m)
+        k = len(self.flown)
+        stub_in = self.ways.stub_before_m(ends, self.turnaround_m)
+        stubs = self._connect(leg, ends, stub_in, self.last_exit) if self.last_exit is not None else stub_in > 0
+        pts = self.points
+        if stubs:
+            pts.append(RoutePoint(*ends.before(stub_in), KIND_TURN_IN, k))
+        pts.append(RoutePoint(*ends.entry, KIND_ENTRY, k))
+        pts.append(RoutePoint(*ends.exit, KIND_EXIT, k))
+        self.spans.append(CameraSpan(len(pts) - 2, len(pts) - 1))
+        stub_out = self.ways.stub_after_m(ends, self.turnaround_m, self.exit_margin_m)
+        if stub_out > self.exit_margin_m:
+            pts.append(RoutePoint(*ends.beyond(stub_out), KIND_TURN_IN, k))
+        self.flown.append(leg)
+        self.reversed.append(rev)
+        self.last_exit = ends.exit
+
+    def route(self) -> Route:
+        return Route(tuple(self.points), tuple(self.flown), tuple(self.reversed), tuple(self.spans))
+
+    def _connect(self, leg: Leg, ends: _LegEnds, stub_in: float, prev_exit: tuple[float, float]) -> bool:
+        """Join the previous leg's exit to this leg's entry; whether the stub before the entry is kept."""
+        prev = self.flown[-1]
+        if prev.part == leg.part and self._detour_inside(leg.part, prev_exit, ends.entry):
+            return False
+        if self.ways.zones is not None:
+            return self._keep_out_of_zones(leg, prev.part, prev_exit, ends, stub_in)
+        return stub_in > 0
+
+    def _detour_inside(self, part: int, prev_exit: tuple[float, float], entry: tuple[float, float]) -> bool:
+        """Where the straight hop crosses a hole or notch of the part: a detour inside it, without the turnaround
+        stubs (which would leave the area). Whether it was taken."""
+        inside = self.ways.inside(part)
+        if not inside.crosses_gap(prev_exit, entry):
+            return False
+        via = inside.path(prev_exit, entry)
+        if via is None:
+            return False
+        self._drop_last_stub()
+        self.points.extend(RoutePoint(x, y, KIND_VIA) for x, y in via)
+        return True
+
+    def _keep_out_of_zones(self, leg: Leg, prev_part: int, prev_exit: tuple[float, float], ends: _LegEnds,
+                           stub_in: float) -> bool:
+        """Where the hop between the stubs crosses a zone: without them, and around the zone when the hop from
+        exit to entry still crosses it (inside the part when both legs are in one, else through free space).
+        Whether the stub before the entry is kept."""
+        zones = self.ways.zones
+        assert zones is not None
+        last = (self.points[-1].x, self.points[-1].y)
+        start = ends.before(stub_in) if stub_in > 0 else ends.entry
+        if zones.crossing_m(last, start) <= ZONE_EDGE_TOL_M:
+            return stub_in > 0
+        self._drop_last_stub()
+        if zones.crossing_m(prev_exit, ends.entry) > ZONE_EDGE_TOL_M:
+            via = self.ways.inside(leg.part).path(prev_exit, ends.entry) if prev_part == leg.part else None
+            if via is None:
+                via = zones.path(prev_exit, ends.entry)
+            self.points.extend(RoutePoint(x, y, KIND_VIA) for x, y in via or [])
+        return False
+
+    def _drop_last_stub(self) -> None:
+        """The turnaround stub after the previous leg, if it has one."""
+        pts = self.points
+        if pts and pts[-1].kind == KIND_TURN_IN and pts[-1].leg == len(self.flown) - 1:
+            pts.pop()
+
+
 def build_route(legs: Sequence[Leg], geometry: Any, turnaround_m: float, exit_margin_m: float = 0.0,
-                start_xy: tuple[float, float] | None = None, order: list[tuple[int, bool]] | None = None,
+                start_xy: tuple[float, float] | None = None, order: Sequence[FlownLeg] | None = None,
                 avoid: Any = None) -> Route:
     """Waypoints for the legs in flying order (see module doc). `geometry` is the area (metres).
     (Hover surveys fly this route with photo stops in place of each leg's entry and exit: survey._hover_route.)
 
     `avoid`: holes and exclusion zones (shapely, metres) the stubs and connections keep out of (step 5).
     """
-    from missions.geometry.swaths import frame
-
     if order is None:
         order = order_legs(legs, start_xy)
-    parts = list(geometry.geoms) if geometry.geom_type == "MultiPolygon" else [geometry]
-    paths: dict[int, _InsidePaths] = {}
-    zones = _Avoid(avoid, geometry) if avoid is not None and not avoid.is_empty else None
-
-    def inside(part: int) -> _InsidePaths:
-        if part not in paths:
-            paths[part] = _InsidePaths(parts[part], zones.keep_out if zones is not None else None)
-        return paths[part]
-
-    ta = max(0.0, turnaround_m)
-    em = max(0.0, exit_margin_m)
-    pts: list[RoutePoint] = []
-    spans: list[tuple[int, int]] = []
-    flown: list[Leg] = []
-    revs: list[bool] = []
-    prev_exit: tuple[float, float] | None = None
-    prev_part = -1
-
-    def drop_last_stub(k: int) -> None:
-        if pts and pts[-1].kind == KIND_TURN_IN and pts[-1].leg == k - 1:
-            pts.pop()
-
+    builder = _RouteBuilder(_Ways(geometry, avoid), max(0.0, turnaround_m), max(0.0, exit_margin_m))
     for li, rev in order:
-        leg = legs[li]
-        (ax, ay), (bx, by) = _ends(leg, rev)
-        d, _n = frame(leg.angle_deg)
-        dx, dy = (-d[0], -d[1]) if rev else (d[0], d[1])
-        ex, ey = bx + dx * em, by + dy * em
-        k = len(flown)
-        ta_in = ta
-        if zones is not None and ta > 0:
-            ta_in = zones.clear_length((ax, ay), (-dx, -dy), ta)
-            if ta_in < min(ta, MIN_STUB_M):
-                ta_in = 0.0
-        stubs = ta_in > 0
-        joined = False
-        if prev_exit is not None and prev_part == leg.part:
-            ip = inside(leg.part)
-            if ip.crosses_gap(prev_exit, (ax, ay)):
-                via = ip.path(prev_exit, (ax, ay))
-                if via is not None:            # detour inside the area, without turnaround stubs
-                    drop_last_stub(k)
-                    pts.extend(RoutePoint(x, y, KIND_VIA) for x, y in via)
-                    stubs = False
-                    joined = True
-        if zones is not None and prev_exit is not None and not joined:
-            start = (ax - dx * ta_in, ay - dy * ta_in) if stubs else (ax, ay)
-            if zones.crossing_m((pts[-1].x, pts[-1].y), start) > ZONE_EDGE_TOL_M:
-                # the hop between the stubs crosses a zone: without them, or around it
-                drop_last_stub(k)
-                stubs = False
-                if zones.crossing_m(prev_exit, (ax, ay)) > ZONE_EDGE_TOL_M:
-                    via = inside(leg.part).path(prev_exit, (ax, ay)) if prev_part == leg.part else None
-                    if via is None:
-                        via = zones.path(prev_exit, (ax, ay))
-                    pts.extend(RoutePoint(x, y, KIND_VIA) for x, y in via or [])
-        if stubs:
-            pts.append(RoutePoint(ax - dx * ta_in, ay - dy * ta_in, KIND_TURN_IN, k))
-        entry = len(pts)
-        pts.append(RoutePoint(ax, ay, KIND_ENTRY, k))
-        pts.append(RoutePoint(ex, ey, KIND_EXIT, k))
-        spans.append((entry, len(pts) - 1))
-        ta_out = ta
-        if zones is not None and ta > em:
-            ta_out = zones.clear_length((bx, by), (dx, dy), ta)
-            if ta_out < min(ta, em + MIN_STUB_M):
-                ta_out = 0.0
-        if ta_out > em:
-            pts.append(RoutePoint(bx + dx * ta_out, by + dy * ta_out, KIND_TURN_IN, k))
-        flown.append(leg)
-        revs.append(rev)
-        prev_exit = (ex, ey)
-        prev_part = leg.part
-    return Route(tuple(pts), tuple(flown), tuple(revs), tuple(spans))
+        builder.add(legs[li], rev)
+    return builder.route()

@@ -24,6 +24,11 @@
                   function the report must run on the path rebuilt from the emitted items.
   legs            the legs in flying order; stats (`SurveyStats`); warnings (`PlanWarning(code, message)`).
 
+The angle search (`best_angle`) minimises an objective, a plain function of what a pass at a candidate angle
+would fly (`objectives.PassEstimate`); the default is the estimated flight time, turns included
+(`objectives.flight_time_s`), and `plan_survey(objective=...)` takes another (`objectives.turn_count`,
+`objectives.path_length_m`, or the caller's own).
+
 Errors: `PlanError` for overlap out of range, a trigger interval shorter than the camera's minimum
 (hint: the highest speed that works), an area that produces no legs, an area of more than MAX_SURVEY_PARTS
 separate polygons.
@@ -35,9 +40,10 @@ Complexity (n = photos, L = lines, V = area vertices, C = boustrophedon cells, P
   vertices); photos O(n) (vectorised per straight segment). angle_deg="auto" ranks ~30–60 candidate angles on
   bare inside segments, then plans once; above EXHAUSTIVE_ANGLE_PARTS parts it ranks ~200 angles on the bare
   inside segments measured from the edges alone and a hop per part to its nearest neighbour (O(V + crossings
-  + P) each, `parts_objective`) and plans the whole area at no more than its four best. Measured on 2 shared cores: 100 km² (785k photos) plans in 4–9 s and
-  measures in ~2 s; a jagged 2000-vertex boundary takes ~3 s at a fixed angle, ~30 s with "auto"; 20,000 small
-  triangles (P = 20,000) compile in ~25 s of CPU with "auto" (bench/bench_survey_scaling.py).
+  + P) each, `parts_estimate`) and plans the whole area at no more than its four best. Measured on 2 shared
+  cores: 100 km² (785k photos) plans in 4–9 s and measures in ~2 s; a jagged 2000-vertex boundary takes ~3 s at
+  a fixed angle, ~30 s with "auto"; 20,000 small triangles (P = 20,000) compile in ~25 s of CPU with "auto"
+  (bench/bench_survey_scaling.py).
 """
 
 from __future__ import annotations
@@ -45,7 +51,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 import functools
 import math
-from typing import Any, Sequence
+from typing import Any, Callable, NamedTuple, Sequence
 
 import numpy as np
 
@@ -53,17 +59,14 @@ from missions.compiled import PlanWarning
 from missions.geometry.area import Area
 from missions.errors import PlanError
 from missions.geometry.footprint import Footprint, transect_spacing_m, trigger_distance_m
-from missions.geometry.route import KIND_PHOTO, Route, RoutePoint, build_route, order_legs
+from missions.geometry.objectives import Objective, PassEstimate, estimated_time_s, flight_time_s
+from missions.geometry.route import KIND_PHOTO, FlownLeg, Route, RoutePoint, build_route, order_legs
 from missions.geometry.swaths import (Leg, PartEdges, SwathSet, bare_lines, candidate_angles, frame, generate_swaths,
                              normalise_angle)
 from missions.geometry.triggers import PhotoPoint, TriggerSpan, simulate_distance_trigger
 
-# A multirotor brakes and re-accelerates at each leg end; at ~2 m/s² (ArduCopter WPNAV_ACCEL default
-# 250 cm/s²) that costs about 2·v/a seconds beyond the straight-line time.
-DEFAULT_ACCEL_MPS2 = 2.0
 # ArduCopter accepts a waypoint within WPNAV_RADIUS (200 cm default) — before the vehicle is on it.
 DEFAULT_EXIT_MARGIN_M = 2.0
-HOVER_HOLD_S = 4.0        # QGC's _hoverAndCaptureDelaySeconds
 # The photos of one plan's survey and corridor steps together: at the WIRIS's 1 s minimum interval this is
 # 28 h of shooting, beyond any one vehicle's mission, while planning and measuring it stays within seconds
 # and a few hundred MB (both grow with the photo count). Checked per step from an estimate, before anything
@@ -74,7 +77,7 @@ MAX_PHOTOS = 100_000
 # over several plans. Checked before any swaths are generated.
 MAX_SURVEY_PARTS = 20_000
 # Up to this many polygon parts the angle search plans the whole area at each candidate angle (~1 s at 100 small
-# parts, growing with parts × angles); above, it ranks angles on a per-part estimate (`parts_objective`), whose
+# parts, growing with parts × angles); above, it ranks angles on a per-part estimate (`parts_estimate`), whose
 # pick flies within ~1-3 % of that search's on grids of 100-1,500 small triangles (better at 600 and 1,500).
 # No area of the survey-quality benchmark or the examples has more than three parts.
 EXHAUSTIVE_ANGLE_PARTS = 100
@@ -175,16 +178,25 @@ class SurveyPlan:
             trigger_interval_s=self.trigger_distance_m / self.speed_mps)
 
 
-# ---------------------------------------------------------------------------------------- objectives
+# ---------------------------------------------------------------------------------------- the angle search
 
-def estimated_time_s(path_length_m: float, turns: int, speed_mps: float, accel_mps2: float = DEFAULT_ACCEL_MPS2,
-                     hover_stops: int = 0, hover_s: float = HOVER_HOLD_S) -> float:
-    """Flight time: cruise over the path, plus braking/accelerating at each turn, plus hover holds."""
-    per_stop = 2.0 * speed_mps / accel_mps2
-    return path_length_m / speed_mps + turns * per_stop + hover_stops * (hover_s + per_stop)
+@dataclass(frozen=True)
+class LineSettings:
+    """How the lines are laid and flown whatever their angle: what the angle search holds fixed."""
+
+    across_m: float          # footprint across the lines
+    spacing_m: float
+    trigger_m: float
+    along_m: float           # footprint along the lines
+    turnaround_m: float
+    speed_mps: float
+
+    def swaths(self, geometry: Any, angle_deg: float, estimate: bool = False) -> SwathSet:
+        return generate_swaths(geometry, angle_deg, self.across_m, self.spacing_m, self.trigger_m, self.along_m,
+                               estimate=estimate)
 
 
-def _order_length(legs: Sequence[Leg], order: Sequence[tuple[int, bool]], turnaround_m: float) -> float:
+def _order_length(legs: Sequence[Leg], order: Sequence[FlownLeg], turnaround_m: float) -> float:
     """Straight-line length of a leg order with turnaround stubs (cheap estimate for angle search)."""
     total = 0.0
     prev = None
@@ -198,38 +210,61 @@ def _order_length(legs: Sequence[Leg], order: Sequence[tuple[int, bool]], turnar
     return total
 
 
-def angle_objective(sw: SwathSet, turnaround_m: float, speed_mps: float) -> float:
-    """Objective of the angle search (seconds, lower is better): estimated flight time of the pass."""
+def swaths_estimate(sw: SwathSet, turnaround_m: float) -> PassEstimate:
+    """What flying the swaths costs: a quick leg order (two greedy starts) and its straight hops."""
     order = order_legs(sw.legs, max_starts=2)
-    return estimated_time_s(_order_length(sw.legs, order, turnaround_m), max(0, len(order) - 1) * 2 + 2, speed_mps)
+    # two turns per leg (its two ends)
+    return PassEstimate(_order_length(sw.legs, order, turnaround_m), max(0, len(order) - 1) * 2 + 2, len(order))
 
 
-def best_angle(geometry: Any, across_m: float, spacing_m: float, trigger_m: float, along_m: float,
-               turnaround_m: float, speed_mps: float) -> float:
-    """Minimum-objective line azimuth: candidate edge directions and a coarse sweep ranked on bare inside
-    segments, a 1° refinement, then the best four distinct angles re-ranked on the full swaths. An area of more
-    than EXHAUSTIVE_ANGLE_PARTS parts is ranked on a per-part estimate instead (`_best_angle_of_many_parts`)."""
-    if len(_polygons(geometry)) > EXHAUSTIVE_ANGLE_PARTS:
-        return _best_angle_of_many_parts(geometry, across_m, spacing_m, trigger_m, along_m, turnaround_m, speed_mps)
-    cache: dict[float, float] = {}
+def angle_objective(sw: SwathSet, turnaround_m: float, speed_mps: float,
+                    objective: Objective = flight_time_s) -> float:
+    """The angle search's score of one pass (lower is better): `objective` of its estimate."""
+    return objective(swaths_estimate(sw, turnaround_m), speed_mps)
 
-    def cost(a: float) -> float:
-        a = round(normalise_angle(a), 6)
-        if a not in cache:
-            sw = generate_swaths(geometry, a, across_m, spacing_m, trigger_m, along_m, estimate=True)
-            cache[a] = angle_objective(sw, turnaround_m, speed_mps) if sw.legs else math.inf
-        return cache[a]
 
-    cands = candidate_angles(geometry)
-    best = min(cands, key=lambda a: (cost(a), abs(a)))
-    for step in (4.0, 2.0, 1.0):
+class _Costs:
+    """An angle's score, computed once per angle (normalised, rounded to 1e-6°): the refinement revisits
+    angles, and `_finalists` ranks what was computed."""
+
+    def __init__(self, score: Callable[[float], float]) -> None:
+        self.score = score
+        self.cache: dict[float, float] = {}
+
+    def __call__(self, angle_deg: float) -> float:
+        a = round(normalise_angle(angle_deg), 6)
+        if a not in self.cache:
+            self.cache[a] = self.score(a)
+        return self.cache[a]
+
+
+def _refined(cost: _Costs, candidates: Sequence[float], steps_deg: Sequence[float]) -> float:
+    """The best candidate (ties: the smallest |angle|), then for each step in turn moved by it either way where
+    that scores lower."""
+    best = min(candidates, key=lambda a: (cost(a), abs(a)))
+    for step in steps_deg:
         for a in (best - step, best + step):
             if cost(a) < cost(best) - 1e-9:
                 best = round(normalise_angle(a), 6)
+    return best
+
+
+def best_angle(geometry: Any, lines: LineSettings, objective: Objective = flight_time_s) -> float:
+    """Minimum-`objective` line azimuth: candidate edge directions and a coarse sweep ranked on bare inside
+    segments, a 1° refinement, then the best four distinct angles re-ranked on the full swaths. An area of more
+    than EXHAUSTIVE_ANGLE_PARTS parts is ranked on a per-part estimate instead (`_best_angle_of_many_parts`)."""
+    if len(_polygons(geometry)) > EXHAUSTIVE_ANGLE_PARTS:
+        return _best_angle_of_many_parts(geometry, lines, objective)
+
+    def on_bare_segments(a: float) -> float:
+        sw = lines.swaths(geometry, a, estimate=True)
+        return angle_objective(sw, lines.turnaround_m, lines.speed_mps, objective) if sw.legs else math.inf
+
+    cost = _Costs(on_bare_segments)
+    best = _refined(cost, candidate_angles(geometry), (4.0, 2.0, 1.0))
     # the estimate ignores leg-end rules and repairs, which matter on concave areas: re-rank the best few
     # distinct angles on the full swaths
-    return _rank_on_full_swaths(_finalists(cache, best, 4), geometry, across_m, spacing_m, trigger_m, along_m,
-                                turnaround_m, speed_mps)
+    return _rank_on_full_swaths(_finalists(cost.cache, best, 4), geometry, lines, objective)
 
 
 def _finalists(cache: dict[float, float], best: float, k: int) -> list[float]:
@@ -244,14 +279,13 @@ def _finalists(cache: dict[float, float], best: float, k: int) -> list[float]:
     return finalists
 
 
-def _rank_on_full_swaths(finalists: list[float], geometry: Any, across_m: float, spacing_m: float,
-                         trigger_m: float, along_m: float, turnaround_m: float, speed_mps: float) -> float:
+def _rank_on_full_swaths(finalists: list[float], geometry: Any, lines: LineSettings, objective: Objective) -> float:
     if len(finalists) == 1:
         return finalists[0]
 
     def full_cost(a: float) -> float:
-        sw = generate_swaths(geometry, a, across_m, spacing_m, trigger_m, along_m)
-        return angle_objective(sw, turnaround_m, speed_mps) if sw.legs else math.inf
+        sw = lines.swaths(geometry, a)
+        return angle_objective(sw, lines.turnaround_m, lines.speed_mps, objective) if sw.legs else math.inf
 
     return min(finalists, key=lambda a: (full_cost(a), abs(a)))
 
@@ -282,54 +316,163 @@ class PartNeighbours:
         return cls(i[keep][order], j[keep][order])
 
 
-def parts_objective(edges: PartEdges, neighbours: PartNeighbours, angle_deg: float, across_m: float,
-                    spacing_m: float, along_m: float, turnaround_m: float, speed_mps: float) -> float:
-    """The angle objective (seconds) estimated part by part: the bare inside segments of every part's lines
-    (`swaths.bare_lines`: what generate_swaths(estimate=True) gives, from the edges in one vectorised pass), each
-    leg with its turnaround stubs and two turns, a spacing's hop from line to line within a part, and a hop from
-    each part to its nearest neighbour. A part is flown as a run along the lines (its extent along them less a
-    footprint, plus the stubs), so lines pointing from one part to the next make progress towards it and the
+def parts_estimate(edges: PartEdges, neighbours: PartNeighbours, angle_deg: float, lines: LineSettings) -> PassEstimate:
+    """What flying the area at `angle_deg` costs, estimated part by part: the bare inside segments of every part's
+    lines (`swaths.bare_lines`: what generate_swaths(estimate=True) gives, from the edges in one vectorised pass),
+    each leg with its turnaround stubs and two turns, a spacing's hop from line to line within a part, and a hop
+    from each part to its nearest neighbour. A part is flown as a run along the lines (its extent along them less
+    a footprint, plus the stubs), so lines pointing from one part to the next make progress towards it and the
     hop between them is that much shorter: the effect that makes lines along a row of small parts pay."""
-    bare = bare_lines(edges, angle_deg, across_m, spacing_m, along_m)
+    bare = bare_lines(edges, angle_deg, lines.across_m, lines.spacing_m, lines.along_m)
     d, n = frame(angle_deg)
-    run = turnaround_m + np.where(bare.one_photo, 0.0, np.maximum(bare.along_m - along_m, 0.0) / 2.0)
+    run = lines.turnaround_m + np.where(bare.one_photo, 0.0, np.maximum(bare.along_m - lines.along_m, 0.0) / 2.0)
     i, j = neighbours.i, neighbours.j
     step = bare.centre_xy[j] - bare.centre_xy[i]
     hop = np.hypot(np.maximum(np.abs(step @ d) - run[i] - run[j], 0.0), step @ n)
     first = np.flatnonzero(np.r_[True, i[1:] != i[:-1]]) if len(i) else np.zeros(0, np.int64)
     hops_m = float(np.minimum.reduceat(hop, first).sum()) if len(i) else 0.0
-    path_m = bare.length_m + 2.0 * turnaround_m * bare.legs + spacing_m * bare.line_hops + hops_m
-    return estimated_time_s(path_m, 2 * bare.legs, speed_mps)
+    path_m = bare.length_m + 2.0 * lines.turnaround_m * bare.legs + lines.spacing_m * bare.line_hops + hops_m
+    return PassEstimate(path_m, 2 * bare.legs, bare.legs)
 
 
-def _best_angle_of_many_parts(geometry: Any, across_m: float, spacing_m: float, trigger_m: float, along_m: float,
-                              turnaround_m: float, speed_mps: float) -> float:
+def _best_angle_of_many_parts(geometry: Any, lines: LineSettings, objective: Objective) -> float:
     """The angle search for an area of many parts: planning the whole area at each of ~60 angles costs
     parts × angles plans (20,000 small polygons: more than 10 minutes), so candidates and a 1° sweep
-    are ranked on `parts_objective` (edges × angles), refined to 0.25°, and only the best few (fewer as the
+    are ranked on `parts_estimate` (edges × angles), refined to 0.25°, and only the best few (fewer as the
     parts grow: FULL_RANK_PARTS / parts) are re-ranked on the full swaths."""
     edges = PartEdges.of(geometry)
     neighbours = PartNeighbours.of(geometry)
-    cache: dict[float, float] = {}
-
-    def cost(a: float) -> float:
-        a = round(normalise_angle(a), 6)
-        if a not in cache:
-            cache[a] = parts_objective(edges, neighbours, a, across_m, spacing_m, along_m, turnaround_m, speed_mps)
-        return cache[a]
-
-    cands = sorted(set(candidate_angles(geometry)) | {float(a) for a in range(-90, 90)})
-    best = min(cands, key=lambda a: (cost(a), abs(a)))
-    for step in (0.5, 0.25):
-        for a in (best - step, best + step):
-            if cost(a) < cost(best) - 1e-9:
-                best = round(normalise_angle(a), 6)
+    cost = _Costs(lambda a: objective(parts_estimate(edges, neighbours, a, lines), lines.speed_mps))
+    best = _refined(cost, sorted(set(candidate_angles(geometry)) | {float(a) for a in range(-90, 90)}), (0.5, 0.25))
     k = max(1, min(4, FULL_RANK_PARTS // edges.parts))
-    return _rank_on_full_swaths(_finalists(cache, best, k), geometry, across_m, spacing_m, trigger_m, along_m,
-                                turnaround_m, speed_mps)
+    return _rank_on_full_swaths(_finalists(cost.cache, best, k), geometry, lines, objective)
 
 
 # ---------------------------------------------------------------------------------------- planning
+
+class OrderedLegs(NamedTuple):
+    """The legs of every pass (the first at the survey's angle, a refly 90° to it) and the order they are flown in."""
+
+    legs: tuple[Leg, ...]
+    order: tuple[FlownLeg, ...]      # indices into legs
+    lines: int
+
+
+def plan_survey(area: Area, footprint: Footprint, front_pct: float, side_pct: float,
+                angle_deg: float | str = "auto", turnaround_m: float = 10.0, speed_mps: float = 5.0,
+                min_interval_s: float | None = None, refly_90: bool = False, hover: bool = False,
+                start_latlon: tuple[float, float] | None = None,
+                exit_margin_m: float = DEFAULT_EXIT_MARGIN_M, photos_left: int = MAX_PHOTOS,
+                objective: Objective = flight_time_s) -> SurveyPlan:
+    """Plan a survey of `area` (see module doc); `photos_left`: what the plan's earlier steps left of
+    MAX_PHOTOS; `objective`: what angle_deg "auto" minimises (`objectives`)."""
+    spacing = transect_spacing_m(footprint, side_pct)
+    trig = trigger_distance_m(footprint, front_pct)
+    _check_speed_and_turnaround(speed_mps, turnaround_m)
+    _check_trigger_interval(trig, speed_mps, min_interval_s, hover)
+    geom = area.geometry
+    warnings = _sliver_warnings(area)
+    check_part_count(geom, area.source)
+    # a photo adds about spacing x trigger distance of new ground
+    check_photo_budget(geom.area / (spacing * trig) * (2 if refly_90 else 1), "survey", photos_left)
+    lines = LineSettings(footprint.across_m, spacing, trig, footprint.along_m, turnaround_m, speed_mps)
+    angle = _line_angle(angle_deg, geom, lines, objective)
+    start_xy = area.projection.point_to_xy(*start_latlon) if start_latlon else None
+    passes = _ordered_passes(geom, angle, lines, refly_90, start_xy)
+    if not passes.legs:
+        raise PlanError("the area produced no flight lines", where=area.source or None,
+                        hint="check the area's size against the footprint")
+    warnings += _small_area_warnings(geom, footprint)
+    route = _flown_route(area, passes, turnaround_m, exit_margin_m, trig, hover)
+    spans = () if hover else tuple(TriggerSpan(a, b, trig, True, False) for a, b in route.spans)
+    return SurveyPlan(_waypoints(area, route, hover), spans, hover, trig, spacing, angle, route.legs, tuple(warnings),
+                      area, route, passes.lines, float(speed_mps))
+
+
+def _check_speed_and_turnaround(speed_mps: float, turnaround_m: float) -> None:
+    if not (isinstance(speed_mps, (int, float)) and math.isfinite(speed_mps) and speed_mps > 0):
+        raise PlanError(f"speed {speed_mps!r} m/s must be positive", where="vehicle.speed_mps",
+                        hint="give the ground speed in m/s, e.g. speed_mps: 5")
+    if not (isinstance(turnaround_m, (int, float)) and math.isfinite(turnaround_m) and turnaround_m >= 0):
+        raise PlanError(f"turnaround {turnaround_m!r} m must be zero or positive", where="turnaround_m",
+                        hint="the straight run beyond each line end in metres, e.g. turnaround_m: 10 (0: none)")
+
+
+def _check_trigger_interval(trig: float, speed_mps: float, min_interval_s: float | None, hover: bool) -> None:
+    """PlanError when distance triggering would ask the camera for photos faster than it can take them."""
+    interval = trig / speed_mps
+    if min_interval_s and not hover and interval < min_interval_s - 1e-9:
+        raise PlanError(f"photos would be {interval:.2f} s apart, faster than the camera's minimum of "
+                        f"{min_interval_s:g} s", where="overlap.front",
+                        hint=f"fly at most {trig / min_interval_s:.1f} m/s, lower the front overlap or fly higher")
+
+
+def _sliver_warnings(area: Area) -> list[PlanWarning]:
+    if not area.dropped[0]:
+        return []
+    from missions.geometry.area import MIN_PART_WIDTH_M
+    n, m2 = area.dropped
+    return [PlanWarning("area_sliver_dropped",
+                        f"{n} piece{'s' if n > 1 else ''} of the area ({m2:.1f} m² in all) that the "
+                        f"exclusion zones cut off {'are' if n > 1 else 'is'} nowhere {MIN_PART_WIDTH_M:g} m "
+                        "wide and not surveyed (no GNSS track that narrow misses the exclusion); "
+                        "if it matters, draw the exclusion to leave a wider strip")]
+
+
+def _small_area_warnings(geom: Any, footprint: Footprint) -> list[PlanWarning]:
+    x0, y0, x1, y1 = geom.bounds
+    if geom.area <= footprint.area_m2 and (x1 - x0) <= max(footprint.across_m, footprint.along_m) \
+            and (y1 - y0) <= max(footprint.across_m, footprint.along_m):
+        return [PlanWarning("area_smaller_than_footprint",
+                            f"the area ({geom.area:.0f} m²) is smaller than one photo's footprint "
+                            f"({footprint.across_m:.1f} × {footprint.along_m:.1f} m); a single waypoint "
+                            "with one photo may serve better")]
+    return []
+
+
+def _line_angle(angle_deg: float | str, geom: Any, lines: LineSettings, objective: Objective) -> float:
+    """The first pass's line azimuth: the plan's, or the search's for "auto"."""
+    if isinstance(angle_deg, str):
+        if angle_deg != "auto":
+            raise PlanError(f"angle_deg must be a number or 'auto', got {angle_deg!r}", where="angle_deg",
+                            hint="degrees clockwise from north, e.g. angle_deg: 30 (0 = north-south lines), or auto")
+        return best_angle(geom, lines, objective)
+    if not math.isfinite(float(angle_deg)):
+        raise PlanError(f"angle_deg {angle_deg!r} is not a number", where="angle_deg",
+                        hint="degrees clockwise from north, e.g. angle_deg: 30 (0 = north-south lines), or auto")
+    return normalise_angle(float(angle_deg))
+
+
+def _ordered_passes(geom: Any, angle: float, lines: LineSettings, refly_90: bool,
+                    start_xy: tuple[float, float] | None) -> OrderedLegs:
+    """The passes' legs in flying order: each pass ordered from where the one before it ended."""
+    passes = [lines.swaths(geom, angle)]
+    if refly_90:
+        passes.append(lines.swaths(geom, angle + 90.0))
+    legs: list[Leg] = []
+    order: list[FlownLeg] = []
+    pos = start_xy
+    for sw in passes:
+        off = len(legs)
+        o = order_legs(sw.legs, pos)
+        legs.extend(sw.legs)
+        order.extend(FlownLeg(i + off, r) for i, r in o)
+        if o:
+            last = sw.legs[o[-1].index]
+            pos = (last.x0, last.y0) if o[-1].reversed else (last.x1, last.y1)
+    return OrderedLegs(tuple(legs), tuple(order), sum(sw.lines for sw in passes))
+
+
+def _flown_route(area: Area, passes: OrderedLegs, turnaround_m: float, exit_margin_m: float, trig: float,
+                 hover: bool) -> Route:
+    # Hover lines are flown on the route distance triggering flies (turnaround stubs, connections kept out of
+    # holes and exclusions), stopping at the photos instead of running the camera along the leg: see _hover_route.
+    # A hover stop is held, so no exit margin against an early waypoint acceptance.
+    margin = 0.0 if hover else min(exit_margin_m, 0.45 * trig)
+    route = build_route(passes.legs, area.geometry, turnaround_m, exit_margin_m=margin, order=passes.order,
+                        avoid=area.excluded)
+    return _hover_route(route, trig) if hover else route
+
 
 def _latlon(area: Area, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     if len(xy) == 0:
@@ -337,92 +480,11 @@ def _latlon(area: Area, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return area.projection.to_latlon(xy[:, 0], xy[:, 1])
 
 
-def plan_survey(area: Area, footprint: Footprint, front_pct: float, side_pct: float,
-                angle_deg: float | str = "auto", turnaround_m: float = 10.0, speed_mps: float = 5.0,
-                min_interval_s: float | None = None, refly_90: bool = False, hover: bool = False,
-                start_latlon: tuple[float, float] | None = None,
-                exit_margin_m: float = DEFAULT_EXIT_MARGIN_M, photos_left: int = MAX_PHOTOS) -> SurveyPlan:
-    """Plan a survey of `area` (see module doc); `photos_left`: what the plan's earlier steps left of
-    MAX_PHOTOS."""
-    spacing = transect_spacing_m(footprint, side_pct)
-    trig = trigger_distance_m(footprint, front_pct)
-    if not (isinstance(speed_mps, (int, float)) and math.isfinite(speed_mps) and speed_mps > 0):
-        raise PlanError(f"speed {speed_mps!r} m/s must be positive", where="vehicle.speed_mps",
-                        hint="give the ground speed in m/s, e.g. speed_mps: 5")
-    if not (isinstance(turnaround_m, (int, float)) and math.isfinite(turnaround_m) and turnaround_m >= 0):
-        raise PlanError(f"turnaround {turnaround_m!r} m must be zero or positive", where="turnaround_m",
-                        hint="the straight run beyond each line end in metres, e.g. turnaround_m: 10 (0: none)")
-    interval = trig / speed_mps
-    if min_interval_s and not hover and interval < min_interval_s - 1e-9:
-        raise PlanError(f"photos would be {interval:.2f} s apart, faster than the camera's minimum of "
-                        f"{min_interval_s:g} s", where="overlap.front",
-                        hint=f"fly at most {trig / min_interval_s:.1f} m/s, lower the front overlap or fly higher")
-    warnings: list[PlanWarning] = []
-    geom = area.geometry
-    if area.dropped[0]:
-        from missions.geometry.area import MIN_PART_WIDTH_M
-        n, m2 = area.dropped
-        warnings.append(PlanWarning("area_sliver_dropped",
-                                    f"{n} piece{'s' if n > 1 else ''} of the area ({m2:.1f} m² in all) that the "
-                                    f"exclusion zones cut off {'are' if n > 1 else 'is'} nowhere {MIN_PART_WIDTH_M:g} m "
-                                    "wide and not surveyed (no GNSS track that narrow misses the exclusion); "
-                                    "if it matters, draw the exclusion to leave a wider strip"))
-    check_part_count(geom, area.source)
-    # a photo adds about spacing x trigger distance of new ground
-    check_photo_budget(geom.area / (spacing * trig) * (2 if refly_90 else 1), "survey", photos_left)
-    if isinstance(angle_deg, str):
-        if angle_deg != "auto":
-            raise PlanError(f"angle_deg must be a number or 'auto', got {angle_deg!r}", where="angle_deg",
-                            hint="degrees clockwise from north, e.g. angle_deg: 30 (0 = north-south lines), or auto")
-        angle = best_angle(geom, footprint.across_m, spacing, trig, footprint.along_m, turnaround_m, speed_mps)
-    else:
-        if not math.isfinite(float(angle_deg)):
-            raise PlanError(f"angle_deg {angle_deg!r} is not a number", where="angle_deg",
-                            hint="degrees clockwise from north, e.g. angle_deg: 30 (0 = north-south lines), or auto")
-        angle = normalise_angle(float(angle_deg))
-    start_xy = area.projection.point_to_xy(*start_latlon) if start_latlon else None
-
-    passes = [generate_swaths(geom, angle, footprint.across_m, spacing, trig, footprint.along_m)]
-    if refly_90:
-        passes.append(generate_swaths(geom, angle + 90.0, footprint.across_m, spacing, trig, footprint.along_m))
-    legs: list[Leg] = []
-    order: list[tuple[int, bool]] = []
-    pos = start_xy
-    for sw in passes:
-        off = len(legs)
-        o = order_legs(sw.legs, pos)
-        legs.extend(sw.legs)
-        order.extend((i + off, r) for i, r in o)
-        if o:
-            last = sw.legs[o[-1][0]]
-            pos = (last.x0, last.y0) if o[-1][1] else (last.x1, last.y1)
-    if not legs:
-        raise PlanError("the area produced no flight lines", where=area.source or None,
-                        hint="check the area's size against the footprint")
-
-    x0, y0, x1, y1 = geom.bounds
-    if geom.area <= footprint.area_m2 and (x1 - x0) <= max(footprint.across_m, footprint.along_m) \
-            and (y1 - y0) <= max(footprint.across_m, footprint.along_m):
-        warnings.append(PlanWarning("area_smaller_than_footprint",
-                                    f"the area ({geom.area:.0f} m²) is smaller than one photo's footprint "
-                                    f"({footprint.across_m:.1f} × {footprint.along_m:.1f} m); a single waypoint "
-                                    "with one photo may serve better"))
-
-    # Hover lines are flown on the route distance triggering flies (turnaround stubs, connections kept out of
-    # holes and exclusions), stopping at the photos instead of running the camera along the leg: see _hover_route.
-    # A hover stop is held, so no exit margin against an early waypoint acceptance.
-    margin = 0.0 if hover else min(exit_margin_m, 0.45 * trig)
-    route: Route = build_route(legs, geom, turnaround_m, exit_margin_m=margin, order=order, avoid=area.excluded)
-    if hover:
-        route = _hover_route(route, trig)
-    xy = route.xy
-    lat, lon = _latlon(area, xy)
+def _waypoints(area: Area, route: Route, hover: bool) -> tuple[Waypoint, ...]:
+    lat, lon = _latlon(area, route.xy)
     yaw = _photo_yaws(area, route) if hover else {}
-    wps = tuple(Waypoint(float(p.x), float(p.y), float(a), float(o), p.kind, p.leg, yaw.get(k))
-                for k, (p, a, o) in enumerate(zip(route.points, lat, lon)))
-    spans = () if hover else tuple(TriggerSpan(a, b, trig, True, False) for a, b in route.spans)
-    return SurveyPlan(wps, spans, hover, trig, spacing, angle, route.legs, tuple(warnings), area, route,
-                      sum(sw.lines for sw in passes), float(speed_mps))
+    return tuple(Waypoint(float(p.x), float(p.y), float(a), float(o), p.kind, p.leg, yaw.get(k))
+                 for k, (p, a, o) in enumerate(zip(route.points, lat, lon)))
 
 
 def _hover_route(route: Route, trig: float) -> Route:

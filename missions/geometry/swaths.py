@@ -37,7 +37,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Any, Sequence
+from typing import Any, NamedTuple, Sequence
 
 import numpy as np
 
@@ -119,7 +119,14 @@ def line_offsets(width_m: float, across_m: float, spacing_m: float, edge_margin_
     return width_m / 2.0 - span / 2.0 + spacing_m * np.arange(n)
 
 
-def _intervals(g: Any) -> list[tuple[float, float]]:
+class Interval(NamedTuple):
+    """A stretch of a line, lo <= hi (along-track v, metres)."""
+
+    lo: float
+    hi: float
+
+
+def _intervals(g: Any) -> list[Interval]:
     """v-intervals of the line pieces of a (rotated) intersection result."""
     out = []
     for h in leaf_parts(g, "LineString"):
@@ -134,7 +141,7 @@ def _intervals(g: Any) -> list[tuple[float, float]]:
             merged[-1][1] = max(merged[-1][1], b)
         else:
             merged.append([a, b])
-    return [(a, b) for a, b in merged]
+    return [Interval(a, b) for a, b in merged]
 
 
 def _polys(g: Any) -> list[Any]:
@@ -154,7 +161,7 @@ def _grid_up(v: float, trigger_m: float) -> float:
     return math.ceil(v / trigger_m - 1e-9) * trigger_m if math.isfinite(v) else v
 
 
-def _snap(a: float, b: float, outer_a: bool, outer_b: bool, trigger_m: float, inward_ok: bool) -> tuple[float, float]:
+def _snap(a: float, b: float, outer_a: bool, outer_b: bool, trigger_m: float, inward_ok: bool) -> Interval:
     lo, hi = _grid_down(a, trigger_m), _grid_up(b, trigger_m)
     if not outer_a and inward_ok:
         lo = _grid_up(a, trigger_m)
@@ -163,13 +170,90 @@ def _snap(a: float, b: float, outer_a: bool, outer_b: bool, trigger_m: float, in
     if hi < lo:          # a gap-bounded leg shorter than one trigger step: keep one photo in its middle
         mid = round((a + b) / 2.0 / trigger_m) * trigger_m
         lo = hi = mid
-    return lo, hi
+    return Interval(lo, hi)
 
 
-def part_legs(poly_uv: Any, part: int, across_m: float, spacing_m: float, trigger_m: float | None,
-              along_m: float | None, edge_margin_m: float,
-              estimate: bool = False) -> list[tuple[int, float, float, float, bool, bool]]:
-    """(line, u, v0, v1, outer0, outer1) for one polygon part already rotated to the (u, v) frame.
+class PartLeg(NamedTuple):
+    """One leg of a polygon part in its (u, v) frame, as `part_legs` lays it."""
+
+    line: int             # line index within the part (increasing u)
+    u: float
+    v0: float
+    v1: float
+    outer0: bool          # the v0 end faces the outside of the area (True) or a gap inside it (False)
+    outer1: bool
+    lowest_v0: float = -math.inf     # the ends never move past these: the middle of the gap beside them
+    highest_v1: float = math.inf
+
+
+class _LineLeg(NamedTuple):
+    """A leg on one line while its ends are set: `snap0`/`snap1`, the end snaps outward to the photo grid."""
+
+    v0: float
+    v1: float
+    snap0: bool
+    snap1: bool
+    lowest_v0: float
+    highest_v1: float
+    outer0: bool
+    outer1: bool
+
+
+def _own_leg(v0: float, v1: float) -> _LineLeg:
+    """A short leg of its own for a piece no inside segment reaches: both ends outer."""
+    return _LineLeg(v0, v1, True, True, -math.inf, math.inf, True, True)
+
+
+@dataclass(frozen=True)
+class _EndRules:
+    """What sets a part's leg ends (see module doc), from the footprint, spacing and trigger distance."""
+
+    trigger_m: float | None
+    excl: float           # half-width of the strip beside a line no neighbouring line's footprint reaches
+    reach: float          # how far a photo's footprint reaches along-track, less the edge margin
+    along_reach: float    # how far beyond a leg's end a piece may lie and still stretch the leg to it
+    s_in: float           # how far inside the boundary an outer end's photo may sit
+    inward_ok: bool       # a gap end may snap inward: half a footprint still reaches the boundary
+
+    @classmethod
+    def of(cls, across_m: float, spacing_m: float, trigger_m: float | None, along_m: float | None,
+           edge_margin_m: float) -> "_EndRules":
+        # Only the strip that no neighbouring line's footprint reaches (half-width `excl`, which is 0 at side
+        # overlap ≥ 50 %) needs this line's leg ends stretched; for the outermost lines that strip runs to
+        # the boundary. A monotone slanted edge's far corner in the rest of the band lies beside the
+        # neighbour's longer leg, inside its footprint.
+        excl = max(0.0, spacing_m - across_m / 2.0 + edge_margin_m)
+        inward_ok = along_m is not None and trigger_m is not None and along_m / 2.0 >= trigger_m - _EPS
+        # a photo covers half a footprint beyond itself along-track: band corners beyond a leg end need the
+        # leg (its last photo) to reach within that distance of them, not all the way
+        reach = max(0.0, along_m / 2.0 - edge_margin_m) if along_m else 0.0
+        # Outer leg ends are snapped outward to the photo grid; starting the requirement half a trigger step
+        # inside the boundary makes the end photo land, on average, on the boundary instead of d/2 beyond it
+        # (QGC's photo is at the boundary too). Its footprint still reaches past the boundary by the margin.
+        s_in = min(trigger_m / 2.0, reach) if trigger_m and along_m else 0.0
+        return cls(trigger_m, excl, reach, along_m if along_m else 0.0, s_in, inward_ok)
+
+    def down(self, v: float) -> float:
+        """v on the photo grid, rounded down (v itself without a trigger distance)."""
+        return _grid_down(v, self.trigger_m) if self.trigger_m else v
+
+    def up(self, v: float) -> float:
+        return _grid_up(v, self.trigger_m) if self.trigger_m else v
+
+
+def _strips(poly_uv: Any, us: np.ndarray, half_width_m: float) -> np.ndarray:
+    """Per line, the part's pieces within `half_width_m` of it; the outermost lines' strips run past the part."""
+    import shapely
+    umin, vmin, umax, vmax = poly_uv.bounds
+    lo, hi = us - half_width_m, us + half_width_m
+    lo[0] = umin - 1.0
+    hi[-1] = umax + 1.0
+    return shapely.intersection(shapely.box(lo, vmin - 1.0, hi, vmax + 1.0), poly_uv)
+
+
+def part_legs(poly_uv: Any, across_m: float, spacing_m: float, trigger_m: float | None, along_m: float | None,
+              edge_margin_m: float, estimate: bool = False) -> list[PartLeg]:
+    """The legs of one polygon part already rotated to the (u, v) frame, by line and v0.
     `estimate`: the inside segments only (no end rules, no repair) — enough to rank angles, ~10× cheaper."""
     import shapely
 
@@ -178,192 +262,193 @@ def part_legs(poly_uv: Any, part: int, across_m: float, spacing_m: float, trigge
             and vmax - vmin + 2 * edge_margin_m <= along_m:
         # the whole part fits in one footprint: one photo at its centre
         vc = (vmin + vmax) / 2.0
-        return [(0, (umin + umax) / 2.0, vc, vc, True, True)]
-    offs = line_offsets(umax - umin, across_m, spacing_m, edge_margin_m)
-    us = umin + offs
+        return [PartLeg(0, (umin + umax) / 2.0, vc, vc, True, True)]
+    us = umin + line_offsets(umax - umin, across_m, spacing_m, edge_margin_m)
     nl = len(us)
-    lo_v, hi_v = vmin - 1.0, vmax + 1.0
-    lines = shapely.linestrings(np.stack([np.column_stack([us, np.full(nl, lo_v)]),
-                                          np.column_stack([us, np.full(nl, hi_v)])], axis=1))
-    half = spacing_m / 2.0
-    band_lo = us - half
-    band_hi = us + half
-    band_lo[0] = umin - 1.0
-    band_hi[-1] = umax + 1.0
-    bands = shapely.box(band_lo, lo_v, band_hi, hi_v)
+    lines = shapely.linestrings(np.stack([np.column_stack([us, np.full(nl, vmin - 1.0)]),
+                                          np.column_stack([us, np.full(nl, vmax + 1.0)])], axis=1))
     shapely.prepare(poly_uv)
     cores = shapely.intersection(lines, poly_uv)
     if estimate:
-        return [(k, float(us[k]), a, b, True, True) for k in range(nl) for a, b in _intervals(cores[k])]
-    bandparts = shapely.intersection(bands, poly_uv)
-    # Only the strip that no neighbouring line's footprint reaches (half-width `excl`, which is 0 at side
-    # overlap ≥ 50 %) needs this line's leg ends stretched; for the outermost lines that strip runs to
-    # the boundary. A monotone slanted edge's far corner in the rest of the band lies beside the
-    # neighbour's longer leg, inside its footprint.
-    excl = max(0.0, spacing_m - across_m / 2.0 + edge_margin_m)
-    ex_lo = us - max(excl, 1e-3)
-    ex_hi = us + max(excl, 1e-3)
-    ex_lo[0] = umin - 1.0
-    ex_hi[-1] = umax + 1.0
-    exparts = shapely.intersection(shapely.box(ex_lo, lo_v, ex_hi, hi_v), poly_uv)
-    inward_ok = along_m is not None and trigger_m is not None and along_m / 2.0 >= trigger_m - _EPS
-    # a photo covers half a footprint beyond itself along-track: band corners beyond a leg end need the
-    # leg (its last photo) to reach within that distance of them, not all the way
-    reach = max(0.0, along_m / 2.0 - edge_margin_m) if along_m else 0.0
-    along_reach = along_m if along_m else 0.0
-    # Outer leg ends are snapped outward to the photo grid; starting the requirement half a trigger step
-    # inside the boundary makes the end photo land, on average, on the boundary instead of d/2 beyond it
-    # (QGC's photo is at the boundary too). Its footprint still reaches past the boundary by the margin.
-    s_in = min(trigger_m / 2.0, reach) if trigger_m and along_m else 0.0
-
-    out = []
+        return [PartLeg(k, float(us[k]), a, b, True, True) for k in range(nl) for a, b in _intervals(cores[k])]
+    rules = _EndRules.of(across_m, spacing_m, trigger_m, along_m, edge_margin_m)
+    bands = _strips(poly_uv, us, spacing_m / 2.0)
+    exclusive = _strips(poly_uv, us, max(rules.excl, 1e-3))
+    legs: list[PartLeg] = []
     for k in range(nl):
-        u = float(us[k])
-        ivs = _intervals(cores[k])
-        comps = _polys(bandparts[k])
-        comp_ranges = [(c.bounds[1], c.bounds[3], c) for c in comps]
-        ex_ranges = [(c.bounds[1], c.bounds[3], c) for c in _polys(exparts[k])]
-        legs: list[list[Any]] = []
-        for i, (a, b) in enumerate(ivs):
-            first, last = i == 0, i == len(ivs) - 1
-            na, nb = a, b
-            if first or last:
-                # the first/last photo may sit up to s_in inside the boundary; the band's far corners
-                # must stay within `reach` of it
+        legs.extend(_line_legs(poly_uv, k, float(us[k]), _intervals(cores[k]), _polys(bands[k]),
+                               _polys(exclusive[k]), rules))
+    return _repair(poly_uv, legs, us, across_m, rules, edge_margin_m)
+
+
+def _line_legs(poly_uv: Any, k: int, u: float, ivs: list[Interval], band: list[Any], exclusive: list[Any],
+               rules: _EndRules) -> list[PartLeg]:
+    """The legs of line k (at u): one per inside segment `ivs`, ends set by what the photos must cover in the
+    line's band and exclusive strip, then merged where they meet and put on the photo grid."""
+    legs = [_segment_leg(poly_uv, u, ivs, i, exclusive, rules) for i in range(len(ivs))]
+    legs = _cover_tips(legs, u, ivs, band, rules)
+    return [_on_grid(k, u, leg, rules) for leg in _merged(legs)]
+
+
+def _segment_leg(poly_uv: Any, u: float, ivs: list[Interval], i: int, exclusive: list[Any],
+                 rules: _EndRules) -> _LineLeg:
+    """The leg of inside segment i: an outer end pulled inside by up to s_in where the exclusive strip's far
+    corners allow it; a gap end kept short of the gap's middle."""
+    import shapely
+    a, b = ivs[i]
+    first, last = i == 0, i == len(ivs) - 1
+    na, nb = a, b
+    if first or last:
+        # the first/last photo may sit up to s_in inside the boundary; the band's far corners
+        # must stay within `reach` of it
+        if first:
+            na = a + rules.s_in
+        if last:
+            nb = b - rules.s_in
+        mid = shapely.Point(u, (a + b) / 2.0)
+        for c in exclusive:
+            if c.distance(mid) < 1e-6:
                 if first:
-                    na = a + s_in
+                    na = min(na, c.bounds[1] + rules.reach)
                 if last:
-                    nb = b - s_in
-                mid = shapely.Point(u, (a + b) / 2.0)
-                for cv0, cv1, c in ex_ranges:
-                    if c.distance(mid) < 1e-6:
-                        if first:
-                            na = min(na, cv0 + reach)
-                        if last:
-                            nb = max(nb, cv1 - reach)
-                        break
-                if na > nb:
-                    na = nb = (na + nb) / 2.0
-            # [start, end, snap start outward, snap end outward, lowest start, highest end, outer0, outer1]
-            leg = [na, nb, first, last, -math.inf, math.inf, first, last]
-            if not first:
-                leg[4] = (ivs[i - 1][1] + a) / 2.0 + 0.5
-            if not last:
-                leg[5] = (b + ivs[i + 1][0]) / 2.0 - 0.5
-            if excl > 0:
-                # at low side overlap the strip beside a gap, closer to this line than its neighbours'
-                # footprints reach, can only be photographed from this line: reach into the gap as far as
-                # that needs, never past the middle of the gap (so two legs never join across it)
-                if not last:
-                    slab = shapely.intersection(poly_uv, shapely.box(u - excl, b, u + excl, ivs[i + 1][0]))
-                    tops = [q.bounds[3] for q in _polys(slab) if q.bounds[1] <= b + 1e-6]
-                    if tops and min(max(tops) - reach, leg[5]) > leg[1]:
-                        leg[1] = min(max(tops) - reach, leg[5])
-                        leg[3] = True
-                if not first:
-                    slab = shapely.intersection(poly_uv, shapely.box(u - excl, ivs[i - 1][1], u + excl, a))
-                    bots = [q.bounds[1] for q in _polys(slab) if q.bounds[3] >= a - 1e-6]
-                    if bots and max(min(bots) + reach, leg[4]) < leg[0]:
-                        leg[0] = max(min(bots) + reach, leg[4])
-                        leg[2] = True
-            legs.append(leg)
-        # band pieces the line never crosses (tips between lines): covered by stretching the outermost
-        # leg when they are near it, else by a short leg of their own; pieces beside a gap are left to
-        # the neighbouring lines.
-        extra = []
-        for cv0, cv1, c in comp_ranges:
-            if any(c.distance(shapely.Point(u, (a + b) / 2.0)) < 1e-6 for a, b in ivs):
-                continue
-            lo_need, hi_need = cv0 + reach, cv1 - reach
-            if lo_need > hi_need:
-                lo_need = hi_need = (cv0 + cv1) / 2.0
-            if not legs:
-                extra.append([lo_need, hi_need, True, True, -math.inf, math.inf, True, True])
-            elif cv1 <= legs[0][0] + _EPS:
-                if legs[0][0] - cv1 > along_reach:
-                    extra.append([lo_need, hi_need, True, True, -math.inf, math.inf, True, True])
-                else:
-                    legs[0][0] = min(legs[0][0], lo_need)
-            elif cv0 >= legs[-1][1] - _EPS:
-                if cv0 - legs[-1][1] > along_reach:
-                    extra.append([lo_need, hi_need, True, True, -math.inf, math.inf, True, True])
-                else:
-                    legs[-1][1] = max(legs[-1][1], hi_need)
-            elif cv0 < legs[0][0]:
-                legs[0][0] = min(legs[0][0], lo_need)
-            elif cv1 > legs[-1][1]:
-                legs[-1][1] = max(legs[-1][1], hi_need)
-        allv = sorted(legs + extra, key=lambda t: t[0])
-        merged: list[list[Any]] = []
-        for leg in allv:
-            if merged and leg[0] <= merged[-1][1] + _EPS:
-                m = merged[-1]
-                if leg[1] >= m[1]:
-                    m[1], m[3], m[5], m[7] = leg[1], leg[3], leg[5], leg[7]
+                    nb = max(nb, c.bounds[3] - rules.reach)
+                break
+        if na > nb:
+            na = nb = (na + nb) / 2.0
+    leg = _LineLeg(na, nb, first, last,
+                   -math.inf if first else (ivs[i - 1].hi + a) / 2.0 + 0.5,
+                   math.inf if last else (b + ivs[i + 1].lo) / 2.0 - 0.5, first, last)
+    return _reach_into_gaps(poly_uv, u, ivs, i, leg, rules) if rules.excl > 0 else leg
+
+
+def _reach_into_gaps(poly_uv: Any, u: float, ivs: list[Interval], i: int, leg: _LineLeg,
+                     rules: _EndRules) -> _LineLeg:
+    """At low side overlap the strip beside a gap, closer to this line than its neighbours' footprints reach,
+    can only be photographed from this line: reach into the gap as far as that needs, never past the middle of
+    the gap (so two legs never join across it)."""
+    import shapely
+    a, b = ivs[i]
+    excl, reach = rules.excl, rules.reach
+    if i < len(ivs) - 1:
+        slab = shapely.intersection(poly_uv, shapely.box(u - excl, b, u + excl, ivs[i + 1].lo))
+        tops = [q.bounds[3] for q in _polys(slab) if q.bounds[1] <= b + 1e-6]
+        if tops and min(max(tops) - reach, leg.highest_v1) > leg.v1:
+            leg = leg._replace(v1=min(max(tops) - reach, leg.highest_v1), snap1=True)
+    if i > 0:
+        slab = shapely.intersection(poly_uv, shapely.box(u - excl, ivs[i - 1].hi, u + excl, a))
+        bots = [q.bounds[1] for q in _polys(slab) if q.bounds[3] >= a - 1e-6]
+        if bots and max(min(bots) + reach, leg.lowest_v0) < leg.v0:
+            leg = leg._replace(v0=max(min(bots) + reach, leg.lowest_v0), snap0=True)
+    return leg
+
+
+def _cover_tips(legs: list[_LineLeg], u: float, ivs: list[Interval], band: list[Any],
+                rules: _EndRules) -> list[_LineLeg]:
+    """Band pieces the line never crosses (tips between lines): covered by stretching the outermost leg when
+    they are near it, else by a short leg of their own; pieces beside a gap are left to the neighbouring lines.
+    The legs, stretched, and the short ones after them."""
+    import shapely
+    legs = list(legs)
+    extra: list[_LineLeg] = []
+    for c in band:
+        cv0, cv1 = c.bounds[1], c.bounds[3]
+        if any(c.distance(shapely.Point(u, (a + b) / 2.0)) < 1e-6 for a, b in ivs):
+            continue
+        lo_need, hi_need = cv0 + rules.reach, cv1 - rules.reach
+        if lo_need > hi_need:
+            lo_need = hi_need = (cv0 + cv1) / 2.0
+        if not legs:
+            extra.append(_own_leg(lo_need, hi_need))
+        elif cv1 <= legs[0].v0 + _EPS:
+            if legs[0].v0 - cv1 > rules.along_reach:
+                extra.append(_own_leg(lo_need, hi_need))
             else:
-                merged.append(list(leg))
-        for a, b, sa, sb, lim_a, lim_b, oa, ob in merged:
-            if trigger_m:
-                a, b = _snap(a, b, sa, sb, trigger_m, inward_ok)
-                # an outward snap must not carry a gap end past the middle of the gap; the end stays on
-                # the grid (see _grid_down) at the last grid point before the middle
-                a, b = max(a, _grid_up(lim_a, trigger_m)), min(b, _grid_down(lim_b, trigger_m))
-                if a > b:
-                    a = b = (a + b) / 2.0
-            out.append([k, u, a, b, bool(oa), bool(ob), lim_a, lim_b])
-    out = _repair(poly_uv, out, us, across_m, reach, trigger_m, edge_margin_m, along_reach)
-    return [(k, u, a, b, oa, ob) for k, u, a, b, oa, ob, _la, _lb in out]
+                legs[0] = legs[0]._replace(v0=min(legs[0].v0, lo_need))
+        elif cv0 >= legs[-1].v1 - _EPS:
+            if cv0 - legs[-1].v1 > rules.along_reach:
+                extra.append(_own_leg(lo_need, hi_need))
+            else:
+                legs[-1] = legs[-1]._replace(v1=max(legs[-1].v1, hi_need))
+        elif cv0 < legs[0].v0:
+            legs[0] = legs[0]._replace(v0=min(legs[0].v0, lo_need))
+        elif cv1 > legs[-1].v1:
+            legs[-1] = legs[-1]._replace(v1=max(legs[-1].v1, hi_need))
+    return legs + extra
 
 
-def _repair(poly_uv: Any, legs: list[list[Any]], us: np.ndarray, across_m: float, reach: float,
-            trigger_m: float | None, edge_margin_m: float, far_m: float) -> list[list[Any]]:
+def _merged(legs: list[_LineLeg]) -> list[_LineLeg]:
+    """Legs of one line that meet or overlap joined into one, which ends where the farther-reaching one ends."""
+    merged: list[_LineLeg] = []
+    for leg in sorted(legs, key=lambda t: t.v0):
+        if merged and leg.v0 <= merged[-1].v1 + _EPS:
+            m = merged[-1]
+            if leg.v1 >= m.v1:
+                merged[-1] = m._replace(v1=leg.v1, snap1=leg.snap1, highest_v1=leg.highest_v1, outer1=leg.outer1)
+        else:
+            merged.append(leg)
+    return merged
+
+
+def _on_grid(k: int, u: float, leg: _LineLeg, rules: _EndRules) -> PartLeg:
+    a, b = leg.v0, leg.v1
+    if rules.trigger_m:
+        a, b = _snap(a, b, leg.snap0, leg.snap1, rules.trigger_m, rules.inward_ok)
+        # an outward snap must not carry a gap end past the middle of the gap; the end stays on
+        # the grid (see _grid_down) at the last grid point before the middle
+        a, b = max(a, _grid_up(leg.lowest_v0, rules.trigger_m)), min(b, _grid_down(leg.highest_v1, rules.trigger_m))
+        if a > b:
+            a = b = (a + b) / 2.0
+    return PartLeg(k, u, a, b, bool(leg.outer0), bool(leg.outer1), leg.lowest_v0, leg.highest_v1)
+
+
+def _repair(poly_uv: Any, legs: list[PartLeg], us: np.ndarray, across_m: float, rules: _EndRules,
+            edge_margin_m: float) -> list[PartLeg]:
     """Measure what the legs leave uncovered (each leg's strip: its photos' footprints less the margins)
-    and cover every remaining piece from its nearest line: stretch a leg on that line when the piece lies
-    just beyond its end (never past a gap's middle), else add a short leg. Catches the cases the band
+    and cover every remaining piece from its nearest line (`_cover_piece`). Catches the cases the band
     rules above do not foresee (spikes between lines, narrow necks) at the cost of one polygon union."""
     import shapely
 
     if not legs:
         return legs
     hw = max(across_m / 2.0 - edge_margin_m, 1e-3)
-    d = trigger_m or 0.0
-
-    def down(v: float) -> float:
-        return _grid_down(v, d) if d else v
-
-    def up(v: float) -> float:
-        return _grid_up(v, d) if d else v
-
+    reach = rules.reach
     min_piece = max(0.5, 1e-7 * poly_uv.area)
+    legs = list(legs)
     for _round in range(2):
-        rects = shapely.box([l[1] - hw for l in legs], [l[2] - reach for l in legs],
-                            [l[1] + hw for l in legs], [l[3] + reach for l in legs])
+        rects = shapely.box([l.u - hw for l in legs], [l.v0 - reach for l in legs],
+                            [l.u + hw for l in legs], [l.v1 + reach for l in legs])
         rest = poly_uv.difference(shapely.union_all(rects))
         pieces = [q for q in _polys(rest) if q.area > min_piece]
         if not pieces:
             break
         for q in pieces:
-            pu0, pv0, pu1, pv1 = q.bounds
-            k = int(np.argmin(np.abs(us - (pu0 + pu1) / 2.0)))
-            lo, hi = pv0 + reach, pv1 - reach
-            if lo > hi:
-                lo = hi = (pv0 + pv1) / 2.0
-            done = False
-            for l in sorted((l for l in legs if l[0] == k), key=lambda l: min(abs(l[2] - pv1), abs(l[3] - pv0))):
-                if l[2] <= lo and hi <= l[3]:
-                    done = True            # covered along-track already: the piece is a margin artefact
-                elif pv0 >= l[2] and hi > l[3] and hi - l[3] <= far_m and hi <= l[7]:
-                    l[3] = max(l[3], min(up(hi), down(l[7])))  # on the grid, short of the gap's middle
-                    done = True
-                elif pv1 <= l[3] and lo < l[2] and l[2] - lo <= far_m and lo >= l[6]:
-                    l[2] = min(l[2], max(down(lo), up(l[6])))
-                    done = True
-                if done:
-                    break
-            if not done:
-                legs.append([k, float(us[k]), down(lo), up(hi), True, True, -math.inf, math.inf])
-    legs.sort(key=lambda l: (l[0], l[2]))
+            _cover_piece(legs, q, us, rules)
+    legs.sort(key=lambda l: (l.line, l.v0))
     return legs
+
+
+def _cover_piece(legs: list[PartLeg], q: Any, us: np.ndarray, rules: _EndRules) -> None:
+    """Cover piece q from its nearest line, in `legs`: stretch a leg on that line when the piece lies just
+    beyond its end (on the grid, never past a gap's middle), else add a short leg."""
+    pu0, pv0, pu1, pv1 = q.bounds
+    k = int(np.argmin(np.abs(us - (pu0 + pu1) / 2.0)))
+    lo, hi = pv0 + rules.reach, pv1 - rules.reach
+    if lo > hi:
+        lo = hi = (pv0 + pv1) / 2.0
+    far = rules.along_reach
+    on_line = sorted((i for i, l in enumerate(legs) if l.line == k),
+                     key=lambda i: min(abs(legs[i].v0 - pv1), abs(legs[i].v1 - pv0)))
+    for i in on_line:
+        l = legs[i]
+        if l.v0 <= lo and hi <= l.v1:
+            return            # covered along-track already: the piece is a margin artefact
+        if pv0 >= l.v0 and hi > l.v1 and hi - l.v1 <= far and hi <= l.highest_v1:
+            legs[i] = l._replace(v1=max(l.v1, min(rules.up(hi), rules.down(l.highest_v1))))
+            return
+        if pv1 <= l.v1 and lo < l.v0 and l.v0 - lo <= far and lo >= l.lowest_v0:
+            legs[i] = l._replace(v0=min(l.v0, max(rules.down(lo), rules.up(l.lowest_v0))))
+            return
+    legs.append(PartLeg(k, float(us[k]), rules.down(lo), rules.up(hi), True, True))
 
 
 def generate_swaths(geometry: Any, angle_deg: float, footprint_across_m: float, spacing_m: float,
@@ -377,14 +462,14 @@ def generate_swaths(geometry: Any, angle_deg: float, footprint_across_m: float, 
     legs: list[Leg] = []
     nlines = 0
     for p, poly in enumerate(parts):
-        raw = part_legs(poly, p, footprint_across_m, spacing_m, trigger_m, footprint_along_m, edge_margin_m,
-                        estimate)
+        raw = part_legs(poly, footprint_across_m, spacing_m, trigger_m, footprint_along_m, edge_margin_m, estimate)
         if raw:
-            nlines += max(r[0] for r in raw) + 1
-        for k, u, a, b, oa, ob in raw:
-            x0, y0 = uv_to_xy(u, a, angle)
-            x1, y1 = uv_to_xy(u, b, angle)
-            legs.append(Leg(p, k, u, a, b, float(x0), float(y0), float(x1), float(y1), oa, ob, angle))
+            nlines += max(r.line for r in raw) + 1
+        for r in raw:
+            x0, y0 = uv_to_xy(r.u, r.v0, angle)
+            x1, y1 = uv_to_xy(r.u, r.v1, angle)
+            legs.append(Leg(p, r.line, r.u, r.v0, r.v1, float(x0), float(y0), float(x1), float(y1), r.outer0, r.outer1,
+                            angle))
     return SwathSet(angle, spacing_m, tuple(legs), nlines)
 
 

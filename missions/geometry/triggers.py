@@ -79,63 +79,80 @@ def _first_heading(seg: np.ndarray, i: int, forward: bool = True) -> float:
 
 
 def _span_photos(seg: np.ndarray, d: float, at_start: bool, at_stop: bool, span: int) -> list[PhotoPoint]:
+    """The photos of one camera-on span over the path vertices `seg`, one whenever the straight-line distance
+    from the last reaches `d`."""
     out: list[PhotoPoint] = []
     ref = seg[0].copy()
     if at_start:
         out.append(PhotoPoint(float(ref[0]), float(ref[1]), _first_heading(seg, 0), span))
     if d > 0:
-        thresh = d * (1.0 - _REL_TOL)
         for i in range(len(seg) - 1):
-            p, q = seg[i], seg[i + 1]
-            D = q - p
-            a = float(D @ D)
-            if a < 1e-18:
-                continue
-            hd = heading_deg(float(D[0]), float(D[1]))
-            t = 0.0
-            while True:
-                w = p - ref
-                b = 2.0 * float(D @ w)
-                c = float(w @ w) - d * d
-                disc = b * b - 4.0 * a * c
-                # larger root of |p + τD − ref| = d: where the path leaves the circle around the last photo
-                tau = (-b + math.sqrt(disc)) / (2.0 * a) if disc >= 0 else -math.inf
-                if tau < t:
-                    # already beyond d (a jump in the path): fire at the current point, or stop if not
-                    X = p + t * D
-                    if float(np.hypot(*(X - ref))) < thresh:
-                        break
-                    tau = t
-                if tau > 1.0:
-                    # the crossing lies beyond q; still fire at q when q is within rounding of d
-                    if float(np.hypot(*(q - ref))) >= thresh:
-                        tau = 1.0
-                    else:
-                        break
-                X = p + tau * D
-                out.append(PhotoPoint(float(X[0]), float(X[1]), hd, span))
-                ref = X
-                if tau >= 1.0:
-                    break
-                # once the last photo lies on this straight segment, the straight-line distance is the
-                # distance along it: the remaining photos on the segment are equally spaced (vectorised)
-                step = d / math.sqrt(a)
-                k = int(math.floor((1.0 - tau) / step * (1.0 + _REL_TOL) + _REL_TOL))
-                if k > 0:
-                    ts = tau + step * np.arange(1, k + 1)
-                    ts[-1] = min(ts[-1], 1.0)
-                    xs = p[0] + ts * D[0]
-                    ys = p[1] + ts * D[1]
-                    out.extend(PhotoPoint(x_, y_, hd, span) for x_, y_ in zip(xs.tolist(), ys.tolist()))
-                    tau = float(ts[-1])
-                    ref = p + tau * D
-                    if tau >= 1.0:
-                        break
-                t = tau
+            ref = _segment_photos(seg[i], seg[i + 1], ref, d, span, out)
     if at_stop:
         end = seg[-1]
         out.append(PhotoPoint(float(end[0]), float(end[1]), _first_heading(seg, len(seg) - 1, forward=False), span))
     return out
+
+
+def _segment_photos(p: np.ndarray, q: np.ndarray, ref: np.ndarray, d: float, span: int,
+                    out: list[PhotoPoint]) -> np.ndarray:
+    """Append to `out` the photos on the straight segment p -> q, the last photo before it being at `ref`;
+    return where the last photo now is."""
+    D = q - p
+    a = float(D @ D)
+    if a < 1e-18:
+        return ref
+    hd = heading_deg(float(D[0]), float(D[1]))
+    t = 0.0
+    while True:
+        tau = _next_crossing(p, q, D, a, ref, d, t)
+        if tau is None:
+            return ref
+        X = p + tau * D
+        out.append(PhotoPoint(float(X[0]), float(X[1]), hd, span))
+        ref = X
+        if tau >= 1.0:
+            return ref
+        # once the last photo lies on this straight segment, the straight-line distance is the
+        # distance along it: the remaining photos on the segment are equally spaced (vectorised)
+        step = d / math.sqrt(a)
+        k = int(math.floor((1.0 - tau) / step * (1.0 + _REL_TOL) + _REL_TOL))
+        if k > 0:
+            ts = tau + step * np.arange(1, k + 1)
+            ts[-1] = min(ts[-1], 1.0)
+            xs = p[0] + ts * D[0]
+            ys = p[1] + ts * D[1]
+            out.extend(PhotoPoint(x_, y_, hd, span) for x_, y_ in zip(xs.tolist(), ys.tolist()))
+            tau = float(ts[-1])
+            ref = p + tau * D
+            if tau >= 1.0:
+                return ref
+        t = tau
+
+
+def _next_crossing(p: np.ndarray, q: np.ndarray, D: np.ndarray, a: float, ref: np.ndarray, d: float,
+                   t: float) -> float | None:
+    """Where on p + τ·D (τ in [t, 1], D = q - p, a = D·D) the next photo is due: where the path leaves the circle
+    of radius d around the last photo `ref`. None when it is not due on this segment."""
+    thresh = d * (1.0 - _REL_TOL)
+    w = p - ref
+    b = 2.0 * float(D @ w)
+    c = float(w @ w) - d * d
+    disc = b * b - 4.0 * a * c
+    # larger root of |p + τD − ref| = d: where the path leaves the circle around the last photo
+    tau = (-b + math.sqrt(disc)) / (2.0 * a) if disc >= 0 else -math.inf
+    if tau < t:
+        # already beyond d (a jump in the path): fire at the current point, or stop if not
+        X = p + t * D
+        if float(np.hypot(*(X - ref))) < thresh:
+            return None
+        tau = t
+    if tau > 1.0:
+        # the crossing lies beyond q; still fire at q when q is within rounding of d
+        if float(np.hypot(*(q - ref))) < thresh:
+            return None
+        tau = 1.0
+    return tau
 
 
 def photos_along(path: Sequence[tuple[float, float]] | np.ndarray, distance_m: float, span: int = 0) -> list[PhotoPoint]:
