@@ -17,7 +17,7 @@ import itertools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterable
+from typing import Any, Callable, Iterable, NamedTuple
 
 from cdf.errors import CdfError, clip, shown
 from cdf.paramtypes import INT_RANGES, NUMERIC_TYPES, mavsdk_range
@@ -440,17 +440,40 @@ def _load_table(path: Path, read: Callable[[Path], dict] = _read_yaml) -> list[C
                             "value, key, name; settings need key: and param:)") from None
 
 
+class _Table(NamedTuple):
+    """A family table and the vendor base table it `extends:` ({} if none); `merged` lets the family's keys win."""
+
+    raw: dict
+    base: dict
+    merged: dict
+
+
 def _cameras_of_table(path: Path, read: Callable[[Path], dict]) -> list[Camera]:
-    raw = read(path)
     where = path.name
+    table = _read_table(path, read)
+    enums = _enums({**(table.base.get("enums") or {}), **(table.raw.get("enums") or {})}, where)
+    settings = _table_settings(table, enums, where)
+    _check_unique_settings(settings, where)
+    commands = table.merged.get("commands") or {}
+    _check_setting_references(settings, commands, where)
+    notes = tuple(str(v) for k, v in table.merged.items() if k.endswith("_note") and isinstance(v, str))
+    return [_camera(m, table.merged, settings, enums, commands, notes, path.name) for m in table.merged["models"]]
+
+
+def _read_table(path: Path, read: Callable[[Path], dict]) -> _Table:
+    raw = read(path)
     base: dict = {}
     if "extends" in raw:
         base = read(path.parent / f"{raw['extends']}.yaml")
-    merged = {**base, **{k: v for k, v in raw.items() if k != "extends"}}
-    enums = _enums({**(base.get("enums") or {}), **(raw.get("enums") or {})}, where)
-    overrides = merged.get("overrides") or {}
+    return _Table(raw=raw, base=base, merged={**base, **{k: v for k, v in raw.items() if k != "extends"}})
+
+
+def _table_settings(table: _Table, enums: dict[str, Enumerator], where: str) -> tuple[Setting, ...]:
+    """The base table's `groups:` the family names, then its own `settings:`, each with its `overrides:`."""
+    base, raw = table.base, table.raw
+    overrides = table.merged.get("overrides") or {}
     raw_settings: list[dict] = []
-    for group in merged.get("groups", []):
+    for group in table.merged.get("groups", []):
         if group not in (base.get("groups") or {}):
             hint = (_name_hint(group, base["groups"], f"`groups:` names groups of {raw['extends']}.yaml")
                     if base.get("groups") else
@@ -458,14 +481,16 @@ def _cameras_of_table(path: Path, read: Callable[[Path], dict]) -> list[Camera]:
             raise CdfError(f"unknown setting group {group!r}", where=where, hint=hint)
         raw_settings.extend(base["groups"][group])
     raw_settings.extend(raw.get("settings", []))
-    settings = []
-    for s in raw_settings:
-        settings.append(_setting({**s, **overrides.get(s["key"], {})}, enums, where))
+    settings = tuple(_setting({**s, **overrides.get(s["key"], {})}, enums, where) for s in raw_settings)
     unknown_overrides = set(overrides) - {s.key for s in settings}
     if unknown_overrides:
         raise CdfError(f"overrides name unknown settings: {', '.join(sorted(unknown_overrides))}", where=where,
                        hint=_name_hint(sorted(unknown_overrides)[0], [s.key for s in settings],
                                        "`overrides:` is keyed by the `key:` of a setting of this model"))
+    return settings
+
+
+def _check_unique_settings(settings: tuple[Setting, ...], where: str) -> None:
     params = [s.param for s in settings]
     keys = [s.key for s in settings]
     for names, what, entry in ((params, "PARAM_EXT name", "param"), (keys, "setting key", "key")):
@@ -473,7 +498,12 @@ def _cameras_of_table(path: Path, read: Callable[[Path], dict]) -> list[Camera]:
         if dupes:
             raise CdfError(f"duplicate {what}: {', '.join(sorted(dupes))}", where=where,
                            hint=f"give each setting its own `{entry}:` (settings come from `settings:` and `groups:`)")
-    commands = merged.get("commands") or {}
+
+
+def _check_setting_references(settings: tuple[Setting, ...], commands: dict, where: str) -> None:
+    """Each setting on its own, then what it names: hidden parameters, its command, the settings of its `when:`."""
+    params = [s.param for s in settings]
+    keys = [s.key for s in settings]
     for s in settings:
         _check_setting(s, where)
         for _, hidden in s.hides:
@@ -491,28 +521,29 @@ def _cameras_of_table(path: Path, read: Callable[[Path], dict]) -> list[Camera]:
                     raise CdfError(f"setting {s.key}: 'when' names unknown setting {k}", where=where,
                                    hint=_name_hint(k, keys, "`when:` is keyed by the `key:` of a setting",
                                                    aliases={o.param: o.key for o in settings}))
-    notes = tuple(str(v) for k, v in merged.items() if k.endswith("_note") and isinstance(v, str))
-    cameras = []
-    for m in merged["models"]:
-        protocol = merged.get("protocol", "workswell-mavlink")
-        has_cdf = bool(m.get("cdf", True)) and protocol == "workswell-mavlink"
-        link = merged.get("link") or {}
-        cameras.append(Camera(
-            id=m["id"], family=merged.get("family", m["id"]), vendor=merged["vendor"], model=m["model"],
-            protocol=protocol, definition_version=m.get("definition_version"),
-            camera_protocol=bool(m.get("camera_protocol", False)), has_cdf=has_cdf,
-            component_ids=tuple(merged["component_ids"]), default_component_id=int(merged["default_component_id"]),
-            mavlink_version=int(link.get("mavlink", 2)), baud=int(link.get("baud", 57600)),
-            capabilities=tuple(merged.get("capabilities", ())), settings=tuple(settings),
-            enums=tuple(enums.values()), imagers=_imagers(merged.get("imagers")),
-            commands=tuple(commands.items()),
-            assumed=tuple(k.removesuffix("_status") for k, v in m.items() if k.endswith("_status") and v == "assumed"),
-            notes=notes + tuple(str(v) for k, v in m.items() if k.endswith("_note")),
-            source=merged.get("source", ""), table=path.name,
-            extra=tuple((k, merged[k]) for k in ("heartbeat", "adopts_sender_system_id", "capabilities_note")
-                        if k in merged),
-        ))
-    return cameras
+
+
+def _camera(m: dict, merged: dict, settings: tuple[Setting, ...], enums: dict[str, Enumerator], commands: dict,
+            notes: tuple[str, ...], table: str) -> Camera:
+    """One `models:` entry `m` of a family table (`merged` over its vendor base table)."""
+    protocol = merged.get("protocol", "workswell-mavlink")
+    has_cdf = bool(m.get("cdf", True)) and protocol == "workswell-mavlink"
+    link = merged.get("link") or {}
+    return Camera(
+        id=m["id"], family=merged.get("family", m["id"]), vendor=merged["vendor"], model=m["model"],
+        protocol=protocol, definition_version=m.get("definition_version"),
+        camera_protocol=bool(m.get("camera_protocol", False)), has_cdf=has_cdf,
+        component_ids=tuple(merged["component_ids"]), default_component_id=int(merged["default_component_id"]),
+        mavlink_version=int(link.get("mavlink", 2)), baud=int(link.get("baud", 57600)),
+        capabilities=tuple(merged.get("capabilities", ())), settings=settings,
+        enums=tuple(enums.values()), imagers=_imagers(merged.get("imagers")),
+        commands=tuple(commands.items()),
+        assumed=tuple(k.removesuffix("_status") for k, v in m.items() if k.endswith("_status") and v == "assumed"),
+        notes=notes + tuple(str(v) for k, v in m.items() if k.endswith("_note")),
+        source=merged.get("source", ""), table=table,
+        extra=tuple((k, merged[k]) for k in ("heartbeat", "adopts_sender_system_id", "capabilities_note")
+                    if k in merged),
+    )
 
 
 def load_catalogue(tables_dir: Path | None = None) -> Catalogue:

@@ -33,7 +33,7 @@ import re
 from dataclasses import dataclass
 from decimal import Decimal
 from pathlib import Path
-from typing import Iterable
+from typing import Iterable, NamedTuple
 
 from cdf.catalogue import CDF_TYPES, INTEGER_RANGES, PARAM_NAME_MAX, Camera, Catalogue, Setting, short_list
 from cdf.errors import CdfError
@@ -227,9 +227,33 @@ def _comment(s: Setting) -> str:
 
 # ----------------------------------------------------------------------------------------------- views
 
+class _Values(NamedTuple):
+    """A parameter's formatted default, its attributes (unit, or min/max/step/decimalPlaces/unit) and options."""
+
+    default: str
+    attributes: tuple[tuple[str, str], ...]
+    options: tuple[OptionView, ...]
+
+
 def definition_view(camera: Camera, locales: Iterable[Locale] | None = None) -> DefinitionView:
     """The checked, formatted content of one camera's definition (CdfError on anything a parser would refuse)."""
     where = f"cdf/tables/{camera.table}" if camera.table else camera.id
+    version = _checked_identity(camera, where)
+    settings = camera.cdf_settings
+    if not settings:
+        raise CdfError(f"{camera.id}: no settings for the definition", where=where,
+                       hint="QGroundControl rejects a definition without parameters")
+    in_cdf = {s.param for s in settings}
+    params = [_parameter_view(s, in_cdf, f"{where}: setting {s.key}") for s in settings]
+    locale_views, missing = _localize(camera, settings, params, tuple(locales if locales is not None else load_locales()),
+                                      where)
+    return DefinitionView(camera_id=camera.id, vendor=camera.vendor, model=camera.model, version=version,
+                          table=camera.table, source=camera.source, parameters=tuple(params),
+                          locales=locale_views, missing_translations=missing)
+
+
+def _checked_identity(camera: Camera, where: str) -> int:
+    """The definition version, after checking the camera has a definition and fits CAMERA_INFORMATION."""
     if not camera.has_cdf:
         raise CdfError(f"{camera.id} ({camera.vendor} {camera.model}) has no camera definition", where=where,
                        hint="it does not speak the MAVLink camera protocol (RedEdge uses its serial API with "
@@ -244,86 +268,84 @@ def definition_view(camera: Camera, locales: Iterable[Locale] | None = None) -> 
             raise CdfError(f"{camera.id}: {what} {text!r} must be at most {IDENTITY_MAX_BYTES} bytes without "
                            "path separators", where=where,
                            hint="CAMERA_INFORMATION carries it in uint8_t[32]; ground stations name cache files after it")
+    return version
 
-    settings = camera.cdf_settings
-    names = [s.param for s in settings]
-    in_cdf = set(names)
-    if not settings:
-        raise CdfError(f"{camera.id}: no settings for the definition", where=where,
-                       hint="QGroundControl rejects a definition without parameters")
-    params = []
-    for s in settings:
-        w = f"{where}: setting {s.key}"
-        if not (1 <= len(s.param) <= PARAM_NAME_MAX) or not re.fullmatch(r"[A-Za-z0-9_]+", s.param):
-            raise CdfError(f"PARAM_EXT name {s.param!r} must be 1-{PARAM_NAME_MAX} characters of A-Z 0-9 _",
-                           where=w, hint="param_id is char[16] in PARAM_EXT_* (common.xml)")
-        if s.param == "CAM_MODE":
-            raise CdfError("CAM_MODE is not generated", where=w,
-                           hint="the camera switches modes with MAV_CMD_SET_CAMERA_MODE; see docs/camera-definitions.md")
-        if s.type not in GENERATED_TYPES:
-            raise CdfError(f"type {s.type!r} is not generated", where=w,
-                           hint="use uint32 for enumerations (MAVSDK mishandles uint16; QGC renders bool as true/false)")
-        _check_text(s.label, "label", w)
-        description = _description(s)
-        _check_text(description, "description", w)
-        if s.unit is not None:
-            _check_text(s.unit, "unit", w)
-        attributes: list[tuple[str, str]] = []
-        options: list[OptionView] = []
-        hides = dict(s.hides)
-        if s.options:
-            values = [_number(s, o.value, w) for o in s.options]
-            if len(set(values)) != len(values):
-                raise CdfError("two options have the same value", where=w,
-                               hint=f"give each flag of `enums: {s.enum.id}` its own bit (0x01, 0x02, 0x04, ...)"
-                               if s.flags and s.enum is not None else
-                               f"{s.type} cannot tell these option values apart: use an integer `type:`")
-            default = _number(s, s.default, w)
-            if values.count(default) != 1:
-                raise CdfError(f"default {default} is not exactly one of the options {', '.join(values)}", where=w,
-                               hint="MAVSDK rejects the whole file when the default matches no option")
-            unknown = set(hides) - {o.value for o in s.options}
-            if unknown:
-                raise CdfError(f"hides names option values {sorted(unknown)} that are not options", where=w,
-                               hint=f"key `hides:` by this setting's option values: {short_list(values)}")
-            for o, value in zip(s.options, values):
-                _check_text(o.name, f"option {value}", w)
-                excludes = tuple(p for p in hides.get(o.value, ()) if p in in_cdf and p != s.param)
-                options.append(OptionView(name=o.name, value=value, excludes=excludes))
-            if s.unit:
-                attributes.append(("unit", s.unit))
-        else:
-            if s.min is None or s.max is None:
-                raise CdfError("a setting without options needs min and max", where=w,
-                               hint="MAVSDK drops a range parameter without both")
-            if hides:
-                raise CdfError("a range setting cannot hide others", where=w,
-                               hint="the spec does not combine min/max with exclusions; give it options")
-            lo, hi = float(s.min), float(s.max)
-            if not lo <= float(s.default) <= hi:
-                raise CdfError(f"default {s.default} outside {s.min}..{s.max}", where=w,
-                               hint="a bug in wiris-tools (the catalogue loader refuses this first): please report it")
-            default = _number(s, s.default, w)
-            attributes += [("min", _number(s, s.min, w)), ("max", _number(s, s.max, w))]
-            if s.step is not None:
-                if float(s.step) <= 0:
-                    raise CdfError(f"step {s.step} must be positive", where=w,
-                                   hint="give `step:` a positive value, or leave it out")
-                attributes.append(("step", _number(s, s.step, w)))
-            if s.decimals is not None and not s.is_integer:
-                attributes.append(("decimalPlaces", str(int(s.decimals))))
-            if s.unit:
-                attributes.append(("unit", s.unit))
-        updates = tuple(u for u in s.updates if u in in_cdf and u != s.param)
-        params.append(ParameterView(name=s.param, type=s.type, default=default, attributes=tuple(attributes),
-                                    description=description, comment=_comment(s), updates=updates,
-                                    options=tuple(options)))
 
-    locale_views, missing = _localize(camera, settings, params, tuple(locales if locales is not None else load_locales()),
-                                      where)
-    return DefinitionView(camera_id=camera.id, vendor=camera.vendor, model=camera.model, version=version,
-                          table=camera.table, source=camera.source, parameters=tuple(params),
-                          locales=locale_views, missing_translations=missing)
+def _parameter_view(s: Setting, in_cdf: set[str], where: str) -> ParameterView:
+    """One setting as a definition parameter; `in_cdf` are the parameter names its exclusions and updates may name."""
+    _check_parameter_name_and_type(s, where)
+    _check_text(s.label, "label", where)
+    description = _description(s)
+    _check_text(description, "description", where)
+    if s.unit is not None:
+        _check_text(s.unit, "unit", where)
+    values = _option_values(s, in_cdf, where) if s.options else _range_values(s, where)
+    updates = tuple(u for u in s.updates if u in in_cdf and u != s.param)
+    return ParameterView(name=s.param, type=s.type, default=values.default, attributes=values.attributes,
+                         description=description, comment=_comment(s), updates=updates, options=values.options)
+
+
+def _check_parameter_name_and_type(s: Setting, where: str) -> None:
+    if not (1 <= len(s.param) <= PARAM_NAME_MAX) or not re.fullmatch(r"[A-Za-z0-9_]+", s.param):
+        raise CdfError(f"PARAM_EXT name {s.param!r} must be 1-{PARAM_NAME_MAX} characters of A-Z 0-9 _",
+                       where=where, hint="param_id is char[16] in PARAM_EXT_* (common.xml)")
+    if s.param == "CAM_MODE":
+        raise CdfError("CAM_MODE is not generated", where=where,
+                       hint="the camera switches modes with MAV_CMD_SET_CAMERA_MODE; see docs/camera-definitions.md")
+    if s.type not in GENERATED_TYPES:
+        raise CdfError(f"type {s.type!r} is not generated", where=where,
+                       hint="use uint32 for enumerations (MAVSDK mishandles uint16; QGC renders bool as true/false)")
+
+
+def _option_values(s: Setting, in_cdf: set[str], where: str) -> _Values:
+    """A setting with options: distinct option values, a default that is exactly one of them, exclusions."""
+    hides = dict(s.hides)
+    values = [_number(s, o.value, where) for o in s.options]
+    if len(set(values)) != len(values):
+        raise CdfError("two options have the same value", where=where,
+                       hint=f"give each flag of `enums: {s.enum.id}` its own bit (0x01, 0x02, 0x04, ...)"
+                       if s.flags and s.enum is not None else
+                       f"{s.type} cannot tell these option values apart: use an integer `type:`")
+    default = _number(s, s.default, where)
+    if values.count(default) != 1:
+        raise CdfError(f"default {default} is not exactly one of the options {', '.join(values)}", where=where,
+                       hint="MAVSDK rejects the whole file when the default matches no option")
+    unknown = set(hides) - {o.value for o in s.options}
+    if unknown:
+        raise CdfError(f"hides names option values {sorted(unknown)} that are not options", where=where,
+                       hint=f"key `hides:` by this setting's option values: {short_list(values)}")
+    options = []
+    for o, value in zip(s.options, values):
+        _check_text(o.name, f"option {value}", where)
+        excludes = tuple(p for p in hides.get(o.value, ()) if p in in_cdf and p != s.param)
+        options.append(OptionView(name=o.name, value=value, excludes=excludes))
+    attributes = (("unit", s.unit),) if s.unit else ()
+    return _Values(default=default, attributes=attributes, options=tuple(options))
+
+
+def _range_values(s: Setting, where: str) -> _Values:
+    """A setting without options: min and max (MAVSDK drops it otherwise), optional step and decimal places."""
+    if s.min is None or s.max is None:
+        raise CdfError("a setting without options needs min and max", where=where,
+                       hint="MAVSDK drops a range parameter without both")
+    if s.hides:
+        raise CdfError("a range setting cannot hide others", where=where,
+                       hint="the spec does not combine min/max with exclusions; give it options")
+    if not float(s.min) <= float(s.default) <= float(s.max):
+        raise CdfError(f"default {s.default} outside {s.min}..{s.max}", where=where,
+                       hint="a bug in wiris-tools (the catalogue loader refuses this first): please report it")
+    default = _number(s, s.default, where)
+    attributes = [("min", _number(s, s.min, where)), ("max", _number(s, s.max, where))]
+    if s.step is not None:
+        if float(s.step) <= 0:
+            raise CdfError(f"step {s.step} must be positive", where=where,
+                           hint="give `step:` a positive value, or leave it out")
+        attributes.append(("step", _number(s, s.step, where)))
+    if s.decimals is not None and not s.is_integer:
+        attributes.append(("decimalPlaces", str(int(s.decimals))))
+    if s.unit:
+        attributes.append(("unit", s.unit))
+    return _Values(default=default, attributes=tuple(attributes), options=())
 
 
 def _localize(camera: Camera, settings: tuple[Setting, ...], params: list[ParameterView],
