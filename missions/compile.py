@@ -21,25 +21,26 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, NamedTuple
+from typing import Any, Callable, NamedTuple
 
+from cdf.catalogue import catalogue
 from missions.compiled import AreaInfo, Compiled, PayloadInfo, PlanWarning, SetupStep
 from missions.emit.emitter import Emitted, Emitter, Track, TrackPoint, HOVER_HOLD_S
 from missions.emit.firmware import FirmwareProfile, check_items, profile, split_parts
 from missions.emit.items import MissionItem
+from missions.emit.lua import render_script
+from missions.emit.params import Param, autopilot_params
+from missions.emit.setup import RedEdgeSurvey, setup_steps
 from missions.errors import PlanError
-from missions.geometry import optics
+from missions.geometry import optics, survey
+from missions.geometry.area import Area, load_area
+from missions.geometry.corridor import CorridorPlan, plan_corridor
 from missions.geometry.footprint import Footprint
+from missions.geometry.geo import MAX_EXTENT_M
+from missions.geometry.survey import SurveyPlan, plan_survey
 from missions.plan.load import (CameraStep, CorridorStep, LandStep, Plan, RtlStep, SurveyStep, TakeoffStep,
                                 WaypointStep, input_files, load_plan)
 from missions.plan.schema import MAX_AGL_M, MAX_ALTITUDE_M, MIN_ALTITUDE_M
-
-if TYPE_CHECKING:   # shapely and pyproj load only when a plan has an area
-    from missions.emit.params import Param
-    from missions.emit.setup import RedEdgeSurvey
-    from missions.geometry.area import Area
-    from missions.geometry.corridor import CorridorPlan
-    from missions.geometry.survey import SurveyPlan
 
 NEAR_MIN_INTERVAL = 1.2      # warn when photos come less than 20 % slower than the camera's minimum
 TURNAROUND_DEFAULT_M = {"copter": 10.0, "plane": 30.0, "vtol": 30.0}   # QGC's defaults (survey-planners §1.4)
@@ -151,9 +152,7 @@ def _relocate(err: PlanError, where: str) -> PlanError:
 def _check_reach(home: Any, lat: float, lon: float, what: str, where: str) -> None:
     """A step must lie within MAX_EXTENT_M of home, like an area's own extent: farther is a typo in a
     coordinate, and the flight there (along which a RedEdge keeps shooting) would be thousands of km."""
-    from pyproj import Geod
-
-    from missions.geometry.geo import MAX_EXTENT_M
+    from pyproj import Geod   # heavy: loads only for a plan with a positioned step
 
     distance = Geod(ellps="WGS84").inv(home.lon, home.lat, lon, lat)[2]
     if not distance <= MAX_EXTENT_M:
@@ -168,8 +167,6 @@ def _rededge_survey(flights: list[_RedEdgeFlight]) -> RedEdgeSurvey:
     camera to space its captures by the target altitude's footprint, higher surveys only gain overlap) and the
     tolerance reaches a margin below it, so that it does not shoot while climbing (a quarter of the altitude, at
     least 10 m: our choice, not MicaSense's). The overlaps are the most demanding of the surveys (rounded up)."""
-    from missions.emit.setup import RedEdgeSurvey
-
     lowest = min(f.altitude_m for f in flights)
     target = max(int(math.floor(lowest)), 1)
     threshold = lowest - max(10.0, 0.25 * lowest)
@@ -182,8 +179,6 @@ def _rededge_survey(flights: list[_RedEdgeFlight]) -> RedEdgeSurvey:
 
 def _resolve_payloads(plan: Plan, prof: FirmwareProfile, state: _State) -> _Payloads:
     """Each payload's catalogue camera, ArduPilot instance and optics (their warnings go to `state`)."""
-    from cdf.catalogue import catalogue
-
     cat = catalogue()
     cameras = {p.name: cat.get(p.camera) for p in plan.payloads}
     # ArduPilot drives each WIRIS as an AP_Camera instance (CAMn_TYPE 6); the RedEdge is not one (it triggers
@@ -357,22 +352,17 @@ def _record_rededges(c: _Compile, step: SurveyStep | CorridorStep, lead: Payload
 
 def _line_inputs(c: _Compile, step: SurveyStep | CorridorStep, lead: PayloadInfo,
                  footprint: Footprint) -> _LineInputs:
-    from missions.geometry.survey import MAX_PHOTOS
-
     last = c.emitter.s.last_pos
     return _LineInputs(
         footprint=footprint,
         turnaround_m=step.turnaround_m if step.turnaround_m is not None
         else TURNAROUND_DEFAULT_M[c.plan.vehicle.frame],
         start_latlon=last[:2] if last else (c.plan.home.lat, c.plan.home.lon),
-        photos_left=max(0, MAX_PHOTOS - sum(len(g.photos) for g in c.state.intent)),
+        photos_left=max(0, survey.MAX_PHOTOS - sum(len(g.photos) for g in c.state.intent)),
         min_interval_s=lead.min_interval_s)
 
 
 def _plan_survey_lines(c: _Compile, step: SurveyStep, inputs: _LineInputs) -> _Lines:
-    from missions.geometry.area import load_area
-    from missions.geometry.survey import plan_survey
-
     area = load_area(step.area, exclude=step.exclude, base_dir=c.plan.base_dir,
                      where=c.plan.step_where(step, "area"))
     _check_reach(c.plan.home, area.projection.lat0, area.projection.lon0, "area", c.plan.step_where(step))
@@ -385,8 +375,6 @@ def _plan_survey_lines(c: _Compile, step: SurveyStep, inputs: _LineInputs) -> _L
 
 
 def _plan_corridor_lines(c: _Compile, step: CorridorStep, inputs: _LineInputs) -> _Lines:
-    from missions.geometry.corridor import plan_corridor
-
     if step.trigger == "hover":
         raise PlanError("corridors are flown with distance or interval triggering",
                         where=c.plan.step_where(step, "trigger"), hint="use trigger: distance")
@@ -441,8 +429,6 @@ def _warn_about_altitudes(c: _Compile) -> None:
 
 def _setup(c: _Compile) -> tuple[SetupStep, ...]:
     """The pre-flight sequence, with each RedEdge's overlap mode covering what it flies."""
-    from missions.emit.setup import setup_steps
-
     rededge = {name: _rededge_survey(flights) for name, flights in c.state.rededge_flights.items()}
     for check in c.state.rededge_checks:
         info = c.payloads.optics[check.payload]
@@ -456,14 +442,10 @@ def _setup(c: _Compile) -> tuple[SetupStep, ...]:
 
 
 def _lua_bridge(c: _Compile, emitted: Emitted) -> str | None:
-    from missions.emit.lua import render_script
-
     return render_script(c.plan.name) if emitted.needs_lua else None
 
 
 def _params(c: _Compile, emitted: Emitted) -> tuple[Param, ...]:
-    from missions.emit.params import autopilot_params
-
     try:
         return autopilot_params(c.profile, c.plan.payloads, c.payloads.cameras, c.payloads.optics,
                                 c.payloads.instances, needs_lua=emitted.needs_lua,

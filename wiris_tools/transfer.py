@@ -65,14 +65,20 @@ import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import NamedTuple
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from cdf.float32 import FLOAT32_MAX
-from missions.emit.items import MISSION_TYPE_MISSION, MissionItem
+from missions.compile import compile_plan
+from missions.emit.items import FRAME_GLOBAL, MISSION_TYPE_MISSION, MissionItem, deg_to_e7
+from missions.errors import PlanError
+from missions.formats.planfile import atomic_write, check_writable, load_plan, write_plan
+from missions.formats.wpl import load_wpl, write_wpl
+from missions.measure.report import report
 from wiris_tools.errors import LinkError
-from wiris_tools.link import Link
+from wiris_tools.link import Link, command_name
 from wiris_tools.readback import compare_items, readback_firmware
 
 Progress = Callable[[int, int], None]
@@ -109,7 +115,6 @@ _FATAL_NACKS = frozenset({
 
 
 def _describe(item: MissionItem) -> str:
-    from wiris_tools.link import command_name
     return command_name(item.command)
 
 
@@ -774,17 +779,12 @@ def load_for_upload(path: str, mission_type: int = MISSION_TYPE_MISSION, *, part
                     firmware: str | None = None) -> LoadedList:
     """The items of `mission_type` in a .plan, a WPL 110 file or a capture plan (compiled on the fly),
     without a home row, and the file's home. PlanError/LinkError for anything unusable."""
-    from pathlib import Path
-
-    from missions.errors import PlanError
-
     p = Path(path)
     suffix = p.suffix.lower()
     if suffix in PLAN_SUFFIXES:
         chosen, home = _list_of_plan_file(p, mission_type)
     elif suffix in WPL_SUFFIXES:
         _require_mission(p, mission_type, "a WPL 110 file holds a mission")
-        from missions.formats.wpl import load_wpl
         chosen, home = load_wpl(p)
     elif suffix in CAPTURE_SUFFIXES:
         _require_mission(p, mission_type, "a capture plan compiles to a mission")
@@ -800,7 +800,6 @@ def load_for_upload(path: str, mission_type: int = MISSION_TYPE_MISSION, *, part
 
 
 def _list_of_plan_file(p, mission_type: int) -> LoadedList:
-    from missions.formats.planfile import load_plan
     items, fence, rally, home = load_plan(p)
     chosen = {MISSION_TYPE_MISSION: items, mavlink2.MAV_MISSION_TYPE_FENCE: fence,
               mavlink2.MAV_MISSION_TYPE_RALLY: rally}[mission_type]
@@ -809,7 +808,6 @@ def _list_of_plan_file(p, mission_type: int) -> LoadedList:
 
 def _require_mission(p, mission_type: int, what: str) -> None:
     """PlanError unless a mission is asked for: only a .plan file holds fence and rally lists."""
-    from missions.errors import PlanError
     if mission_type != MISSION_TYPE_MISSION:
         raise PlanError(f"{what}, not a {TYPE_NAMES.get(mission_type, str(mission_type))} list", where=str(p),
                         hint="upload fence and rally from a .plan file")
@@ -825,18 +823,9 @@ def _capture_plan_part(p, part: int | None, firmware: str | None) -> LoadedList:
 
 def _compiled_without_errors(p, firmware: str | None):
     """missions.compile.compile_plan of `p`; PlanError when the report of the compiled mission finds errors."""
-    from missions.errors import PlanError
-    try:
-        from missions.compile import compile_plan
-    except ImportError:
-        raise PlanError("this installation cannot compile capture plans (missions.compile is missing)",
-                        where=str(p), hint="compile it elsewhere and upload the .plan file") from None
     compiled = compile_plan(str(p), firmware=firmware)
     try:
-        from missions.measure.report import report
         errors = [e.to_json() for e in report(compiled).errors]
-    except ImportError:
-        errors = []
     except PlanError as err:  # from measuring the mission (a photo budget): about the plan as a whole
         err.where = err.where or str(p)
         raise
@@ -848,7 +837,6 @@ def _compiled_without_errors(p, firmware: str | None):
 
 def _part_index(p, part: int | None, count: int, item_limit: int) -> int:
     """The index into the `count` parts of --part `part` (None: the only one); PlanError when it names none."""
-    from missions.errors import PlanError
     if count > 1 and part is None:
         raise PlanError(f"the mission is split into {count} parts to fit the vehicle's {item_limit} items",
                         where=str(p), hint="choose one with --part 1..N")
@@ -861,7 +849,6 @@ def _part_index(p, part: int | None, count: int, item_limit: int) -> int:
 
 def home_item(home: Home | None) -> MissionItem:
     """ArduPilot's item 0: the home position (it replaces it with its own home on upload)."""
-    from missions.emit.items import FRAME_GLOBAL, deg_to_e7
     lat, lon, alt = home if home is not None else (0.0, 0.0, 0.0)
     return MissionItem(command=mavlink2.MAV_CMD_NAV_WAYPOINT, frame=FRAME_GLOBAL, x=deg_to_e7(lat),
                        y=deg_to_e7(lon), z=float(alt))
@@ -917,9 +904,6 @@ def download_file(link: Link, out: str, *, target_system: int | None = None, tar
     """Download what the vehicle holds and write it to `out` (.plan: mission, fence and rally;
     .waypoints: the mission) atomically; a summary dict. `deadline_s` bounds each list's download
     (None: MissionClient.download's own, from the count and the round trip)."""
-    from pathlib import Path
-
-    from missions.formats.planfile import atomic_write
 
     p = Path(out)
     suffix = _output_suffix(p)
@@ -940,8 +924,6 @@ def download_file(link: Link, out: str, *, target_system: int | None = None, tar
 
 def _output_suffix(p) -> str:
     """The suffix of output file `p`, after checking it can be written - before the download, not after it."""
-    from missions.errors import PlanError
-    from missions.formats.planfile import check_writable
 
     suffix = p.suffix.lower()
     if suffix not in PLAN_SUFFIXES + WPL_SUFFIXES:
@@ -990,9 +972,6 @@ def _file_text(p, suffix: str, items: list[MissionItem], home: Home | None, hb,
                others: dict[int, _OtherList]) -> str:
     """The text of output file `p`; PlanError (where: `p`) when what the vehicle holds does not fit the file
     form (an infinite float)."""
-    from missions.errors import PlanError
-    from missions.formats.planfile import write_plan
-    from missions.formats.wpl import write_wpl
 
     try:
         if suffix in PLAN_SUFFIXES:

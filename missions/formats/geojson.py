@@ -17,14 +17,16 @@ home, flat ground assumed as in the report). Every feature has a `kind` property
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+import json
+from typing import Any
+
+import numpy as np
 
 from missions.compiled import Compiled
+from missions.emit.items import mavlink
 from missions.formats.jsonfinite import finite
 from missions.measure.flight import Simulation
-
-if TYPE_CHECKING:
-    from missions.measure.report import MissionReport
+from missions.measure.report import MissionReport
 
 
 # A 100 km² survey has ~10^6 photos; a GIS tool opening a GeoJSON of a million rectangles is unusable.
@@ -37,7 +39,6 @@ def _r7(v: float) -> float:
 
 
 def _command_name(cmd: int) -> str:
-    from missions.emit.items import mavlink
     entry = mavlink.enums["MAV_CMD"].get(cmd)
     return entry.name if entry is not None else str(cmd)
 
@@ -97,8 +98,6 @@ def feature_collection(compiled: Compiled, sim: Simulation, rep: MissionReport) 
 
 def _footprints(compiled: Compiled, sim: Simulation) -> list[dict]:
     """Footprint polygons of every photo and payload, corners computed at once (one projection call)."""
-    import numpy as np
-
     owners = [(k, name) for k, p in enumerate(sim.photos) for name in p.payloads]
     if not owners:
         return []
@@ -125,8 +124,6 @@ def _footprints(compiled: Compiled, sim: Simulation) -> list[dict]:
 def dumps_collection(fc: dict) -> str:
     """The collection as text: one feature per line (diffable, and json's C encoder instead of its slow
     indenting one). JSON has no NaN: a non-finite number anywhere becomes null."""
-    import json
-
     def dump(obj: Any) -> str:
         try:
             return json.dumps(obj, ensure_ascii=False, allow_nan=False, separators=(",", ":"))

@@ -54,54 +54,39 @@ import re
 import shutil
 import stat
 import tempfile
-from typing import TYPE_CHECKING, Callable, Iterable, Iterator, NamedTuple
+from typing import Callable, Iterable, Iterator, NamedTuple
 
 from cdf.paths import require_directory
 from missions.compiled import Compiled
+from missions.emit.params import format_params
+from missions.emit.setup import setup_json
 from missions.errors import PlanError
-
-if TYPE_CHECKING:
-    from missions.measure.report import MissionReport
+from missions.formats import geojson, kml, planfile, wpl
+from missions.formats.jsonfinite import finite
+from missions.measure.flight import simulate
+from missions.measure.report import MissionReport, report
 
 
 def _json_text(obj) -> str:
-    from missions.formats.jsonfinite import finite
     return json.dumps(finite(obj), indent=1, ensure_ascii=False, allow_nan=False) + "\n"
 
 
 def setup_document(compiled: Compiled) -> dict:
     """NAME.setup.json: the ordered pre-flight steps in missions.emit.setup's format (what `wiris camera apply` reads)."""
-    from missions.emit.setup import setup_json
     return setup_json(compiled.name, compiled.setup)
 
 
-def _params_text(compiled: Compiled) -> str:
-    try:
-        from missions.emit.params import format_params
-    except ImportError:   # the compiler core's formatter; the fallback is Mission Planner's "NAME,VALUE" form
-        lines = [f"# {compiled.name}: autopilot parameters this mission relies on ({compiled.firmware})"]
-        for name, value, why in compiled.params:
-            lines.append(f"# {why}")
-            lines.append(f"{name},{value:g}")
-        return "\n".join(lines) + "\n"
-    return format_params(compiled)
-
-
 def _writers(compiled: Compiled, rep: MissionReport, sim) -> list[tuple[str, Callable[[Path], None]]]:
-    from missions.formats import planfile, wpl
-    from missions.formats.geojson import dumps_collection, feature_collection
-    from missions.formats.kml import render_kml
-
     name = compiled.name
-    fc = feature_collection(compiled, sim, rep)
+    fc = geojson.feature_collection(compiled, sim, rep)
     out: list[tuple[str, Callable[[Path], None]]] = [
         (f"{name}.plan", lambda p: planfile.write_plan(p, compiled)),
         (f"{name}.waypoints", lambda p: wpl.write_wpl(p, compiled.items, home=compiled.home,
                                                       firmware=compiled.firmware)),
-        (f"{name}.geojson", lambda p: p.write_text(dumps_collection(fc), encoding="utf-8")),
-        (f"{name}.kml", lambda p: p.write_text(render_kml(fc), encoding="utf-8")),
+        (f"{name}.geojson", lambda p: p.write_text(geojson.dumps_collection(fc), encoding="utf-8")),
+        (f"{name}.kml", lambda p: p.write_text(kml.render_kml(fc), encoding="utf-8")),
         (f"{name}.setup.json", lambda p: p.write_text(_json_text(setup_document(compiled)), encoding="utf-8")),
-        (f"{name}.params", lambda p: p.write_text(_params_text(compiled), encoding="utf-8")),
+        (f"{name}.params", lambda p: p.write_text(format_params(compiled), encoding="utf-8")),
         (f"{name}.report.json", lambda p: p.write_text(_json_text(rep.to_json()), encoding="utf-8")),
     ]
     if compiled.lua:
@@ -357,11 +342,9 @@ def recover_outputs(out_dir: str | Path, name: str) -> None:
 
 def _write_temp_set(out_dir: Path, name: str, writers: list[tuple[str, Callable[[Path], None]]]) -> Path:
     """Step 2: every file and the manifest in a fresh `.NAME.XXXXXXXX.tmp` folder of DIR, fsynced."""
-    from missions.formats.planfile import new_file_mode
-
     tmp = Path(tempfile.mkdtemp(prefix=f".{name}.", suffix=".tmp", dir=out_dir))
     try:
-        mode = new_file_mode()
+        mode = planfile.new_file_mode()
         files: dict[str, str] = {}
         for fname, write in writers:
             write(tmp / fname)
@@ -389,9 +372,6 @@ def _make_output_dir(out_dir: Path) -> None:
 def write_outputs(compiled: Compiled, out_dir: str | Path, rep: MissionReport | None = None, sim=None) -> list[Path]:
     """Write every output file of `compiled` into `out_dir`; return their paths (in the order above, the
     manifest last)."""
-    from missions.measure.flight import simulate
-    from missions.measure.report import report
-
     out_dir = Path(out_dir)
     require_directory(out_dir, PlanError, missing_ok=True, hint="give a directory for -o",
                       access_hint="give -o a path you may access, each name in it at most 255 bytes")

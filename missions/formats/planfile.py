@@ -42,6 +42,7 @@ from pathlib import Path
 from typing import Any, Iterator
 
 from cdf.float32 import FLOAT32_MAX  # params 1-4 and z travel as float32
+from cdf.userfile import UserFile, read_user_file
 from missions.errors import PlanError
 from missions.formats.itemcheck import GLOBAL_FRAMES, check_items, command_label, home_problem, item_problem
 from missions.emit.items import (FRAME_GLOBAL, FRAME_GLOBAL_RELATIVE_ALT, FRAME_GLOBAL_TERRAIN_ALT, MISSION_TYPE_FENCE,
@@ -668,9 +669,7 @@ def read_plan(text: str | bytes, name: str = "<plan>") -> tuple[list[MissionItem
 
 def load_plan(path: str | Path) -> tuple[list[MissionItem], list[MissionItem], list[MissionItem], Home | None]:
     """read_plan on a file, reading at most the size limit of it."""
-    from cdf.userfile import UserFile, read_user_file
-
     data = read_user_file(path, UserFile(".plan file", MAX_PLAN_BYTES, PlanError, READ_HINT, SIZE_HINT))
-    from missions.formats.outputs import check_output
+    from missions.formats.outputs import check_output   # not at the top: outputs imports this module
     check_output(Path(path), data)       # a compiled NAME.plan: only the last complete compile's
     return read_plan(data, str(path))

@@ -18,16 +18,18 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Sequence
+from typing import Any, Callable, Sequence
 from xml.sax.saxutils import escape
 
+from markupsafe import Markup
 import numpy as np
 
 from missions.compiled import Compiled
 from missions.errors import PlanError
-
-if TYPE_CHECKING:
-    from missions.measure.report import MissionReport
+from missions.formats.planfile import replacing
+from missions.measure.flight import simulate
+from missions.measure.report import MissionReport, footprint_ring, report
+from templates import render
 
 MAP_W, MAP_H = 1000, 800          # map area in pixels
 PANEL_W = 430                     # legend panel to the right
@@ -148,9 +150,6 @@ class _Frame:
 
 def build_picture(compiled: Compiled, sim: Any = None, rep: MissionReport | None = None) -> Picture:
     """The preview's display list: the map from the simulated flight, the legend from the measured report."""
-    from missions.measure.flight import simulate
-    from missions.measure.report import report
-
     sim = sim or simulate(compiled)
     rep = rep or report(compiled, sim)
     content = _map_content(compiled, sim)
@@ -166,8 +165,6 @@ def build_picture(compiled: Compiled, sim: Any = None, rep: MissionReport | None
 
 
 def _map_content(compiled: Compiled, sim: Any) -> _MapContent:
-    from missions.measure.report import footprint_ring
-
     proj = sim.projection
     areas = []
     for a in compiled.areas:
@@ -505,7 +502,7 @@ _PNG_DRAW: dict[str, Callable[[Any, Shape, int, Callable[[float, bool], Any]], N
 def render_png(pic: Picture, path: Path, supersample: int = 2) -> None:
     """Draw `pic` at `supersample` times its size, each layer on its own overlay (so its opacities blend with
     what is below it, not with itself), then reduce it: smooth lines without anti-aliasing in Pillow's draw."""
-    from PIL import Image, ImageDraw, ImageFont
+    from PIL import Image, ImageDraw, ImageFont   # Pillow loads only for a .png preview
 
     k = supersample
     base = Image.new("RGBA", (pic.width * k, pic.height * k), _rgb(COLOURS["background"]) + (255,))
@@ -529,19 +526,12 @@ def render_png(pic: Picture, path: Path, supersample: int = 2) -> None:
 # ------------------------------------------------------------------------------------------------ HTML
 
 def render_html(pic: Picture, rep: MissionReport) -> str:
-    from markupsafe import Markup
-    from templates import render
-
     return render("preview.html.j2", title=pic.title, svg=Markup(render_svg(pic)), rows=pic.rows,
                   warnings=pic.warnings, errors=[e.message for e in rep.errors], areas=rep.areas)
 
 
 def write_preview(compiled: Compiled, out: str | Path) -> Path:
     """Render the preview to `out` (.svg, .png or .html, by suffix), written atomically."""
-    from missions.formats.planfile import replacing
-    from missions.measure.flight import simulate
-    from missions.measure.report import report
-
     out = Path(out)
     suffix = out.suffix.lower()
     if suffix not in (".svg", ".png", ".html", ".htm"):

@@ -27,9 +27,10 @@ from decimal import ROUND_HALF_UP, Decimal, InvalidOperation
 from pathlib import Path
 from typing import NamedTuple
 
+from cdf.userfile import UserFile, read_user_file
 from missions.errors import PlanError
 from missions.formats.itemcheck import check_items, command_label, home_problem, item_problem
-from missions.emit.items import FRAME_GLOBAL, MISSION_TYPE_MISSION, MissionItem, mavlink
+from missions.emit.items import FRAME_GLOBAL, MISSION_TYPE_MISSION, MissionItem, deg_to_e7, mavlink
 from missions.formats.planfile import FLOAT32_MAX, MAX_ITEMS, READ_HINT, _scale, atomic_write, check_finite, xy_hint
 
 Home = tuple[float, float, float]
@@ -73,7 +74,6 @@ def _row(index: int, it: MissionItem, current: int) -> str:
 
 
 def _home_item(home: Home | None) -> MissionItem:
-    from missions.emit.items import deg_to_e7
     lat, lon, alt = home if home is not None else (0.0, 0.0, 0.0)
     return MissionItem(command=mavlink.MAV_CMD_NAV_WAYPOINT, frame=FRAME_GLOBAL, x=deg_to_e7(lat), y=deg_to_e7(lon),
                        z=float(alt))
@@ -269,9 +269,7 @@ def _check_row(row: _Row, problem) -> None:
 
 
 def load_wpl(path: str | Path, *, home_row: bool | None = None) -> tuple[list[MissionItem], Home | None]:
-    from cdf.userfile import UserFile, read_user_file
-
     data = read_user_file(path, UserFile("waypoint file", MAX_WPL_BYTES, PlanError, READ_HINT, SIZE_HINT))
-    from missions.formats.outputs import check_output
+    from missions.formats.outputs import check_output   # not at the top: outputs imports this module
     check_output(Path(path), data)       # a compiled NAME.waypoints: only the last complete compile's
     return read_wpl(data, str(path), home_row=home_row)

@@ -102,7 +102,7 @@ def footprint_polygons(xy: np.ndarray, heading_rad: np.ndarray, fp: Footprint) -
 
 
 def _rects(start: np.ndarray, end: np.ndarray, heading_rad: np.ndarray, fp: Footprint) -> np.ndarray:
-    import shapely
+    import shapely   # heavy: loads only when a plan has an area
     d = np.column_stack([np.sin(heading_rad), np.cos(heading_rad)])
     n = np.column_stack([np.cos(heading_rad), -np.sin(heading_rad)])
     ha, hc = fp.along_m / 2.0, fp.across_m / 2.0
@@ -134,7 +134,7 @@ def _runs(xy: np.ndarray, h: np.ndarray, span: np.ndarray, fp: Footprint) -> lis
 
 def coverage_fraction(area: Any, photos: Sequence[PhotoPoint], fp: Footprint) -> tuple[float, float]:
     """(covered area m², coverage fraction)."""
-    import shapely
+    import shapely   # heavy: loads only when a plan has an area
     if not photos or area.area <= 0:
         return 0.0, 0.0
     xy, h, span = _arrays(photos)
@@ -148,7 +148,7 @@ def coverage_fraction(area: Any, photos: Sequence[PhotoPoint], fp: Footprint) ->
 
 
 def min_front_overlap(photos: Sequence[PhotoPoint], fp: Footprint) -> float | None:
-    import shapely
+    import shapely   # heavy: loads only when a plan has an area
     xy, h, span = _arrays(photos)
     if len(xy) < 2:
         return None
@@ -174,7 +174,7 @@ def min_front_overlap(photos: Sequence[PhotoPoint], fp: Footprint) -> float | No
 
 
 def min_side_overlap(photos: Sequence[PhotoPoint], fp: Footprint) -> float | None:
-    import shapely
+    import shapely   # heavy: loads only when a plan has an area
     xy, h, span = _arrays(photos)
     runs = _runs(xy, h, span, fp)
     if len(runs) < 2:
@@ -293,7 +293,7 @@ def _photos_beside(xy: np.ndarray, h: np.ndarray, span: np.ndarray, s: np.ndarra
     off the run's heading (either way round) is on another leg of a bend. An acute bend puts the other leg's
     photos within half a footprint of the run's end, off to one side; taken as a neighbour, such a photo would
     read the run's edge line lower than flown (56 % against 60 %: its one real neighbour is on its other side)."""
-    import shapely
+    import shapely   # heavy: loads only when a plan has an area
 
     d, n, start = lines.d, lines.n, lines.start
     half = fp.along_m / 2.0
@@ -324,7 +324,7 @@ def _nearest_each_side(xy: np.ndarray, h: np.ndarray, span: np.ndarray, lines: _
 
 
 def outside_length_m(path_xy: np.ndarray, area: Any) -> float:
-    from shapely.geometry import LineString
+    from shapely.geometry import LineString   # heavy: loads only when a plan has an area
     if len(path_xy) < 2:
         return 0.0
     return float(LineString(path_xy).difference(area).length)

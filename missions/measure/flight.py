@@ -49,8 +49,12 @@ from typing import Any, Callable, NamedTuple, Sequence
 
 import numpy as np
 
+from cdf.catalogue import catalogue
 from missions.compiled import Compiled
 from missions.emit.items import FRAME_GLOBAL, FRAME_GLOBAL_RELATIVE_ALT, FRAME_GLOBAL_TERRAIN_ALT, MissionItem, mavlink
+from missions.geometry.geo import LocalProjection
+from missions.geometry.survey import check_photo_budget
+from missions.geometry.triggers import TriggerSpan, simulate_distance_trigger
 
 # ArduCopter defaults (WPNAV_ACCEL 250 cm/s², WPNAV_SPEED_UP 250 cm/s, WPNAV_SPEED_DN 150 cm/s,
 # LAND_SPEED 50 cm/s below LAND_ALT_LOW 10 m, RTL_ALT 15 m); PX4's multicopter defaults are close
@@ -149,7 +153,6 @@ def _heading(dx: float, dy: float) -> float:
 
 def _protocol(camera_id: str) -> str:
     try:
-        from cdf.catalogue import catalogue
         return catalogue().get(camera_id).protocol
     except Exception:   # an id the catalogue does not know cannot come out of the compiler; stay neutral
         return ""
@@ -216,8 +219,6 @@ def _trigger_payloads(compiled: Compiled) -> tuple[str, ...]:
 def _projection(compiled: Compiled):
     """The first area's own projection when there is one (so photos and area share one plane: runs of photos
     stay exactly collinear for the overlap measurement); else one centred on home and every item."""
-    from missions.geometry.geo import LocalProjection
-
     if compiled.areas:
         return compiled.areas[0].area.projection
     lats = [compiled.home[0]]
@@ -733,8 +734,6 @@ def _photos(compiled: Compiled, verts: Sequence[Vertex], times: np.ndarray, flig
 def _distance_photos(path: _Path, spans: Sequence[DistanceSpan], payloads: tuple[str, ...], shots: list[_Shot],
                      span_id: int) -> int:
     """Distance triggering, re-run as the firmware fires it; returns the next span id."""
-    from missions.geometry.triggers import TriggerSpan, simulate_distance_trigger
-
     verts, times, xy, alts, holds = path
     for span in spans:
         pts = simulate_distance_trigger(xy, [TriggerSpan(span.start, span.end, span.distance_m, span.shoot_at_start,
@@ -798,9 +797,6 @@ def _single_photos(path: _Path, singles: Sequence[SinglePhoto], shots: list[_Sho
 
 def _self_triggered_photos(compiled: Compiled, path: _Path, shots: list[_Shot], span_id: int) -> int:
     """Payloads that trigger themselves (RedEdge overlap mode): distance triggering wherever the altitude fits."""
-    from missions.geometry.survey import check_photo_budget
-    from missions.geometry.triggers import TriggerSpan, simulate_distance_trigger
-
     verts, times, xy, alts, _ = path
     for name, (op_alt, tol, front_pct) in self_triggering(compiled).items():
         pay = compiled.payload(name)

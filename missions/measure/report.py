@@ -28,16 +28,20 @@ from __future__ import annotations
 from dataclasses import dataclass
 import math
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Any, Iterable, Mapping, Sequence, TypeVar
+from typing import Any, Iterable, Mapping, Sequence, TypeVar
 
 import numpy as np
 
+from cdf.catalogue import catalogue
 from missions.compiled import AreaInfo, Compiled, PayloadInfo
+from missions.geometry.footprint import Footprint
+from missions.geometry.geo import leaf_parts
+from missions.geometry.route import ZONE_EDGE_TOL_M
+from missions.geometry.triggers import PhotoPoint
+from missions.measure.coverage import (coverage_fraction, footprint_polygons, min_front_overlap, min_side_overlap,
+                                       outside_length_m)
 from missions.measure.flight import Photo, Simulation, simulate
 from missions.plan.schema import MAX_AGL_M
-
-if TYPE_CHECKING:
-    from missions.geometry.triggers import PhotoPoint
 
 # Coverage below this is worth a warning: the examples and the tests hold the compiler to it.
 COVERAGE_TARGET = 0.995
@@ -240,7 +244,7 @@ class UncompiledReport:
 def area_geometry(area: Any, proj: Any) -> Any:
     """`area` (missions.geometry.area.Area) as a shapely geometry in projection `proj` (re-projected through
     lat/lon when it was built in another plane; its edges are short enough to stay straight in both)."""
-    from shapely.geometry import MultiPolygon, Polygon
+    from shapely.geometry import MultiPolygon, Polygon   # heavy: loads only when a plan has an area
 
     if area.projection == proj:
         return area.geometry
@@ -326,17 +330,13 @@ class _PhotoArrays:
         return groups
 
     def points(self, ks: list[int]) -> list[PhotoPoint]:
-        from missions.geometry.triggers import PhotoPoint
-
         return [PhotoPoint(float(self.x[k]), float(self.y[k]), self.photos[k].heading_deg, self.photos[k].span)
                 for k in ks]
 
 
 def _coverage(geom: Any, ph: _PhotoArrays, groups: dict[float, list[int]], payload: PayloadInfo) -> float:
     """Fraction of `geom` under the footprints of the photos `groups` (by altitude): the union over all groups."""
-    import shapely
-    from missions.geometry.footprint import Footprint
-    from missions.measure.coverage import coverage_fraction, footprint_polygons
+    import shapely   # heavy: loads only when a plan has an area
 
     if len(groups) == 1:
         (alt, ks), = groups.items()
@@ -356,9 +356,6 @@ def _lowest(values: Iterable[float | None]) -> float | None:
 
 def _min_overlaps(ph: _PhotoArrays, groups: dict[float, list[int]], payload: PayloadInfo) -> OverlapMin:
     """The lowest front and side overlap of the photos `groups` (by altitude; pairs within a group)."""
-    from missions.geometry.footprint import Footprint
-    from missions.measure.coverage import min_front_overlap, min_side_overlap
-
     fronts, sides = [], []
     for alt, ks in groups.items():
         fp = Footprint(*payload.footprint_m(alt))
@@ -408,8 +405,6 @@ def _step_paths(compiled: Compiled, sim: Simulation) -> list[np.ndarray | None]:
 
 def _outside_m(xy: np.ndarray, path: np.ndarray | None, geom: Any) -> float:
     """Metres of the path segments `path` selects (None: all) outside `geom`, one polyline per run of them."""
-    from missions.measure.coverage import outside_length_m
-
     if path is None:
         return outside_length_m(xy, geom)
     k = np.flatnonzero(path)
@@ -423,10 +418,8 @@ def _zones(area: Any, proj: Any) -> Any:
     """The area's holes and exclusion zones as drawn (`Area.excluded`: an exclusion that touches, crosses or
     splits the boundary is no hole of the surveyed geometry) in projection `proj`. An Area built without that
     record (by hand) has only its geometry's holes."""
-    import shapely
+    import shapely   # heavy: loads only when a plan has an area
     from shapely.geometry import Polygon
-
-    from missions.geometry.geo import leaf_parts
 
     zones = getattr(area, "excluded", None)
     if zones is None:
@@ -445,8 +438,7 @@ def _zones(area: Any, proj: Any) -> Any:
 def _over_zones_m(sim: Simulation, zones: Any) -> tuple[float, float]:
     """Metres of the flown path inside `zones`, and how many of them with the camera on. Inside means deeper than
     route.ZONE_EDGE_TOL_M: a path along a zone's edge (a detour inside the area) is beside it."""
-    import shapely
-    from missions.geometry.route import ZONE_EDGE_TOL_M
+    import shapely   # heavy: loads only when a plan has an area
 
     xy = sim.xy
     if zones.is_empty or len(xy) < 2:
@@ -466,8 +458,7 @@ def _over_zones_m(sim: Simulation, zones: Any) -> tuple[float, float]:
 
 def _photos_in(zones: Any, photos: Sequence[Photo]) -> int:
     """Photos centred inside `zones` (deeper than the edge tolerance, as for the path)."""
-    import shapely
-    from missions.geometry.route import ZONE_EDGE_TOL_M
+    import shapely   # heavy: loads only when a plan has an area
 
     if zones.is_empty or not photos:
         return 0
@@ -661,7 +652,6 @@ def _errors(compiled: Compiled) -> list[Finding]:
 def _optics_warnings(compiled: Compiled) -> list[Finding]:
     out: list[Finding] = []
     try:
-        from cdf.catalogue import catalogue
         cat = catalogue()
     except Exception:  # the catalogue is checked by its own tests; a report still comes out without it
         return out

@@ -12,14 +12,13 @@ import re
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
+from cdf.catalogue import catalogue
 from missions.plan.meaning import Resolved
 from missions.plan.types import (CameraStep, CorridorStep, Home, LandStep, Payload, Plan, RtlStep, Step, SurveyStep,
                                  TakeoffStep, Vehicle, WaypointStep)
 
 
 def build_plan(data: dict, resolved: Resolved, path: str, base_dir: Path, locations: Mapping) -> Plan:
-    from cdf.catalogue import catalogue
-
     cat = catalogue()
     cameras = {name: cat.get(p["camera"]) for name, p in data["payloads"].items()}
     payloads = tuple(_payload(name, p, cameras[name], resolved.component_ids[name])

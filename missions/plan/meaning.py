@@ -16,7 +16,8 @@ import difflib
 from pathlib import Path
 from typing import Any, Callable, Mapping, NamedTuple
 
-from cdf.errors import ECHO_CHARS, clip, shown
+from cdf.catalogue import catalogue
+from cdf.errors import ECHO_CHARS, CdfError, clip, shown
 from cdf.userfile import not_a_file
 from missions.plan.schema import COMPONENT_IDS
 from missions.plan.settings import check_settings
@@ -62,9 +63,6 @@ def _is_rededge(camera: Any) -> bool:
 def _payload_cameras(payloads: Mapping[str, Any], doc: PositionedYaml) -> dict[str, Any]:
     """The catalogue camera of each payload that names one the catalogue has; its imager and component id
     checked against the camera."""
-    from cdf.catalogue import catalogue
-    from cdf.errors import CdfError
-
     cat = catalogue()
     cameras: dict[str, Any] = {}
     for name, p in payloads.items():

@@ -23,7 +23,7 @@ from missions.plan.yaml_reader import PositionedYaml
 
 def schema_problems(data: Any, doc: PositionedYaml, problems: list[Problem]) -> None:
     """Append a located problem for each schema error (once each), skipping values the YAML pass reported."""
-    import jsonschema
+    import jsonschema   # heavy: `wiris mission schema` imports this package and prints the schema without it
 
     schema = plan_schema()
     validator = jsonschema.Draft202012Validator(schema)

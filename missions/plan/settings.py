@@ -13,7 +13,7 @@ from __future__ import annotations
 import difflib
 from typing import Any
 
-from cdf.errors import shown
+from cdf.errors import CdfError, shown
 from missions.plan.yaml_reader import PositionedYaml
 
 
@@ -31,8 +31,6 @@ def check_settings(camera: Any, settings: Any, path: tuple, doc: PositionedYaml,
 
 def _checked_values(camera: Any, settings: dict, path: tuple, doc: PositionedYaml) -> dict[str, float | int]:
     """The wire value of each setting the camera has and accepts the value of, in the plan's order."""
-    from cdf.errors import CdfError
-
     values: dict[str, float | int] = {}
     for key, value in settings.items():
         s = camera.setting(key)

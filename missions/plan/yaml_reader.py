@@ -15,6 +15,8 @@ import math
 import re
 from typing import Any
 
+import yaml
+
 from cdf.errors import ECHO_CHARS, clip, shown
 from missions.errors import Problem
 
@@ -66,8 +68,6 @@ class PositionedYaml:
         self.problems.append(Problem(self.where(path, key), message, hint))
 
     def convert(self, node: Any, path: tuple, depth: int = 0) -> Any:
-        import yaml
-
         self.nodes += 1
         if self.nodes > MAX_NODES:
             raise _Budget(f"the YAML expands to more than {MAX_NODES} nodes (aliases?)")
@@ -81,8 +81,6 @@ class PositionedYaml:
         return self.scalar(node, path)
 
     def mapping(self, node: Any, path: tuple, depth: int) -> dict[str, Any]:
-        import yaml
-
         out: dict[str, Any] = {}
         for knode, vnode in node.value:
             if not isinstance(knode, yaml.ScalarNode) or knode.tag == "tag:yaml.org,2002:merge":
@@ -125,8 +123,6 @@ class PositionedYaml:
 
     def resolved_number(self, node: Any, path: tuple) -> Any:
         """A scalar YAML resolved as int or float, as PyYAML constructs it; text when PyYAML cannot."""
-        import yaml
-
         tag, text = node.tag, node.value
         try:
             c = yaml.constructor.SafeConstructor()
@@ -172,8 +168,6 @@ def parse_yaml(text: str, file: str, problems: list[Problem]) -> tuple[Any, Posi
 
 def _compose(text: str, doc: PositionedYaml, problems: list[Problem]) -> Any:
     """PyYAML's node tree of `text`, or None and a problem (invalid YAML, nested too deeply, empty)."""
-    import yaml
-
     file = doc.file
     try:
         node = yaml.compose(text, Loader=yaml.SafeLoader)
