@@ -827,7 +827,7 @@ def _classic_type_name(ptype: str) -> str:
 def load_setup(path: str | Path) -> list[Step]:
     raw = read_user_file(path, SETUP_FILE)
     from missions.formats.outputs import check_output
-    check_output(Path(path), raw)        # only the last complete compile's NAME.setup.json (PlanError otherwise)
+    check_output(path)        # only the last complete compile's NAME.setup.json (PlanError otherwise)
     try:
         data = json.loads(raw.decode("utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as err:

@@ -174,11 +174,13 @@ def _candidate_names(fname: str) -> list[str]:
     return names
 
 
-def check_output(path: str | Path, data: bytes) -> None:
-    """Refuse `data`, just read from `path`, when `path` is a file of a compiled set that is not the last complete
-    compile's: a compile of its NAME is pending in that folder, or NAME's manifest there does not list it (a
-    part left by an earlier, longer compile). A file no manifest speaks for passes, and so does a listed file
-    the user has edited since."""
+def check_output(path: str | Path) -> None:
+    """Refuse `path` when it is a file of a compiled set that is not the last complete compile's: a compile of its
+    NAME is pending in that folder, or NAME's manifest there does not list it (a part left by an earlier, longer
+    compile). A file no manifest speaks for passes, and so does a listed file the user has edited since: its
+    bytes are theirs to fly (QGroundControl saves a .plan in place, `mission download -o` may write under the
+    compile's name), and a half-switched set cannot show up here, since from the commit on the pending folder
+    refuses every file of NAME."""
     p = Path(path)
     folder = p.parent
     for name in _candidate_names(p.name):
@@ -188,14 +190,10 @@ def check_output(path: str | Path, data: bytes) -> None:
         manifest = read_manifest(folder / manifest_name(name), name)
         if manifest is None:
             continue
-        want = manifest.files.get(p.name)
-        if want is None:
+        if p.name not in manifest.files:
             raise PlanError(f"not a file of the last compile of {name} ({manifest_name(name)} does not list it)",
                             where=str(p), hint=f"a file left by an earlier compile: use the files "
                                                f"{manifest_name(name)} lists, or move this one away")
-        # Bytes that differ from the manifest's are the user's own edit (QGroundControl saves a .plan in place,
-        # `mission download -o` may write under the compile's name): theirs to fly. A half-switched set cannot
-        # show up here: from the commit on, the pending folder above refuses every file of NAME.
         return
 
 

@@ -457,17 +457,22 @@ def _float32(r: _Reader, d: Decimal | None, path: str, hint: str = FLOAT32_METRE
     return d
 
 
-def _parse_json(text: str | bytes, name: str) -> Any:
+def capped_text(text: str | bytes, name: str, cap: int, utf8_hint: str, size_hint: str = SIZE_HINT) -> str:
+    """A mission file's text, at most `cap` long; bytes decoded as UTF-8 (a byte order mark dropped)."""
     if isinstance(text, bytes):
-        if len(text) > MAX_PLAN_BYTES:
-            raise PlanError(f"the file is larger than {MAX_PLAN_BYTES // 2**20} MB", where=name, hint=SIZE_HINT)
+        if len(text) > cap:
+            raise PlanError(f"the file is larger than {cap // 2**20} MB", where=name, hint=size_hint)
         try:
             text = text.decode("utf-8-sig")
         except UnicodeDecodeError as err:
-            raise PlanError(f"not UTF-8 text (byte {err.start})", where=name,
-                            hint="a .plan file is JSON in UTF-8") from None
-    if len(text) > MAX_PLAN_BYTES:
-        raise PlanError(f"the file is larger than {MAX_PLAN_BYTES // 2**20} MB", where=name, hint=SIZE_HINT)
+            raise PlanError(f"not UTF-8 text (byte {err.start})", where=name, hint=utf8_hint) from None
+    if len(text) > cap:
+        raise PlanError(f"the file is larger than {cap // 2**20} MB", where=name, hint=size_hint)
+    return text
+
+
+def _parse_json(text: str | bytes, name: str) -> Any:
+    text = capped_text(text, name, MAX_PLAN_BYTES, "a .plan file is JSON in UTF-8")
     try:
         return json.loads(text, parse_float=Decimal, parse_int=Decimal)
     except json.JSONDecodeError as err:
@@ -671,5 +676,5 @@ def load_plan(path: str | Path) -> tuple[list[MissionItem], list[MissionItem], l
     """read_plan on a file, reading at most the size limit of it."""
     data = read_user_file(path, UserFile(".plan file", MAX_PLAN_BYTES, PlanError, READ_HINT, SIZE_HINT))
     from missions.formats.outputs import check_output   # not at the top: outputs imports this module
-    check_output(Path(path), data)       # a compiled NAME.plan: only the last complete compile's
+    check_output(path)       # a compiled NAME.plan: only the last complete compile's
     return read_plan(data, str(path))

@@ -31,7 +31,8 @@ from cdf.userfile import UserFile, read_user_file
 from missions.errors import PlanError
 from missions.formats.itemcheck import check_items, command_label, home_problem, item_problem
 from missions.emit.items import FRAME_GLOBAL, MISSION_TYPE_MISSION, MissionItem, deg_to_e7, mavlink
-from missions.formats.planfile import FLOAT32_MAX, MAX_ITEMS, READ_HINT, _scale, atomic_write, check_finite, xy_hint
+from missions.formats.planfile import (FLOAT32_MAX, MAX_ITEMS, READ_HINT, _scale, atomic_write, capped_text,
+                                      check_finite, xy_hint)
 
 Home = tuple[float, float, float]
 
@@ -146,18 +147,8 @@ def read_wpl(text: str | bytes, name: str = "<waypoints>", *,
 
 
 def _decoded(text: str | bytes, name: str) -> str:
-    """The file's text, size-capped; bytes decoded as UTF-8 (a byte order mark dropped)."""
-    if isinstance(text, bytes):
-        if len(text) > MAX_WPL_BYTES:
-            raise PlanError(f"the file is larger than {MAX_WPL_BYTES // 2**20} MB", where=name, hint=SIZE_HINT)
-        try:
-            text = text.decode("utf-8-sig")
-        except UnicodeDecodeError as err:
-            raise PlanError(f"not UTF-8 text (byte {err.start})", where=name,
-                            hint="save the file as UTF-8 (a comment in another encoding?) or export it again") from None
-    if len(text) > MAX_WPL_BYTES:
-        raise PlanError(f"the file is larger than {MAX_WPL_BYTES // 2**20} MB", where=name, hint=SIZE_HINT)
-    return text
+    return capped_text(text, name, MAX_WPL_BYTES,
+                       "save the file as UTF-8 (a comment in another encoding?) or export it again", SIZE_HINT)
 
 
 class _Row(NamedTuple):
@@ -271,5 +262,5 @@ def _check_row(row: _Row, problem) -> None:
 def load_wpl(path: str | Path, *, home_row: bool | None = None) -> tuple[list[MissionItem], Home | None]:
     data = read_user_file(path, UserFile("waypoint file", MAX_WPL_BYTES, PlanError, READ_HINT, SIZE_HINT))
     from missions.formats.outputs import check_output   # not at the top: outputs imports this module
-    check_output(Path(path), data)       # a compiled NAME.waypoints: only the last complete compile's
+    check_output(path)       # a compiled NAME.waypoints: only the last complete compile's
     return read_wpl(data, str(path), home_row=home_row)
