@@ -177,10 +177,14 @@ class Imager:
     sensor_mm: tuple[float, float] | None = None
     lenses_mm: tuple[float, ...] = ()
     min_interval_s: float | None = None
+    # A microbolometer's thermal time constant: it integrates the scene over about this long, so motion during
+    # it smears the image (the compiler's blur budget, missions.thermal.blur). None: not a thermal imager.
+    time_constant_ms: float | None = None
     bands: int | None = None
     assumed: tuple[str, ...] = ()     # which of the facts above are assumptions, not sourced
     sources: tuple[tuple[str, str], ...] = ()
     note: str = ""
+    time_constant_note: str = ""
 
     @property
     def sensor_size_mm(self) -> tuple[float, float] | None:
@@ -387,8 +391,9 @@ def _imagers(raw: dict) -> tuple[Imager, ...]:
             id=iid, known=known, resolution_px=tuple(res) if res else None,
             pixel_pitch_um=im.get("pixel_pitch_um"), sensor_mm=tuple(sensor) if sensor else None,
             lenses_mm=tuple(float(x) for x in im.get("lenses_mm", ())), min_interval_s=im.get("min_interval_s"),
-            bands=im.get("bands"), assumed=assumed, sources=sources,
-            note=" ".join(str(im[k]) for k in im if k == "note" or k.endswith("_note")),
+            time_constant_ms=im.get("time_constant_ms"), bands=im.get("bands"), assumed=assumed, sources=sources,
+            note=" ".join(str(im[k]) for k in im if k == "note" or (k.endswith("_note") and k != "time_constant_note")),
+            time_constant_note=str(im.get("time_constant_note", "")),
         ))
     return tuple(out)
 

@@ -18,7 +18,7 @@ no_optics, mission_split, px4_single_capture_all.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 import math
 from pathlib import Path
 from typing import Any, Callable, NamedTuple
@@ -39,8 +39,10 @@ from missions.geometry.footprint import Footprint
 from missions.geometry.geo import MAX_EXTENT_M
 from missions.geometry.survey import SurveyPlan, plan_survey
 from missions.plan.load import (CameraStep, CorridorStep, LandStep, Plan, RtlStep, SurveyStep, TakeoffStep,
-                                WaypointStep, input_files, load_plan)
-from missions.plan.schema import MAX_AGL_M, MAX_ALTITUDE_M, MIN_ALTITUDE_M
+                                WaypointStep, input_files, load_plan, raise_problems)
+from missions.plan.schema import MAX_AGL_M, MAX_ALTITUDE_M, MIN_ALTITUDE_M, SPEED_RANGE_MPS
+from missions.thermal.assess import assess
+from missions.thermal.speed import SpeedLimit, check_sharp, choose_speed, line_limits
 
 NEAR_MIN_INTERVAL = 1.2      # warn when photos come less than 20 % slower than the camera's minimum
 TURNAROUND_DEFAULT_M = {"copter": 10.0, "plane": 30.0, "vtol": 30.0}   # QGC's defaults (survey-planners §1.4)
@@ -107,10 +109,7 @@ class _Compile:
     payloads: _Payloads
     emitter: Emitter
     state: _State
-
-    @property
-    def speed_mps(self) -> float:
-        return self.plan.vehicle.speed_mps
+    speed_mps: float                         # the plan's, or the one `auto` chose (`_mission_speed`)
 
     def warn(self, code: str, message: str) -> None:
         self.state.warnings.append(PlanWarning(code, message))
@@ -200,8 +199,8 @@ def _resolve_payloads(plan: Plan, prof: FirmwareProfile, state: _State) -> _Payl
     return _Payloads(cameras, {name: i + 1 for i, name in enumerate(wiris)}, known, unknown)
 
 
-def _emitter(plan: Plan, prof: FirmwareProfile, payloads: _Payloads) -> Emitter:
-    return Emitter(prof, plan.vehicle.frame, plan.vehicle.speed_mps, (plan.home.lat, plan.home.lon),
+def _emitter(plan: Plan, prof: FirmwareProfile, payloads: _Payloads, speed_mps: float) -> Emitter:
+    return Emitter(prof, plan.vehicle.frame, speed_mps, (plan.home.lat, plan.home.lon),
                    payloads.cameras, {p.name: p.component_id for p in plan.payloads}, payloads.instances,
                    {p.name: dict(p.values) for p in plan.payloads})
 
@@ -260,13 +259,14 @@ def _lines_step(c: _Compile, step: SurveyStep | CorridorStep, kind: str,
     """A survey or corridor: its first payload's optics set the altitude, footprint and trigger distance, every
     payload must keep up with the trigger, and the planned lines become the emitter's track."""
     here = c.plan.step_where(step)
-    lead = _lead_optics(c, step, kind)
-    alt = _line_altitude(c, step, lead)
+    lead = _lead_optics(c.plan, c.payloads, step, kind)
+    alt = _line_altitude(c.plan, step, lead)
     c.state.altitudes.append(_Altitude(alt, c.plan.step_where(
         step, "altitude_m" if step.altitude_m is not None else "gsd_cm")))
     footprint = optics.footprint(lead, alt)
     trig = optics.trigger_m(lead, alt, step.front_pct)
     _check_triggering(c, step, lead, trig)
+    check_sharp(_step_limits(c.plan, c.payloads, step, lead, alt), c.speed_mps, c.plan.where("vehicle", "speed_mps"))
     _record_rededges(c, step, lead, alt)
     try:
         lines = plan_lines(c, step, _line_inputs(c, step, lead, footprint))
@@ -283,17 +283,17 @@ def _lines_step(c: _Compile, step: SurveyStep | CorridorStep, kind: str,
     c.state.intent.append(lines.route)
 
 
-def _lead_optics(c: _Compile, step: SurveyStep | CorridorStep, kind: str) -> PayloadInfo:
+def _lead_optics(plan: Plan, payloads: _Payloads, step: SurveyStep | CorridorStep, kind: str) -> PayloadInfo:
     """The optics of the step's first payload, which sets the lines: without them there is no footprint."""
     lead = step.payloads[0]
-    if lead in c.payloads.optics_errors:
-        e = c.payloads.optics_errors[lead]
+    if lead in payloads.optics_errors:
+        e = payloads.optics_errors[lead]
         raise PlanError(f"{kind} lines need {lead}'s footprint: {e.message}",
-                        where=c.plan.step_where(step, "payloads", 0), hint=e.hint)
-    return c.payloads.optics[lead]
+                        where=plan.step_where(step, "payloads", 0), hint=e.hint)
+    return payloads.optics[lead]
 
 
-def _line_altitude(c: _Compile, step: SurveyStep | CorridorStep, lead: PayloadInfo) -> float:
+def _line_altitude(plan: Plan, step: SurveyStep | CorridorStep, lead: PayloadInfo) -> float:
     """The step's altitude, or the one at which the lead payload images with the step's GSD."""
     if step.altitude_m is not None:
         return step.altitude_m
@@ -301,7 +301,7 @@ def _line_altitude(c: _Compile, step: SurveyStep | CorridorStep, lead: PayloadIn
     if not MIN_ALTITUDE_M <= alt <= MAX_ALTITUDE_M:
         raise PlanError(f"gsd_cm {step.gsd_cm:g} needs {alt:.1f} m above ground with {lead.name}'s optics, "
                         f"outside {MIN_ALTITUDE_M:g}..{MAX_ALTITUDE_M:g} m",
-                        where=c.plan.step_where(step, "gsd_cm"), hint="choose another GSD")
+                        where=plan.step_where(step, "gsd_cm"), hint="choose another GSD")
     return alt
 
 
@@ -393,8 +393,16 @@ def _track(c: _Compile, step: SurveyStep | CorridorStep, route: SurveyPlan | Cor
                  spans=tuple((s.start_index, s.stop_index) for s in route.camera_spans),
                  altitude_m=alt, trigger=step.trigger, trigger_distance_m=route.trigger_distance_m,
                  interval_s=(route.trigger_distance_m / c.speed_mps),
-                 hold_s=max(HOVER_HOLD_S, lead.min_interval_s or 0.0),
+                 hold_s=_hover_hold_s(lead),
                  autopilot_triggers=any(not c.payloads.is_rededge(n) for n in step.payloads))
+
+
+def _hover_hold_s(lead: PayloadInfo) -> float:
+    """A hover photo waits until the vehicle has settled: QGC's hover delay at least, and long enough for a
+    microbolometer to settle on the still scene (five time constants: 99 % of a first-order step response) and
+    then take the photo (the camera's minimum capture interval)."""
+    settle = 5.0 * (lead.time_constant_ms or 0.0) / 1000.0
+    return max(HOVER_HOLD_S, settle + (lead.min_interval_s or 0.0))
 
 
 _STEPS: dict[type, Callable[[_Compile, Any], None]] = {
@@ -461,6 +469,68 @@ def _warn_about_unknown_optics(c: _Compile) -> None:
             c.warn("no_optics", f"{name}: {e.message}")
 
 
+# ------------------------------------------------------------------------------------------- the speed
+
+def _speed_limits(plan: Plan, payloads: _Payloads) -> list[SpeedLimit]:
+    """Every survey's and corridor's limits on the speed (interval and blur), from the same optics, altitude and
+    trigger distance the steps plan with."""
+    limits: list[SpeedLimit] = []
+    for step in plan.mission:
+        if not isinstance(step, (SurveyStep, CorridorStep)):
+            continue
+        kind = "survey" if isinstance(step, SurveyStep) else "corridor"
+        try:
+            lead = _lead_optics(plan, payloads, step, kind)
+            alt = _line_altitude(plan, step, lead)
+        except PlanError:
+            continue                 # the step's own pass reports it, in mission order
+        limits += _step_limits(plan, payloads, step, lead, alt)
+    return limits
+
+
+def _step_limits(plan: Plan, payloads: _Payloads, step: SurveyStep | CorridorStep, lead: PayloadInfo,
+                 alt: float) -> list[SpeedLimit]:
+    kind = "survey" if isinstance(step, SurveyStep) else "corridor"
+    infos = [payloads.optics[n] for n in step.payloads if n in payloads.optics]
+    triggered = [n for n in step.payloads if not payloads.is_rededge(n)]
+    return line_limits(f"{kind} at {plan.step_where(step)}", plan.step_where(step, "blur_px"),
+                       optics.trigger_m(lead, alt, step.front_pct), infos, alt, step.blur_px,
+                       moving=step.trigger != "hover", triggered=triggered)
+
+
+def _mission_speed(plan: Plan, payloads: _Payloads, state: _State) -> float:
+    """The plan's speed, checked against the blur budgets and vehicle.max_speed_mps; or, for `auto`, the
+    fastest speed every camera allows (capped by vehicle.max_speed_mps or the frame's plausible maximum)."""
+    v = plan.vehicle
+    where = plan.where("vehicle", "speed_mps")
+    limits = _speed_limits(plan, payloads)
+    low, high = SPEED_RANGE_MPS[v.frame]
+    if v.speed_mps is not None:
+        if v.max_speed_mps is not None and v.speed_mps > v.max_speed_mps:
+            raise PlanError(f"speed_mps {v.speed_mps:g} is above vehicle.max_speed_mps {v.max_speed_mps:g}",
+                            where=where, hint=f"fly at {v.max_speed_mps:g} m/s or slower, or speed_mps: auto")
+        return v.speed_mps          # each step checks it against its limits (`_check_sharp`)
+    if v.max_speed_mps is not None:
+        cap = SpeedLimit(v.max_speed_mps, "vehicle", "vehicle.max_speed_mps", plan.where("vehicle", "max_speed_mps"))
+    elif limits:
+        cap = SpeedLimit(high, "vehicle", f"the fastest plausible {v.frame} survey speed", where)
+    else:
+        raise PlanError("speed_mps: auto sizes the speed from the surveys and corridors, and this plan has none",
+                        where=where, hint="give a number, e.g. speed_mps: 5, or vehicle.max_speed_mps")
+    # auto keeps the interval NEAR_MIN_INTERVAL above the camera's minimum: a gust of tail wind loses no photo
+    chosen = choose_speed([lim._replace(speed_mps=lim.speed_mps / NEAR_MIN_INTERVAL,
+                                        why=lim.why + f" with a {NEAR_MIN_INTERVAL - 1:.0%} margin")
+                           if lim.kind == "interval" else lim for lim in limits], cap)
+    if chosen.speed_mps < low:
+        raise PlanError(f"speed_mps: auto finds no speed a {v.frame} can fly: {chosen.limit.why} allows at most "
+                        f"{chosen.speed_mps:g} m/s, below the {low:g} m/s minimum", where=chosen.limit.where,
+                        hint="fly higher (coarser GSD, longer trigger distance), lower the front overlap, or "
+                             "raise blur_px")
+    state.warnings.append(PlanWarning("speed_auto", f"speed_mps: auto chose {chosen.speed_mps:g} m/s, the fastest "
+                                      f"at which {chosen.limit.why}"))
+    return chosen.speed_mps
+
+
 # -------------------------------------------------------------------------------------------- the driver
 
 def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -> Compiled:
@@ -468,7 +538,8 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     prof = profile(firmware or plan.vehicle.firmware)
     state = _State(warnings=[f"component_id_chosen: {n}" for n in plan.notes])
     payloads = _resolve_payloads(plan, prof, state)
-    c = _Compile(plan, prof, payloads, _emitter(plan, prof, payloads), state)
+    speed = _mission_speed(plan, payloads, state)
+    c = _Compile(plan, prof, payloads, _emitter(plan, prof, payloads, speed), state, speed)
     _warn_about_the_start(c)
     for step in plan.mission:
         _STEPS[type(step)](c, step)
@@ -481,7 +552,7 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     lua = _lua_bridge(c, emitted)
     params = _params(c, emitted)
     _warn_about_unknown_optics(c)
-    return Compiled(
+    compiled = Compiled(
         name=plan.name, firmware=prof.name, frame=plan.vehicle.frame,
         home=(plan.home.lat, plan.home.lon, plan.home.alt_amsl_m), speed_mps=c.speed_mps, items=emitted.items,
         parts=parts.parts, item_limit=parts.limit,
@@ -489,3 +560,13 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
         payloads=tuple(payloads.optics[p.name] for p in plan.payloads if p.name in payloads.optics),
         areas=tuple(state.areas), setup=setup, lua=lua, params=params,
         warnings=tuple(dict.fromkeys(state.warnings)), intent=tuple(state.intent), inputs=input_files(plan))
+    return _with_the_sun(plan, compiled)
+
+
+def _with_the_sun(plan: Plan, compiled: Compiled) -> Compiled:
+    """The sun over each timed step and the PV profile's findings: its violations are the plan's errors."""
+    found = assess(plan, compiled)
+    raise_problems(list(found.problems), plan.path)
+    if not found.steps and not found.warnings:
+        return compiled
+    return replace(compiled, sun=found.steps, warnings=tuple(dict.fromkeys(compiled.warnings + found.warnings)))

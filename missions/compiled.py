@@ -38,6 +38,8 @@ class PayloadInfo:
     resolution_px: tuple[int, int]
     landscape: bool = True          # long image side across track
     min_interval_s: float | None = None
+    time_constant_ms: float | None = None   # thermal imagers: the blur budget's integration time (catalogue)
+    time_constant_assumed: bool = False     # the catalogue marks it assumed (no datasheet value)
 
     def footprint_m(self, altitude_m: float) -> tuple[float, float]:
         """Ground footprint (across track, along track) in metres at `altitude_m` above ground, nadir."""
@@ -121,6 +123,7 @@ class Compiled:
     warnings: tuple[PlanWarning, ...] = ()
     intent: tuple[Any, ...] = field(default=(), compare=False)   # planner geometry, for previews only
     inputs: tuple[str, ...] = field(default=(), compare=False)   # the files the plan was read from (never written)
+    sun: tuple[Any, ...] = ()                   # missions.thermal.assess.StepSun per timed step (plans with `when`)
 
     def payload(self, name: str) -> PayloadInfo:
         return next(p for p in self.payloads if p.name == name)

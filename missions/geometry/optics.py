@@ -66,7 +66,8 @@ def payload_info(payload, camera, where: str | None = None) -> tuple[PayloadInfo
                         f"({table}); GSD, footprint and spacing are only as good as that assumption"))
     info = PayloadInfo(name=payload.name, camera_id=camera.id, imager=im.id, component_id=payload.component_id,
                        focal_mm=focal, sensor_mm=tuple(im.sensor_size_mm), resolution_px=tuple(im.resolution_px),
-                       landscape=payload.landscape, min_interval_s=im.min_interval_s)
+                       landscape=payload.landscape, min_interval_s=im.min_interval_s,
+                       time_constant_ms=im.time_constant_ms, time_constant_assumed="time_constant" in im.assumed)
     return info, tuple(warnings)
 
 

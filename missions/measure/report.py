@@ -186,6 +186,8 @@ class MissionReport:
     areas: tuple[AreaRow, ...]
     warnings: tuple[Finding, ...]
     errors: tuple[Finding, ...]
+    speed_mps: float = 0.0                    # the survey speed flown (the plan's, or the one `auto` chose)
+    sun: tuple[Any, ...] = ()                 # missions.thermal.assess.StepSun per timed step (a plan with `when`)
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -210,6 +212,8 @@ class MissionReport:
             "areas": [a.to_json() for a in self.areas],
             "warnings": [w.to_json() for w in self.warnings],
             "errors": [e.to_json() for e in self.errors],
+            "speed_mps": self.speed_mps,
+            "sun": [s.to_json() for s in self.sun],
         }
 
 
@@ -498,6 +502,8 @@ def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | N
         areas=rows,
         warnings=tuple(_warnings(compiled, sim, steps, rows)),
         errors=tuple(_errors(compiled)),
+        speed_mps=compiled.speed_mps,
+        sun=tuple(compiled.sun),
     )
 
 
@@ -725,11 +731,36 @@ def format_report(rep: MissionReport) -> str:
         outside_m = a.path.outside_m if a.path is not None else 0
         rows.append((f"step {a.step} {a.kind}", f"{a.area_m2:.0f} m² at {a.altitude_m:g} m, "
                                                 f"{outside_m:.0f} m flown outside the area"))
+    rows.append(("speed", f"{rep.speed_mps:g} m/s"))
+    rows += [(f"sun step {s.step}", _sun_text(s)) for s in rep.sun]
     width = max(len(k) for k, _ in rows)
     out = [f"{k.ljust(width)}  {v}" for k, v in rows] + _findings_lines(rep)
     if not rep.warnings and not rep.errors:
         out.append("no warnings")
     return "\n".join(out)
+
+
+def _sun_text(s: Any) -> str:
+    """One line of the sun over a step (missions.thermal.assess.StepSun)."""
+    j = s.to_json()
+    a, b = j["sun_start"], j["sun_end"]
+    text = (f"{j['start'][11:16]}-{j['end'][11:16]} (UTC{j['start'][16:]}), solar time "
+            f"{_clock_h(s.solar_time_start_h)}-{_clock_h(s.solar_time_end_h)}: sun at {a['elevation_deg']:.1f}° "
+            f"elevation, {a['azimuth_deg']:.0f}° azimuth -> {b['elevation_deg']:.1f}°, {b['azimuth_deg']:.0f}°; "
+            f"clear sky {j['clear_sky_min_wm2']:.0f} W/m² or more on the {'modules' if s.plane == 'target' else 'ground'}"
+            " (estimate: measure on site)")
+    if s.viewing_angle_deg is not None:
+        text += f"; camera {s.viewing_angle_deg:.0f}° off the module normal"
+    if s.glare_min_deg is not None:
+        text += f", sun's reflection {s.glare_min_deg:.0f}° from the view"
+    if s.profile:
+        text += f"; {s.profile}"
+    return text
+
+
+def _clock_h(h: float) -> str:
+    minutes = int(round(h * 60.0)) % (24 * 60)
+    return f"{minutes // 60:02d}:{minutes % 60:02d}"
 
 
 def error_report(plan_path: str, err: Exception) -> UncompiledReport:

@@ -15,7 +15,10 @@ from typing import Any, Callable, Mapping
 from cdf.catalogue import catalogue
 from missions.plan.meaning import Resolved
 from missions.plan.types import (CameraStep, CorridorStep, Home, LandStep, Payload, Plan, RtlStep, Step, SurveyStep,
-                                 TakeoffStep, Vehicle, WaypointStep)
+                                 TakeoffStep, Target, Timing, Vehicle, WaypointStep)
+from missions.thermal.blur import DEFAULT_BLUR_PX
+from missions.thermal.pv import pv_profile
+from missions.thermal.when import parse_when
 
 
 def build_plan(data: dict, resolved: Resolved, path: str, base_dir: Path, locations: Mapping) -> Plan:
@@ -32,10 +35,17 @@ def build_plan(data: dict, resolved: Resolved, path: str, base_dir: Path, locati
     v, h = data["vehicle"], data["home"]
     return Plan(
         version=int(data["version"]), name=data.get("name") or _default_name(path),
-        vehicle=Vehicle(v["firmware"], v["frame"], float(v["speed_mps"]), v.get("max_mission_items")),
+        vehicle=Vehicle(v["firmware"], v["frame"], None if v["speed_mps"] == "auto" else float(v["speed_mps"]),
+                        v.get("max_mission_items"), _float_or_none(v, "max_speed_mps")),
         home=Home(float(h["lat"]), float(h["lon"]), float(h["alt_amsl_m"])),
         payloads=payloads, mission=tuple(steps), path=path, base_dir=str(base_dir), notes=tuple(resolved.notes),
-        locations=locations)
+        timing=_timing(data), locations=locations)
+
+
+def _timing(body: Mapping[str, Any]) -> Timing:
+    """`when` (checked by the meaning pass) and `when_wind_mps` of a plan or step."""
+    when = body.get("when")
+    return Timing(parse_when(when) if when else None, _float_or_none(body, "when_wind_mps"))
 
 
 def _default_name(path: str) -> str:
@@ -90,7 +100,10 @@ def _survey(i: int, b: dict, cameras: Mapping[str, Any]) -> SurveyStep:
         exclude=tuple(_area_value(x) for x in b.get("exclude", ())),
         angle_deg=angle if angle == "auto" else float(angle),
         trigger=b.get("trigger", "distance"), turnaround_m=_float_or_none(b, "turnaround_m"),
-        refly_90=bool(b.get("refly_90", False)))
+        refly_90=bool(b.get("refly_90", False)), blur_px=float(b.get("blur_px", DEFAULT_BLUR_PX)), timing=_timing(b),
+        target=Target(float(b["target"]["tilt_deg"]), float(b["target"]["azimuth_deg"])) if "target" in b else None,
+        camera_pitch_deg=float(b.get("camera_pitch_deg", 0.0)),
+        profile=pv_profile(b["profile"]) if "profile" in b else None)
 
 
 def _corridor(i: int, b: dict, cameras: Mapping[str, Any]) -> CorridorStep:
@@ -98,7 +111,8 @@ def _corridor(i: int, b: dict, cameras: Mapping[str, Any]) -> CorridorStep:
     return CorridorStep(
         i, _pairs(b["line"]), float(b["width_m"]), tuple(b["payloads"]), float(ov["front"]), float(ov["side"]),
         altitude_m=_float_or_none(b, "altitude_m"), gsd_cm=_float_or_none(b, "gsd_cm"),
-        trigger=b.get("trigger", "distance"), turnaround_m=_float_or_none(b, "turnaround_m"))
+        trigger=b.get("trigger", "distance"), turnaround_m=_float_or_none(b, "turnaround_m"),
+        blur_px=float(b.get("blur_px", DEFAULT_BLUR_PX)), timing=_timing(b))
 
 
 def _waypoint(i: int, b: dict, cameras: Mapping[str, Any]) -> WaypointStep:

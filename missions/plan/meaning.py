@@ -21,6 +21,7 @@ from cdf.errors import ECHO_CHARS, CdfError, clip, shown
 from cdf.userfile import not_a_file
 from missions.plan.schema import COMPONENT_IDS
 from missions.plan.settings import check_settings
+from missions.plan.thermal_keys import check_thermal_keys
 from missions.plan.yaml_reader import PositionedYaml
 
 # Above this the front overlap puts photos closer than a consumer GNSS receiver's position noise
@@ -51,6 +52,7 @@ def check_meaning(data: dict, doc: PositionedYaml, base_dir: Path) -> Resolved:
     resolved = _component_ids(payloads, cameras, doc)
     frame = data["vehicle"].get("frame") if isinstance(data.get("vehicle"), dict) else None
     _check_steps(data, _Written(doc, payloads, cameras, states, frame, base_dir))
+    check_thermal_keys(data, doc)
     return resolved
 
 

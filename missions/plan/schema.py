@@ -91,6 +91,34 @@ SETTINGS = {"type": "object", "minProperties": 1,
             "description": "camera settings by the catalogue's names (`wiris cdf models`), checked against it",
             "additionalProperties": {"type": ["string", "number", "array"], "items": {"type": "string"}}}
 
+# Thermal-aware planning (missions.thermal): when the flight happens, the wind then, the blur budget, the
+# modules' plane and the PV inspection profile with its overridable numbers (missions.thermal.pv.PvProfile).
+WHEN = {"type": "string", "minLength": 1,
+        "description": "when it is flown: ISO 8601 date and time with UTC offset, e.g. 2026-06-14T11:30+02:00",
+        "x-hint": "e.g. when: 2026-06-14T11:30+02:00"}
+WHEN_WIND = _num(0, 60, desc="wind expected during the flight, m/s (checked against the profile)",
+                 hint="wind speed in m/s, e.g. 3")
+BLUR_PX = _num(exclusive_min=0, maximum=10, desc="blur budget: ground pixels the image may smear during the "
+               "thermal imager's time constant (default 1)", hint="pixels of motion blur, e.g. 1.0")
+TARGET = _obj({
+    "tilt_deg": _num(0, 90, desc="module tilt from horizontal, degrees", hint="0 (flat) to 90 (vertical)"),
+    "azimuth_deg": _num(0, 360, desc="direction the modules face, degrees clockwise from north (180 = south)",
+                        hint="0 to 360, 180 = facing south"),
+}, required=("tilt_deg", "azimuth_deg"), desc="the surface inspected: PV module plane")
+CAMERA_PITCH = _num(0, 90, desc="camera pitch off nadir towards the modules' face, degrees (0 = straight down)",
+                    hint="0 (nadir) to 90 degrees")
+
+
+def _profile_schema() -> dict:
+    from missions.thermal.pv import PROFILE_NAMES, PvProfile, override_schema
+
+    name = {"enum": list(PROFILE_NAMES), "description": "inspection profile: " + ", ".join(PROFILE_NAMES)}
+    return {"description": "inspection profile: a name, or {name, level, and any of its numbers to override}",
+            "anyOf": [name, _obj({"name": name, "level": {"enum": list(PvProfile.LEVELS),
+                                                          "description": "module or cell level (default module)"},
+                                  **override_schema()}, required=("name",))]}
+
+
 STEPS: dict[str, dict] = {
     "takeoff": _obj({"alt_m": ALTITUDE}, required=("alt_m",), desc="take off to alt_m above home"),
     "survey": _obj({
@@ -105,6 +133,8 @@ STEPS: dict[str, dict] = {
         "trigger": TRIGGER,
         "turnaround_m": TURNAROUND,
         "refly_90": {"type": "boolean", "default": False, "description": "fly a second pass at +90 degrees"},
+        "blur_px": BLUR_PX, "when": WHEN, "when_wind_mps": WHEN_WIND, "target": TARGET,
+        "camera_pitch_deg": CAMERA_PITCH, "profile": _profile_schema(),
     }, required=("area", "payloads", "overlap"), desc="area survey (exactly one of altitude_m and gsd_cm)"),
     "corridor": _obj({
         "line": {"type": "array", "minItems": 2, "items": LATLON, "description": "centre line, [lat, lon] points"},
@@ -116,6 +146,7 @@ STEPS: dict[str, dict] = {
         "overlap": OVERLAP,
         "trigger": TRIGGER,
         "turnaround_m": TURNAROUND,
+        "blur_px": BLUR_PX, "when": WHEN, "when_wind_mps": WHEN_WIND,
     }, required=("line", "width_m", "payloads", "overlap"), desc="corridor along a line"),
     "waypoint": _obj({
         "lat": _num(-90, 90, desc=_LAT), "lon": _num(-180, 180, desc=_LON), "alt_m": ALTITUDE,
@@ -149,7 +180,10 @@ _SPEEDS_TEXT = ", ".join(f"{lo:g} to {hi:g} for a {_FRAME_NAMES[f]}" for f, (lo,
 def _speed_ranges() -> list[dict]:
     """speed_mps's range for each frame, as JSON Schema if/then (editors check it while typing)."""
     return [{"if": {"properties": {"frame": {"const": frame}}, "required": ["frame"]},
-             "then": {"properties": {"speed_mps": _num(lo, hi, hint=f"a {_FRAME_NAMES[frame]} surveys at {lo:g} to {hi:g} m/s")}}}
+             "then": {"properties": {
+                 "speed_mps": {"anyOf": [{"const": "auto"}, _num(lo, hi, hint=f"a {_FRAME_NAMES[frame]} surveys at "
+                                                                              f"{lo:g} to {hi:g} m/s")]},
+                 "max_speed_mps": _num(lo, hi, hint=f"a {_FRAME_NAMES[frame]} flies {lo:g} to {hi:g} m/s")}}}
             for frame, (lo, hi) in SPEED_RANGE_MPS.items()]
 
 
@@ -165,10 +199,15 @@ def _build() -> dict:
             "version": {"const": FORMAT_VERSION, "description": "capture-plan format version"},
             "name": {"type": "string", "pattern": "^[A-Za-z0-9][A-Za-z0-9._-]{0,63}$",
                      "description": "output file names derive from it (default: the plan file's name)"},
+            "when": WHEN,
+            "when_wind_mps": WHEN_WIND,
             "vehicle": _obj({
                 "firmware": {"enum": ["ardupilot", "px4"], "description": "autopilot firmware: ardupilot or px4"},
                 "frame": {"enum": ["copter", "plane", "vtol"], "description": "airframe: copter, plane or vtol"},
-                "speed_mps": _num(desc="ground speed while surveying, m/s: " + _SPEEDS_TEXT),
+                "speed_mps": {"anyOf": [{"const": "auto"}, _num()],
+                              "description": "ground speed while surveying, m/s: " + _SPEEDS_TEXT + "; or auto: the "
+                              "fastest at which every camera keeps its minimum capture interval and blur budget"},
+                "max_speed_mps": _num(desc="the fastest the vehicle may fly, m/s (caps speed_mps: auto)"),
                 "max_mission_items": _num(10, 65535, integer=True,
                                           desc="item limit of the vehicle (default per firmware)"),
             }, required=("firmware", "frame", "speed_mps"), desc="the aircraft") | {"allOf": _speed_ranges()},

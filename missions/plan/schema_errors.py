@@ -254,7 +254,38 @@ def _neither_form(e: _SchemaError) -> list[Problem] | None:
     if e.last == "angle_deg":
         return e.said(f"angle_deg must be 'auto' or a number of degrees -360..360, got {shown(e.err.instance)}",
                       "degrees clockwise from north, e.g. angle_deg: 30 (0 = north-south lines)")
+    if e.last == "speed_mps":
+        return _speed_form(e)
+    if e.last == "profile":
+        return _profile_form(e)
     return None
+
+
+def _speed_form(e: _SchemaError) -> list[Problem]:
+    """speed_mps: 'auto' or a number in the frame's range (the range error of the number branch, when it is one)."""
+    inst = e.err.instance
+    if isinstance(inst, (int, float)) and not isinstance(inst, bool):
+        bound = next((c for c in e.err.context if c.validator in ("minimum", "maximum")), None)
+        if bound is not None:
+            return e.said(_out_of_range(e.name, shown(inst), bound.validator, bound.validator_value),
+                          bound.schema.get("x-hint"))
+    return e.said(f"speed_mps must be a number of m/s or auto, got {describe(inst)}",
+                  "e.g. speed_mps: 5, or speed_mps: auto (the fastest the cameras allow)")
+
+
+def _profile_form(e: _SchemaError) -> list[Problem]:
+    """profile: a name, or {name, level, overrides}: say which part is wrong."""
+    from missions.thermal.pv import PROFILE_NAMES, PvProfile
+
+    inst = e.err.instance
+    names = ", ".join(PROFILE_NAMES)
+    if isinstance(inst, dict):
+        bad = [c for c in e.err.context if c.validator != "enum" or c.path]
+        detail = bad[0].message if bad else "unknown form"
+        return e.said(f"profile: {clip(detail, 2 * ECHO_CHARS)}",
+                      f"write profile: {{name: {PROFILE_NAMES[0]}, level: module}}; numbers to override: "
+                      + ", ".join(PvProfile.OVERRIDABLE))
+    return e.said(f"profile {shown(inst)} is not a profile this compiler knows", f"profiles: {names}")
 
 
 def _listed_twice(e: _SchemaError) -> list[Problem]:

@@ -7,6 +7,7 @@ the plan the user wrote.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+import datetime as dt
 from types import MappingProxyType
 from typing import Any, Mapping
 
@@ -14,8 +15,9 @@ from typing import Any, Mapping
 class Vehicle:
     firmware: str                   # "ardupilot" | "px4"
     frame: str                      # "copter" | "plane" | "vtol"
-    speed_mps: float
+    speed_mps: float | None         # None: `auto`, the fastest the cameras allow (missions.thermal.speed)
     max_mission_items: int | None = None
+    max_speed_mps: float | None = None
 
 
 @dataclass(frozen=True)
@@ -48,6 +50,22 @@ class TakeoffStep:
 
 
 @dataclass(frozen=True)
+class Target:
+    """The surface inspected: a PV module plane (tilt from horizontal, azimuth its face looks to)."""
+
+    tilt_deg: float
+    azimuth_deg: float
+
+
+@dataclass(frozen=True)
+class Timing:
+    """When a step is flown and the wind then (None: the plan's, or not given)."""
+
+    when: dt.datetime | None = None
+    wind_mps: float | None = None
+
+
+@dataclass(frozen=True)
 class SurveyStep:
     index: int
     area: str | tuple[tuple[float, float], ...]
@@ -61,6 +79,11 @@ class SurveyStep:
     trigger: str = "distance"
     turnaround_m: float | None = None
     refly_90: bool = False
+    blur_px: float = 1.0
+    timing: Timing = Timing()
+    target: Target | None = None
+    camera_pitch_deg: float = 0.0
+    profile: Any = None             # missions.thermal.pv.PvProfile, or None
 
 
 @dataclass(frozen=True)
@@ -75,6 +98,8 @@ class CorridorStep:
     gsd_cm: float | None = None
     trigger: str = "distance"
     turnaround_m: float | None = None
+    blur_px: float = 1.0
+    timing: Timing = Timing()
 
 
 @dataclass(frozen=True)
@@ -121,6 +146,7 @@ class Plan:
     path: str = "<plan>"
     base_dir: str = "."
     notes: tuple[str, ...] = ()          # decisions the loader took for the user (e.g. a moved component id)
+    timing: Timing = Timing()            # `when` and `when_wind_mps` of the whole plan
     locations: Mapping[tuple, str] = field(default_factory=lambda: MappingProxyType({}), compare=False, repr=False)
 
     def payload(self, name: str) -> Payload:
