@@ -7,6 +7,7 @@ from __future__ import annotations
 from typing import Any
 
 from missions.plan.yaml_reader import PositionedYaml
+from missions.thermal.pv import PvProfile
 from missions.thermal.when import WhenError, parse_when
 
 _TIMED_STEPS = ("survey", "corridor")
@@ -53,11 +54,17 @@ def _check_profile(body: dict, base: tuple, doc: PositionedYaml) -> None:
 def _check_pairs(profile: dict, path: tuple, doc: PositionedYaml) -> None:
     for low, high, what in (("solar_time_from_h", "solar_time_to_h", "solar-time window"),
                             ("emissivity_min", "emissivity_max", "emissivity range")):
-        lo, hi = profile.get(low), profile.get(high)
-        if isinstance(lo, (int, float)) and isinstance(hi, (int, float)) and lo > hi:
-            doc.report(path + (low,), f"profile {what}: {low} {lo:g} is above {high} {hi:g}",
-                       f"give {low} below {high}")
+        lo, hi = profile.get(low, getattr(PvProfile(), low)), profile.get(high, getattr(PvProfile(), high))
+        if (low in profile or high in profile) and _number(lo) and _number(hi) and lo > hi:
+            at = low if low in profile else high
+            doc.report(path + (at,), f"profile {what}: {low} {lo:g} is above {high} {hi:g}",
+                       f"give {low} below {high} (defaults {getattr(PvProfile(), low):g} and "
+                       f"{getattr(PvProfile(), high):g})")
     for key in ("solar_time_from_h", "solar_time_to_h"):
         v = profile.get(key)
-        if isinstance(v, (int, float)) and not isinstance(v, bool) and v > 24:
+        if _number(v) and v > 24:
             doc.report(path + (key,), f"profile {key} {v:g} is not an hour of the day", "0 to 24, e.g. 10")
+
+
+def _number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
