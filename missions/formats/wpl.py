@@ -243,20 +243,25 @@ def _jump_followed(row: _Row, renumber: dict[int, int], present: dict[int, str],
     return row._replace(item=it.with_(param1=float(renumber[target])))
 
 
+def _row_kind(row: _Row) -> int:
+    command = row.item.command
+    return (MISSION_TYPE_FENCE if command in FENCE_COMMANDS else MISSION_TYPE_RALLY if command in RALLY_COMMANDS
+            else MISSION_TYPE_MISSION)
+
+
 def _list_kind(rows: list[_Row]) -> int:
-    """Which list the rows are: all fence commands a fence, all rally points a rally list, else a mission;
-    PlanError at the first row that mixes them."""
-    kinds = [FENCE_COMMANDS, RALLY_COMMANDS]
-    for kind, commands in zip((MISSION_TYPE_FENCE, MISSION_TYPE_RALLY), kinds):
-        if rows and all(r.item.command in commands for r in rows):
-            return kind
-    other = FENCE_COMMANDS | RALLY_COMMANDS
-    for r in rows:
-        if r.item.command in other:
-            raise PlanError(f"{command_label(r.item.command)} among mission items", where=r.where,
-                            hint="a fence (or rally) file holds only NAV_FENCE_* (or NAV_RALLY_POINT) rows: save "
-                                 "the fence and the mission as separate files, or as one .plan")
-    return MISSION_TYPE_MISSION
+    """Which list the rows are, by the first row: fence commands a fence, rally points a rally list, else a
+    mission; PlanError at the first row of another kind (a file holds one list)."""
+    if not rows:
+        return MISSION_TYPE_MISSION
+    kind = _row_kind(rows[0])
+    for r in rows[1:]:
+        if _row_kind(r) != kind:
+            raise PlanError(f"{command_label(r.item.command)} in a file of {LIST_NAMES[kind]} rows "
+                            f"(the first row is {command_label(rows[0].item.command)})", where=r.where,
+                            hint="a fence (or rally) file holds only NAV_FENCE_* (or NAV_RALLY_POINT) rows, a "
+                                 "mission none: save the fence and the mission as separate files, or as one .plan")
+    return kind
 
 
 def _other_list(rows: list[_Row], kind: int, notes: list[ReadNote]) -> WplFile:
