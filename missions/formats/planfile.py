@@ -629,11 +629,11 @@ def _skipped_as_qgc_skips(r: _Reader, section: dict[str, Any], path: str, *, unv
     v = section.get("version")
     if v is None and unversioned:
         r.note(path, "no version: an early QGroundControl 3.x section, skipped as QGroundControl skips it "
-                     "(nothing of it is read or uploaded)")
+                     "(nothing of it is read)")
         return True
     if not isinstance(v, bool) and isinstance(v, (int, Decimal)) and v == 1:
-        r.note(path, "version 1 (QGroundControl 3.x), skipped as QGroundControl skips it (nothing of it is read "
-                     "or uploaded)")
+        r.note(path, "version 1 (QGroundControl 3.x), skipped as QGroundControl skips it (nothing of it is "
+                     "read)")
         return True
     return False
 
