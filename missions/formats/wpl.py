@@ -13,7 +13,7 @@ upload); `read_wpl` takes row 0 as home when it looks like one (NAV_WAYPOINT - o
 old Mission Planner quirk pymavlink also accepts - in frame 0), else every row is a mission item.
 Pass `home_row=True/False` to decide explicitly.
 
-Numbering, read as pymavlink's MAVWPLoader and MAVSDK read it (they number rows by position), with a
+Numbering, read as pymavlink's MAVWPLoader reads it (mavwp.py add(): a row's seq is its position), with a
 ReadNote for each repair (`read_wpl_file(...).notes`):
   * a gap (0, 1, 2, 4: ArduPilot's autotest `inf_loop.txt`) is renumbered; a DO_JUMP to a renumbered row
     follows it;
@@ -197,7 +197,7 @@ def read_wpl_file(text: str | bytes, name: str = "<waypoints>", *, home_row: boo
 
 
 def _renumbered(rows: list[_Row], notes: list[ReadNote]) -> list[_Row]:
-    """The rows numbered by their position, as MAVWPLoader and MAVSDK number them: a note for each gap, and
+    """The rows numbered by their position, as MAVWPLoader numbers them: a note for each gap, and
     DO_JUMP targets moved with the rows they name. Rows from 1 (no home row 0) keep their numbers, which
     already count home as 0. PlanError at a duplicated or decreasing index: which row is meant is unclear."""
     if not rows:
@@ -222,7 +222,7 @@ def _renumbered(rows: list[_Row], notes: list[ReadNote]) -> list[_Row]:
         previous = row.index
         if row.index != pos:
             notes.append(ReadNote(row.where, f"row index {row.index} read as {pos} (the rows before it end at "
-                                             f"{pos - 1}), as pymavlink's MAVWPLoader and MAVSDK renumber"))
+                                             f"{pos - 1}), as pymavlink's MAVWPLoader renumbers"))
             renumber[row.index] = pos
     return [_jump_followed(row, renumber, seen, notes) for row in rows] if renumber else rows
 
