@@ -152,3 +152,17 @@ def test_bad_input_and_refused_conversions_write_nothing(tmp_path, make, args, w
     where = where.replace("IN", str(src)).replace("OUT", str(out_dir))
     assert f"error: {where}: " in r.output and text in r.output and "hint:" in r.output, r.output
     assert list(out_dir.iterdir()) == [] and sorted(p.name for p in src_dir.iterdir()) == before
+
+
+def test_mavsdk_imports_the_conversion_of_a_qgc3_save_it_refuses(tmp_path):
+    """MAVSDK's QGC importer refuses the 3.x save (its geoFence version 1); converted to a current .plan, the
+    same mission imports, item for item."""
+    import mission_peers
+
+    src = DATA / "qgc3_devguide_mission.plan"
+    assert not mission_peers.mavsdk_import_plan(src.read_text(), tmp_path / "a")["ok"]
+    assert run(src, "-o", tmp_path / "new.plan").exit_code == 0
+    res = mission_peers.mavsdk_import_plan((tmp_path / "new.plan").read_text(), tmp_path / "b")
+    assert res["ok"], res.get("error")
+    assert [(it.command, it.x, it.y, it.z) for it in res["mission"]] == \
+        [(it.command, it.x, it.y, it.z) for it in load_plan_file(src).items]
