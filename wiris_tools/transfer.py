@@ -997,7 +997,8 @@ def too_big_hint(path, count: int, mission_type: int) -> str:
     """What to upload instead of `path`'s `count` items, which the vehicle has no room for."""
     kind = TYPE_NAMES.get(mission_type, "mission")
     split = split_files_beside(path)
-    if split and mission_type == MISSION_TYPE_MISSION:
+    already_split = re.search(r"\.(part|sortie)\d+$", Path(path).stem) is not None
+    if split and mission_type == MISSION_TYPE_MISSION and not already_split:
         names = ", ".join(f.name for f in split)
         return (f"the vehicle has no room for {count} items; the compiler split this mission into {names} beside "
                 "it: upload them one at a time, each after the last is flown")

@@ -157,6 +157,9 @@ def test_a_mission_too_big_for_the_vehicle_points_at_its_part_files(tmp_path):
         assert "big.part1.plan, big.part2.plan, big.part3.plan" in r.output and "one at a time" in r.output
         r = run("mission", "upload", str(parts[0]), "--connect", url(sim))
         assert r.exit_code == 0, r.output
+    with VehicleSim(flavour="px4", item_limit=10) as sim:   # fewer than a part: split it finer
+        r = run("mission", "upload", str(parts[0]), "--connect", url(sim))
+        assert r.exit_code == 1 and "max_mission_items" in r.output and "big.part2.plan" not in r.output
 
 
 def test_a_too_big_file_without_parts_says_how_to_get_them(tmp_path):
