@@ -14,9 +14,11 @@ STYLES = {
     "gap": ("7f4b4be6", "ff4b4be6", 2),         # red
     "path": ("00000000", "ffd86b1e", 3),        # blue line
     "footprint": ("1400a5ff", "6000a5ff", 1),   # faint orange
+    "fence": ("200000ff", "ff0000ff", 2),       # red line, faint fill (`wiris mission convert`)
 }
 FOLDERS = (("area", "Areas"), ("gap", "Holes and exclusions"), ("path", "Flight path"), ("home", "Home"),
-           ("waypoint", "Waypoints"), ("photo", "Photos"), ("footprint", "Footprints"))
+           ("waypoint", "Waypoints"), ("photo", "Photos"), ("footprint", "Footprints"),
+           ("fence", "Fence"), ("fence_return", "Fence return point"), ("rally", "Rally points"))
 
 
 def _coords(points) -> str:
@@ -58,6 +60,10 @@ def _name(p: dict) -> str:
         return f"photo {p['index']}"
     if kind == "footprint":
         return f"footprint {p['photo']} {p['payload']}"
+    if kind == "fence":
+        return f"fence {'inclusion' if p['inclusion'] else 'exclusion'}"
+    if kind == "rally":
+        return f"rally point {p['index']}"
     return kind
 
 
