@@ -119,6 +119,16 @@ class Setting:
     def option_by_key(self, key: str) -> Option | None:
         return next((o for o in self.options if o.key == key), None)
 
+    def option_named(self, text: str) -> Option | None:
+        """The option a person means by `text`: its key as a plan writes it ("manual"), or the key or the
+        label a ground station shows ("Manual"), in any case. The same names work in a plan and in
+        `wiris camera set`."""
+        return _named(self.options, text)
+
+    def choice_hint(self, text: str) -> str:
+        """The hint for a value that names no option: the likely one, then every choice."""
+        return _did_you_mean(text, self.options) + f"choose one of {', '.join(o.key for o in self.options)}"
+
     def check(self, value: Any) -> float | int:
         """The typed value of a plan/CLI value for this setting, or CdfError with the allowed values.
 
@@ -127,22 +137,23 @@ class Setting:
         """
         if self.options:
             if isinstance(value, (list, tuple)) and self.flags:
-                keys = [str(v) for v in value]
-                allowed = {o.key for o in self.enum.options} if self.enum else set()
-                bad = [k for k in keys if k not in allowed]
+                flags = self.enum.options if self.enum else ()
+                named = [_named(flags, str(v)) for v in value]
+                keys = [o.key for o in named if o is not None]
+                bad = [str(v) for v, o in zip(value, named) if o is None]
                 if bad or not keys:
                     raise CdfError(f"{self.key}: {clip(bad[0]) if bad else 'an empty list'} is not a choice",
-                                   hint=f"choose one or more of {', '.join(sorted(allowed))}")
+                                   hint=(_did_you_mean(bad[0], flags) if bad else "")
+                                   + f"choose one or more of {', '.join(sorted(o.key for o in flags))}")
                 option = self.option_by_key("+".join(o.key for o in self.enum.options if o.key in keys))
                 if option is None:
                     raise CdfError(f"{self.key}: {clip(' + '.join(keys))} cannot be combined",
                                    hint=self.enum.note or "see the camera manual")
                 return option.value
             if isinstance(value, str):
-                option = self.option_by_key(value)
+                option = self.option_named(value)
                 if option is None:
-                    raise CdfError(f"{self.key}: {shown(value)} is not a choice",
-                                   hint=f"choose one of {', '.join(o.key for o in self.options)}")
+                    raise CdfError(f"{self.key}: {shown(value)} is not a choice", hint=self.choice_hint(value))
                 return option.value
             if isinstance(value, (int, float)) and not isinstance(value, bool):
                 if any(o.value == value for o in self.options):
@@ -229,6 +240,22 @@ class Camera:
     def setting_by_param(self, param: str) -> Setting | None:
         return next((s for s in self.settings if s.param == param), None)
 
+    def setting_named(self, name: str) -> Setting | None:
+        """The setting a person means by `name`: its plan name ("range_mode") or its PARAM_EXT name as the
+        camera definition and `wiris camera settings` show it ("RANGE_MODE"), in any case."""
+        exact = self.setting(name) or self.setting_by_param(name)
+        if exact is not None:
+            return exact
+        folded = name.strip().casefold()
+        return next((s for s in self.settings if folded in (s.key.casefold(), s.param.casefold())), None)
+
+    def setting_hint(self, name: str) -> str:
+        """The hint for a name that is no setting of this camera: the likely one, then every plan name."""
+        names = {s.key: s.key for s in self.settings} | {s.param.casefold(): s.key for s in self.settings}
+        close = difflib.get_close_matches(name.strip().casefold(), list(names), n=1)
+        keys = ", ".join(s.key for s in self.settings)
+        return (f"did you mean {names[close[0]]!r}? " if close else "") + f"settings: {keys}"
+
     def option_key(self, key: str, value: Any) -> Any:
         """How a plan writes `value` of setting `key`: its option's key when the setting has one for it."""
         s = self.setting(key)
@@ -273,6 +300,26 @@ class Catalogue:
             if cam.vendor.lower() == vendor.strip().lower() and cam.model.lower() == model.strip().lower():
                 return cam
         return None
+
+
+def _named(options: Iterable[Option], text: str) -> Option | None:
+    """The option whose key is `text`, else whose key or label is `text` in any case."""
+    options = tuple(options)
+    exact = next((o for o in options if o.key == text), None)
+    if exact is not None:
+        return exact
+    folded = text.strip().casefold()
+    return next((o for o in options if folded in (o.key.casefold(), o.name.casefold())), None)
+
+
+def _did_you_mean(text: str, options: Iterable[Option]) -> str:
+    """"did you mean 'manual'? " for a near miss of an option's key or label, else ""."""
+    names = {}
+    for o in options:
+        names.setdefault(o.key.casefold(), o.key)
+        names.setdefault(o.name.casefold(), o.key)
+    close = difflib.get_close_matches(text.strip().casefold(), list(names), n=1)
+    return f"did you mean {names[close[0]]!r}? " if close else ""
 
 
 def _fmt(v: float | None) -> str:

@@ -40,6 +40,7 @@ from missions.geometry.geo import MAX_EXTENT_M
 from missions.geometry.survey import SurveyPlan, plan_survey
 from missions.plan.load import (CameraStep, CorridorStep, LandStep, Plan, RtlStep, SurveyStep, TakeoffStep,
                                 WaypointStep, input_files, load_plan)
+from missions.plan.meaning import Ceiling, ceiling_problem
 from missions.plan.schema import MAX_AGL_M, MAX_ALTITUDE_M, MIN_ALTITUDE_M
 
 NEAR_MIN_INTERVAL = 1.2      # warn when photos come less than 20 % slower than the camera's minimum
@@ -302,7 +303,16 @@ def _line_altitude(c: _Compile, step: SurveyStep | CorridorStep, lead: PayloadIn
         raise PlanError(f"gsd_cm {step.gsd_cm:g} needs {alt:.1f} m above ground with {lead.name}'s optics, "
                         f"outside {MIN_ALTITUDE_M:g}..{MAX_ALTITUDE_M:g} m",
                         where=c.plan.step_where(step, "gsd_cm"), hint="choose another GSD")
+    too_high = ceiling_problem(alt, f"gsd_cm {step.gsd_cm:g} with {lead.name}'s optics", _ceiling(c.plan))
+    if too_high is not None:
+        raise PlanError(too_high[0], where=c.plan.step_where(step, "gsd_cm"),
+                        hint="choose a coarser GSD, or " + too_high[1])
     return alt
+
+
+def _ceiling(plan: Plan) -> Ceiling:
+    given = plan.vehicle.max_altitude_m
+    return Ceiling(given, True) if given is not None else Ceiling(MAX_AGL_M, False)
 
 
 def _check_triggering(c: _Compile, step: SurveyStep | CorridorStep, lead: PayloadInfo, trig: float) -> None:
@@ -421,10 +431,14 @@ def _split_into_parts(c: _Compile, items: tuple[MissionItem, ...]) -> _Parts:
 
 
 def _warn_about_altitudes(c: _Compile) -> None:
-    for alt, where in c.state.altitudes:
-        if alt > MAX_AGL_M:
-            c.warn("altitude_above_120m", f"{alt:g} m above home at {where}; most rules allow {MAX_AGL_M:g} m "
-                   "above ground without a permit (ground assumed flat at home's height)")
+    """One note for a mission above MAX_AGL_M under the plan's permit (without one the loader refused it)."""
+    high = [a for a in c.state.altitudes if a.altitude_m > MAX_AGL_M]
+    if high and c.plan.vehicle.max_altitude_m is not None:
+        top = max(high, key=lambda a: a.altitude_m)
+        c.warn("altitude_above_120m", f"the mission flies up to {top.altitude_m:g} m above home (at {top.where}), "
+               f"above the {MAX_AGL_M:g} m most rules allow without a permit: flown under the permit the plan "
+               f"states (vehicle.max_altitude_m: {c.plan.vehicle.max_altitude_m:g} at "
+               f"{c.plan.where('vehicle', 'max_altitude_m')}); ground assumed flat at home's height")
 
 
 def _setup(c: _Compile) -> tuple[SetupStep, ...]:

@@ -24,7 +24,8 @@ SCHEMA_ID = "https://wiris-tools.invalid/schema/capture-plan-1.json"
 MIN_ALTITUDE_M = 2.0
 MAX_ALTITUDE_M = 500.0
 # Most of the world's drone rules (EU 2019/947 open category, FAA part 107) cap flights at 120 m / 400 ft above
-# ground without a permit: above it the compiler and the report warn, they do not refuse.
+# ground without a permit: above it a plan is refused unless it states a permit's ceiling
+# (vehicle.max_altitude_m); 400 there is most often feet written as metres.
 MAX_AGL_M = 120.0
 # Plausible survey speeds per airframe, m/s, as (lowest, highest). A copter slower than 0.5 m/s hardly moves
 # (1e-9 m/s would be a flight of days); ArduCopter's WPNAV_SPEED and PX4's MPC_XY_VEL_MAX stop at 20 m/s
@@ -135,7 +136,9 @@ PAYLOAD = _obj({
     "imager": {"type": "string", "description": "which imager sets the footprint (default: the first with known optics)"},
     "lens_mm": _num(exclusive_min=0, maximum=1000, desc="focal length of the fitted lens, mm"),
     "component_id": {"type": "integer", "enum": list(COMPONENT_IDS),
-                     "description": "MAVLink component id 100..105 (RedEdge is fixed at 100)"},
+                     "description": "MAVLink component id 100..105 (RedEdge is fixed at 100)",
+                     "x-hint": "a camera's component id is 100 to 105 (MAV_COMP_ID_CAMERA..CAMERA6), the one set "
+                               "in the camera's menu; a RedEdge answers only on 100"},
     "orientation": {"enum": ["landscape", "portrait"], "default": "landscape",
                     "description": "landscape: the long image side across the flight line"},
     "settings": SETTINGS,
@@ -171,6 +174,11 @@ def _build() -> dict:
                 "speed_mps": _num(desc="ground speed while surveying, m/s: " + _SPEEDS_TEXT),
                 "max_mission_items": _num(10, 65535, integer=True,
                                           desc="item limit of the vehicle (default per firmware)"),
+                "max_altitude_m": _num(MIN_ALTITUDE_M, MAX_ALTITUDE_M,
+                                       desc=f"the highest altitude above home your permit allows, metres; "
+                                            f"without it no step may fly above {MAX_AGL_M:g} m",
+                                       hint=f"a permit's ceiling above home, {MIN_ALTITUDE_M:g} to "
+                                            f"{MAX_ALTITUDE_M:g} m"),
             }, required=("firmware", "frame", "speed_mps"), desc="the aircraft") | {"allOf": _speed_ranges()},
             "home": _obj({"lat": _num(-90, 90, desc=_LAT), "lon": _num(-180, 180, desc=_LON),
                           "alt_amsl_m": _num(-500, 9000, desc="home altitude above mean sea level")},

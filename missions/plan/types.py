@@ -16,6 +16,7 @@ class Vehicle:
     frame: str                      # "copter" | "plane" | "vtol"
     speed_mps: float
     max_mission_items: int | None = None
+    max_altitude_m: float | None = None     # a permit's ceiling above home; None: MAX_AGL_M (120 m) holds
 
 
 @dataclass(frozen=True)
