@@ -31,7 +31,7 @@ from missions.emit.items import MissionItem
 from missions.emit.lua import render_script
 from missions.emit.params import Param, autopilot_params
 from missions.emit.setup import RedEdgeSurvey, setup_steps
-from missions.errors import PlanError
+from missions.errors import PlanError, Problem
 from missions.geometry import optics, survey
 from missions.geometry.area import Area, load_area
 from missions.geometry.corridor import CorridorPlan, plan_corridor
@@ -39,7 +39,7 @@ from missions.geometry.footprint import Footprint
 from missions.geometry.geo import MAX_EXTENT_M
 from missions.geometry.survey import SurveyPlan, plan_survey
 from missions.plan.load import (CameraStep, CorridorStep, LandStep, Plan, RtlStep, SurveyStep, TakeoffStep,
-                                WaypointStep, input_files, load_plan)
+                                WaypointStep, input_files, load_plan_partly, raise_problems)
 from missions.plan.meaning import Ceiling, ceiling_problem
 from missions.plan.schema import MAX_AGL_M, MAX_ALTITUDE_M, MIN_ALTITUDE_M
 
@@ -303,10 +303,10 @@ def _line_altitude(c: _Compile, step: SurveyStep | CorridorStep, lead: PayloadIn
         raise PlanError(f"gsd_cm {step.gsd_cm:g} needs {alt:.1f} m above ground with {lead.name}'s optics, "
                         f"outside {MIN_ALTITUDE_M:g}..{MAX_ALTITUDE_M:g} m",
                         where=c.plan.step_where(step, "gsd_cm"), hint="choose another GSD")
-    too_high = ceiling_problem(alt, f"gsd_cm {step.gsd_cm:g} with {lead.name}'s optics", _ceiling(c.plan))
+    too_high = ceiling_problem(alt, f"gsd_cm {step.gsd_cm:g} with {lead.name}'s optics", _ceiling(c.plan),
+                               lower="a smaller gsd_cm (finer detail) flies lower")
     if too_high is not None:
-        raise PlanError(too_high[0], where=c.plan.step_where(step, "gsd_cm"),
-                        hint="choose a coarser GSD, or " + too_high[1])
+        raise PlanError(too_high[0], where=c.plan.step_where(step, "gsd_cm"), hint=too_high[1])
     return alt
 
 
@@ -477,15 +477,49 @@ def _warn_about_unknown_optics(c: _Compile) -> None:
 
 # -------------------------------------------------------------------------------------------- the driver
 
+def _problems_of(err: PlanError) -> list[Problem]:
+    return list(err.problems) or [Problem(err.where or "", err.message, err.hint)]
+
+
+def _compile_steps(c: _Compile) -> list[Problem]:
+    """Every step compiled in order; a step that fails is left out and the next ones still checked, so that
+    one run reports every step's problem."""
+    problems: list[Problem] = []
+    for step in c.plan.mission:
+        try:
+            _STEPS[type(step)](c, step)
+        except PlanError as e:
+            problems.extend(_problems_of(e))
+    return problems
+
+
 def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -> Compiled:
-    plan = path_or_plan if isinstance(path_or_plan, Plan) else load_plan(path_or_plan)
+    """The compiled mission of a plan (a path or a loaded Plan), or one PlanError listing every problem of the
+    plan and of its steps, ordered by where they are written."""
+    if isinstance(path_or_plan, Plan):
+        plan, problems = path_or_plan, []
+    else:
+        part = load_plan_partly(path_or_plan)
+        plan, problems = part.plan, list(part.problems)
+        if plan is None:
+            raise_problems(problems, str(path_or_plan))
     prof = profile(firmware or plan.vehicle.firmware)
     state = _State(warnings=[f"component_id_chosen: {n}" for n in plan.notes])
-    payloads = _resolve_payloads(plan, prof, state)
+    try:
+        payloads = _resolve_payloads(plan, prof, state)
+    except PlanError as e:
+        raise_problems(problems + _problems_of(e), plan.path)
     c = _Compile(plan, prof, payloads, _emitter(plan, prof, payloads), state)
     _warn_about_the_start(c)
-    for step in plan.mission:
-        _STEPS[type(step)](c, step)
+    problems += _compile_steps(c)
+    if problems:
+        # the mission misses the failed steps: what follows (items, parts, setup) would judge a mission nobody
+        # asked for; the pre-flight setup depends on the payloads alone and is still checked
+        try:
+            _setup(c)
+        except PlanError as e:
+            problems += _problems_of(e)
+        raise_problems(problems, plan.path)
     emitted = c.emitter.result()
     state.warnings.extend(emitted.warnings)
     check_items(emitted.items, prof)

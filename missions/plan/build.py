@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Collection, Mapping
 
 from cdf.catalogue import catalogue
 from missions.plan.meaning import Resolved
@@ -18,13 +18,18 @@ from missions.plan.types import (CameraStep, CorridorStep, Home, LandStep, Paylo
                                  TakeoffStep, Vehicle, WaypointStep)
 
 
-def build_plan(data: dict, resolved: Resolved, path: str, base_dir: Path, locations: Mapping) -> Plan:
+def build_plan(data: dict, resolved: Resolved, path: str, base_dir: Path, locations: Mapping, *,
+               skip_payloads: Collection[str] = (), skip_steps: Collection[int] = ()) -> Plan:
+    """The plan; without the payloads and steps named to skip (ones with problems, for the later stages to
+    check the rest). A kept step keeps its index in the mission list, so its locations stay right."""
     cat = catalogue()
-    cameras = {name: cat.get(p["camera"]) for name, p in data["payloads"].items()}
-    payloads = tuple(_payload(name, p, cameras[name], resolved.component_ids[name])
-                     for name, p in data["payloads"].items())
+    kept = {name: p for name, p in data["payloads"].items() if name not in skip_payloads}
+    cameras = {name: cat.get(p["camera"]) for name, p in kept.items()}
+    payloads = tuple(_payload(name, p, cameras[name], resolved.component_ids[name]) for name, p in kept.items())
     steps: list[Step] = []
     for i, step in enumerate(data["mission"]):
+        if i in skip_steps:
+            continue
         kind, body = next(iter(step.items()))
         build = _STEP_BUILDERS.get(kind)
         if build is not None:

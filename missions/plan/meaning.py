@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import difflib
+import math
 from pathlib import Path
 from typing import Any, Callable, Mapping, NamedTuple
 
@@ -199,17 +200,20 @@ def _in_altitude_range(v: Any) -> bool:
     return _num(v) and MIN_ALTITUDE_M <= v <= MAX_ALTITUDE_M
 
 
-def ceiling_problem(altitude_m: float, what: str, ceiling: Ceiling) -> tuple[str, str] | None:
-    """(message, hint) when `altitude_m` is above the ceiling; None when it may be flown."""
+def ceiling_problem(altitude_m: float, what: str, ceiling: Ceiling,
+                    lower: str | None = None) -> tuple[str, str] | None:
+    """(message, hint) when `altitude_m` is above the ceiling; None when it may be flown. `lower` says how to
+    fly lower when the altitude follows from another value (a GSD); without it the altitude is as written."""
     if altitude_m <= ceiling.limit_m:
         return None
+    alt = f"{altitude_m:.1f}".removesuffix(".0")
+    fix = lower or f"altitudes are metres ({alt} ft would be {altitude_m * 0.3048:.0f} m)"
     if ceiling.waiver:
-        return (f"{what} {altitude_m:g} m is above the plan's vehicle.max_altitude_m of {ceiling.limit_m:g} m",
-                "fly lower, or raise vehicle.max_altitude_m to what your permit allows")
-    return (f"{what}: {altitude_m:g} m above home is more than the {MAX_AGL_M:g} m most rules allow without a "
+        return (f"{what}: {alt} m above home is above the plan's vehicle.max_altitude_m of {ceiling.limit_m:g} m",
+                f"{fix}; or raise vehicle.max_altitude_m to what your permit allows")
+    return (f"{what}: {alt} m above home is more than the {MAX_AGL_M:g} m most rules allow without a "
             f"permit (EU open category, FAA part 107; the ground is taken as flat at home's height)",
-            f"altitudes are metres ({altitude_m:g} ft would be {altitude_m * 0.3048:.0f} m); with a permit for "
-            f"more, state its ceiling: vehicle: {{max_altitude_m: {altitude_m:g}}}")
+            f"{fix}; with a permit for more, state its ceiling: vehicle: {{max_altitude_m: {math.ceil(altitude_m)}}}")
 
 
 def _check_ceiling(plan: _Written, at: tuple, value: Any) -> None:

@@ -34,6 +34,7 @@ def schema_problems(data: Any, doc: PositionedYaml, problems: list[Problem]) -> 
         for problem in _translate(err, doc):
             if problem.hint is None:
                 problem = replace(problem, hint=_fallback_hint(err))
+            problem = replace(problem, path=tuple(err.absolute_path))
             k = (problem.where, problem.message)
             if k not in seen:
                 seen.add(k)

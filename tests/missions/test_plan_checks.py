@@ -99,7 +99,7 @@ def test_an_altitude_above_the_permit_is_an_error(tmp_path):
     text = BASE.replace("speed_mps: 5}", "speed_mps: 5, max_altitude_m: 150}").replace("altitude_m: 40",
                                                                                        "altitude_m: 160")
     probs = problems_of(tmp_path, text)
-    assert len(probs) == 1 and "vehicle.max_altitude_m of 150 m" in probs[0].message
+    assert len(probs) == 1 and "vehicle.max_altitude_m of 150 m" in probs[0].message and "160 m" in probs[0].message
 
 
 @pytest.mark.parametrize("cid", [1, 0, 99, 106])
@@ -171,3 +171,77 @@ def test_compile_of_a_plan_with_mistakes_exits_1_and_writes_nothing(tmp_path):
     assert r.exit_code == 1, r.output
     assert "write percent: 80" in r.output and "max_altitude_m" in r.output and "Traceback" not in r.output
     assert not out.exists()
+
+
+# ----------------------------------------------------------------------------------------- one pass
+
+MANY = """\
+version: 1
+vehicle: {firmware: ardupilot, frame: copter, speed_mps: 4.5}
+home: {lat: 50.1098, lon: 14.5002, alt_amsl_m: 262}
+payloads:
+  thermal:
+    camera: wiris-pro
+    lens_mm: 13
+    component_id: 1
+    settings: {range_mode: manuel}
+  other: {camera: wiris-pro, lens_mm: 13, component_id: 102}
+mission:
+  - takeoff: {alt_m: 40}
+  - survey:
+      area: [[50.1100, 14.5000], [50.1100, 14.5030], [50.1120, 14.5030]]
+      payloads: [thermal]
+      altitude_m: 400
+      overlap: {front: 0.8, side: 0.7}
+  - waypoint: {lat: 14.5002, lon: 50.1098, alt_m: 40}
+  - survey:
+      area: areas/nothere.geojson
+      payloads: [other]
+      altitude_m: 40
+      overlap: {front: 80, side: 70}
+  - survey:
+      area: [[50.1100, 14.5000], [50.1100, 14.5030], [50.1120, 14.5030]]
+      payloads: [other]
+      gsd_cm: 30
+      overlap: {front: 80, side: 70}
+  - land: {lat: 14.5002, lon: 50.1098}
+"""
+
+
+def test_every_problem_of_every_stage_is_reported_at_once_ordered_by_line(tmp_path):
+    """Schema (component id), catalogue (setting value), meaning (altitude, overlap, area file) and the
+    compiler's own stages (swapped coordinates, a GSD's altitude) in one run: no rounds of fixing."""
+    probs = problems_of(tmp_path, MANY)
+    lines = [line_of(p.where) for p in probs]
+    assert lines == sorted(lines)
+    found = {line_of(p.where): p for p in probs}
+    assert set(found) == {8, 9, 16, 17, 18, 20, 27, 29}, [str(p) for p in probs]
+    assert "100 to 105" in found[8].hint
+    assert found[9].hint.startswith("did you mean 'manual'?")
+    assert "120 m" in found[16].message
+    assert [p.hint for p in probs if line_of(p.where) == 17] == ["write percent: 80", "write percent: 70"]
+    assert "swapped" in found[18].hint and "swapped" in found[29].hint
+    assert "nothere.geojson" in found[20].message
+    assert "gsd_cm 30" in found[27].message
+    assert all(p.hint for p in probs)
+
+
+def test_a_step_of_a_payload_with_a_problem_is_not_checked_twice(tmp_path):
+    """The survey of the payload with a bad setting is skipped by the later stages (no second finding about
+    it), the other payload's steps are still checked."""
+    probs = problems_of(tmp_path, MANY.replace("altitude_m: 400", "altitude_m: 40").replace(
+        "{front: 0.8, side: 0.7}", "{front: 80, side: 70}"))
+    assert sorted({line_of(p.where) for p in probs}) == [8, 9, 18, 20, 27, 29]
+
+
+def test_check_prints_every_problem_and_exits_1(tmp_path):
+    r = CliRunner().invoke(cli, ["mission", "check", str(write(tmp_path, MANY))])
+    assert r.exit_code == 1 and "Traceback" not in r.output
+    assert "9 problems in the plan" in r.output and r.output.count("hint:") == 9
+
+
+def test_a_problem_outside_steps_and_payloads_stops_before_the_compiler(tmp_path):
+    """A bad vehicle leaves nothing to compile: its problem is reported with the other loading ones."""
+    probs = problems_of(tmp_path, MANY.replace("speed_mps: 4.5", "speed_mps: fast"))
+    assert any(line_of(p.where) == 2 for p in probs)
+    assert not any("swapped" in (p.hint or "") for p in probs)
