@@ -210,6 +210,30 @@ class Imager:
 
 
 @dataclass(frozen=True)
+class CaptureSizes:
+    """How much one photo writes to the camera's storage, by the option of the setting that chooses the files
+    (a flag set: each chosen file's size adds up), from a published source. A camera without this is of
+    unknown sizes: the compiler says so instead of guessing."""
+
+    setting: str                                # the setting's key, e.g. raw_format
+    mb: tuple[tuple[str, float], ...]           # option (or flag) key -> megabytes (10^6 bytes) per photo
+    source: str
+
+    def per_photo_mb(self, setting: Setting, value: float | int) -> float | None:
+        """Megabytes one photo writes with `setting` at wire value `value`; None when a chosen file's size is
+        not in the table."""
+        sizes = dict(self.mb)
+        if setting.flags and setting.enum is not None:
+            keys = [o.key for o in setting.enum.options if int(value) & o.value]
+        else:
+            option = next((o for o in setting.options if o.value == value), None)
+            keys = [option.key] if option is not None else []
+        if not keys or any(k not in sizes for k in keys):
+            return None
+        return sum(sizes[k] for k in keys)
+
+
+@dataclass(frozen=True)
 class Camera:
     id: str
     family: str
@@ -233,6 +257,24 @@ class Camera:
     source: str = ""
     table: str = ""
     extra: tuple[tuple[str, Any], ...] = field(default=(), compare=False)
+    capture_sizes: CaptureSizes | None = None      # None: no published image sizes
+
+    def capture_formats(self, values: Any) -> tuple[str, float | None]:
+        """The files a photo writes with the settings `values` (key -> wire value; a setting left out holds its
+        default), as "radiometric_jpeg + visible_jpeg", and their megabytes per photo (None: not known)."""
+        chooser = self.capture_sizes.setting if self.capture_sizes else next(
+            (s.key for s in self.settings if s.key == "capture"), None)
+        s = self.setting(chooser) if chooser else None
+        if s is None:
+            return "", None
+        value = dict(values).get(s.key, s.default)
+        if value is None:
+            return "", None
+        if s.flags and s.enum is not None:
+            text = " + ".join(o.key for o in s.enum.options if int(value) & o.value)
+        else:
+            text = str(self.option_key(s.key, value))
+        return text, self.capture_sizes.per_photo_mb(s, value) if self.capture_sizes else None
 
     def setting(self, key: str) -> Setting | None:
         return next((s for s in self.settings if s.key == key), None)
@@ -590,7 +632,30 @@ def _camera(m: dict, merged: dict, settings: tuple[Setting, ...], enums: dict[st
         source=merged.get("source", ""), table=table,
         extra=tuple((k, merged[k]) for k in ("heartbeat", "adopts_sender_system_id", "capabilities_note")
                     if k in merged),
+        capture_sizes=_capture_sizes(merged.get("capture_sizes"), settings, table),
     )
+
+
+def _capture_sizes(raw: Any, settings: tuple[Setting, ...], where: str) -> CaptureSizes | None:
+    """A table's `capture_sizes:`, checked: it names a setting with options, each size keyed by one of them."""
+    if raw is None:
+        return None
+    s = next((x for x in settings if x.key == raw.get("setting")), None)
+    if s is None or not (s.options or s.enum):
+        raise CdfError(f"capture_sizes: setting {raw.get('setting')!r} is no setting with options", where=where,
+                       hint=_name_hint(raw.get("setting"), [x.key for x in settings if x.options],
+                                       "`capture_sizes: setting:` names the `key:` of the setting choosing the files"))
+    keys = {o.key for o in (s.enum.options if s.flags and s.enum else s.options)}
+    mb = {str(k): float(v) for k, v in (raw.get("mb") or {}).items()}
+    bad = sorted(set(mb) - keys)
+    if bad or not mb or any(not (math.isfinite(v) and v > 0) for v in mb.values()):
+        raise CdfError(f"capture_sizes of {s.key}: {'unknown option ' + bad[0] if bad else 'a size is not positive'}",
+                       where=where, hint=f"`mb:` maps options of {s.key} ({', '.join(sorted(keys))}) to megabytes "
+                                         "per photo, e.g. {tiff: 12.5}")
+    if not str(raw.get("source") or "").strip():
+        raise CdfError(f"capture_sizes of {s.key} has no source", where=where,
+                       hint="say where the sizes are published (`source:`); without one leave the sizes out")
+    return CaptureSizes(s.key, tuple(mb.items()), str(raw["source"]))
 
 
 def load_catalogue(tables_dir: Path | None = None) -> Catalogue:

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any, Callable, NamedTuple
 
 from cdf.catalogue import catalogue
-from missions.compiled import AreaInfo, Compiled, PayloadInfo, PlanWarning, SetupStep
+from missions.compiled import AreaInfo, CaptureSize, Compiled, PayloadInfo, PlanWarning, SetupStep, StepFacts
 from missions.emit.emitter import Emitted, Emitter, Track, TrackPoint, HOVER_HOLD_S
 from missions.emit.firmware import FirmwareProfile, check_items, profile, split_parts
 from missions.emit.items import MissionItem
@@ -97,6 +97,9 @@ class _State:
     altitudes: list[_Altitude] = field(default_factory=list)
     rededge_flights: dict[str, list[_RedEdgeFlight]] = field(default_factory=dict)
     rededge_checks: list[_RedEdgeCheck] = field(default_factory=list)
+    # each payload's settings as the camera holds them at this point of the mission (wire values by key)
+    settings_now: dict[str, dict[str, float | int]] = field(default_factory=dict)
+    step_facts: list[StepFacts] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -233,6 +236,7 @@ def _waypoint(c: _Compile, step: WaypointStep) -> None:
 
 def _camera(c: _Compile, step: CameraStep) -> None:
     c.emitter.camera_change(step.payload, step.values, where=c.plan.step_where(step, "settings"))
+    c.state.settings_now.setdefault(step.payload, {}).update(step.values)
 
 
 def _rtl(c: _Compile, step: RtlStep) -> None:
@@ -282,6 +286,54 @@ def _lines_step(c: _Compile, step: SurveyStep | CorridorStep, kind: str,
         front_overlap=step.front_pct / 100.0, side_overlap=step.side_pct / 100.0, trigger=step.trigger,
         trigger_distance_m=lines.route.trigger_distance_m, items=(first, c.emitter.item_count)))
     c.state.intent.append(lines.route)
+    c.state.step_facts.append(_step_facts(c, step, kind, lead, footprint, lines.route))
+
+
+def _step_facts(c: _Compile, step: SurveyStep | CorridorStep, kind: str, lead: PayloadInfo, footprint: Footprint,
+                route: SurveyPlan | CorridorPlan) -> StepFacts:
+    """The numbers a pilot reads for one step, and what they assume."""
+    survey_step = isinstance(step, SurveyStep)
+    return StepFacts(
+        step=step.index, kind=kind, where=c.plan.step_where(step), lead=lead.name,
+        angle_deg=route.angle_deg if survey_step else None,
+        angle_auto=survey_step and step.angle_deg == "auto",
+        spacing_m=route.spacing_m, lines=route.lines if survey_step else route.stats.lines,
+        trigger=step.trigger, trigger_distance_m=route.trigger_distance_m, speed_mps=c.speed_mps,
+        footprint_m=(footprint.across_m, footprint.along_m),
+        capture=tuple(_capture_size(c, name) for name in step.payloads),
+        assumptions=tuple(_assumptions(c, step)))
+
+
+def _capture_size(c: _Compile, name: str) -> CaptureSize:
+    """The files each photo of payload `name` writes with the settings it holds now, and their size."""
+    cam = c.payloads.cameras[name]
+    held = c.state.settings_now.setdefault(name, dict(c.plan.payload(name).values))
+    formats, mb = cam.capture_formats(held)
+    if mb is not None:
+        source = cam.capture_sizes.source
+    else:
+        source = f"{cam.model}: no published image sizes in the catalogue (cdf/tables/{cam.table})"
+    return CaptureSize(name, formats, mb, source)
+
+
+def _assumptions(c: _Compile, step: SurveyStep | CorridorStep) -> list[str]:
+    """Every assumption the step's numbers rest on."""
+    out = ["flat ground at home's height: altitudes, footprints and GSD are above home, not above the terrain"]
+    for name in step.payloads:
+        info = c.payloads.optics.get(name)
+        if info is None:
+            out.append(f"{name}: optics unknown, its photos are not measured")
+            continue
+        imager = c.payloads.cameras[name].imager(info.imager)
+        assumed = [a.replace("_", " ") for a in imager.assumed] if imager is not None else []
+        if assumed:
+            out.append(f"{name}: {', '.join(assumed)} of {info.camera_id}/{info.imager} assumed, not from a "
+                       f"datasheet (cdf/tables/{c.payloads.cameras[name].table})")
+    if step.trigger != "hover":
+        what = "airspeed" if c.emitter.speed_is_airspeed else "ground speed"
+        out.append(f"{c.speed_mps:g} m/s {what} held along the lines, no wind: the time between photos and the "
+                   "flight time scale with it")
+    return out
 
 
 def _lead_optics(c: _Compile, step: SurveyStep | CorridorStep, kind: str) -> PayloadInfo:
@@ -536,4 +588,5 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
         # PayloadInfo only for payloads whose optics are known: the report measures coverage with them
         payloads=tuple(payloads.optics[p.name] for p in plan.payloads if p.name in payloads.optics),
         areas=tuple(state.areas), setup=setup, lua=lua, params=params,
-        warnings=tuple(dict.fromkeys(state.warnings)), intent=tuple(state.intent), inputs=input_files(plan))
+        warnings=tuple(dict.fromkeys(state.warnings)), intent=tuple(state.intent), inputs=input_files(plan),
+        step_facts=tuple(state.step_facts))

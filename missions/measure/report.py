@@ -41,6 +41,7 @@ from missions.geometry.triggers import PhotoPoint
 from missions.measure.coverage import (coverage_fraction, footprint_polygons, min_front_overlap, min_side_overlap,
                                        outside_length_m)
 from missions.measure.flight import Photo, Simulation, simulate
+from missions.measure.numbers import StepNumbers, step_numbers
 from missions.plan.schema import MAX_AGL_M
 
 # Coverage below this is worth a warning: the examples and the tests hold the compiler to it.
@@ -106,13 +107,14 @@ class GsdRange:
 
 @dataclass(frozen=True)
 class RequestedOverlap:
-    """The overlaps a step's plan asks for (fractions)."""
+    """The overlaps a step's plan asks for (fractions; `*_pct` in the JSON as the plan writes them)."""
 
     front: float
     side: float
 
     def to_json(self) -> dict[str, float]:
-        return {"front": self.front, "side": self.side}
+        return {"front": self.front, "side": self.side,
+                "front_pct": round(100 * self.front, 4), "side_pct": round(100 * self.side, 4)}
 
 
 @dataclass(frozen=True)
@@ -186,6 +188,7 @@ class MissionReport:
     areas: tuple[AreaRow, ...]
     warnings: tuple[Finding, ...]
     errors: tuple[Finding, ...]
+    steps: tuple[StepNumbers, ...] = ()      # per survey or corridor step, the numbers a pilot reads
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -210,6 +213,7 @@ class MissionReport:
             "areas": [a.to_json() for a in self.areas],
             "warnings": [w.to_json() for w in self.warnings],
             "errors": [e.to_json() for e in self.errors],
+            "steps": [s.to_json() for s in self.steps],
         }
 
 
@@ -498,6 +502,7 @@ def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | N
         areas=rows,
         warnings=tuple(_warnings(compiled, sim, steps, rows)),
         errors=tuple(_errors(compiled)),
+        steps=step_numbers(compiled, sim),
     )
 
 
@@ -694,6 +699,9 @@ def summary_lines(rep: MissionReport) -> list[str]:
             f, s = _overlap_text(rep.overlap[name])
             extra = f", coverage {100 * rep.coverage[name]:.2f} %, min overlap front {f} side {s}"
         lines.append(f"  {name}: {n} photos{extra}")
+    for s in rep.steps:
+        lines.append(f"  {s.summary()}")
+        lines.extend(f"    assumes {a}" for a in s.facts.assumptions)
     return lines + _findings_lines(rep)
 
 
@@ -724,7 +732,11 @@ def format_report(rep: MissionReport) -> str:
     for a in rep.areas:
         outside_m = a.path.outside_m if a.path is not None else 0
         rows.append((f"step {a.step} {a.kind}", f"{a.area_m2:.0f} m² at {a.altitude_m:g} m, "
-                                                f"{outside_m:.0f} m flown outside the area"))
+                                                f"{outside_m:.0f} m flown outside the area, overlap asked "
+                                                f"front {100 * a.requested.front:g} %, side "
+                                                f"{100 * a.requested.side:g} %"))
+        numbers = next((s for s in rep.steps if s.facts.step == a.step), None)
+        rows += [(f"  {k}", v) for k, v in (numbers.rows() if numbers else [])]
     width = max(len(k) for k, _ in rows)
     out = [f"{k.ljust(width)}  {v}" for k, v in rows] + _findings_lines(rep)
     if not rep.warnings and not rep.errors:
