@@ -19,8 +19,8 @@ FORMAT_VERSION = 1
 SCHEMA_ID = "https://wiris-tools.invalid/schema/capture-plan-1.json"
 
 # A copter below 2 m is in ground effect and its barometer noise (~1 m) is half the altitude; above 500 m
-# no photogrammetry of a ground target makes sense and every civil drone rulebook is far exceeded (the
-# compiler warns from 120 m, the common regulatory ceiling, see missions.compile).
+# no photogrammetry of a ground target makes sense and every civil drone rulebook is far exceeded (above
+# MAX_AGL_M, the common regulatory ceiling, a plan needs vehicle.max_altitude_m: missions.plan.meaning).
 MIN_ALTITUDE_M = 2.0
 MAX_ALTITUDE_M = 500.0
 # Most of the world's drone rules (EU 2019/947 open category, FAA part 107) cap flights at 120 m / 400 ft above
@@ -89,7 +89,9 @@ TRIGGER = {"enum": ["distance", "interval", "hover"], "default": "distance",
 TURNAROUND = _num(0, 500, desc="straight run-in/out beyond each line end, metres (default 10 copter, 30 plane)")
 
 SETTINGS = {"type": "object", "minProperties": 1,
-            "description": "camera settings by the catalogue's names (`wiris cdf models`), checked against it",
+            "description": "camera settings, checked against the camera catalogue: each by its plan name or its "
+                           "PARAM_EXT name (`wiris cdf models --settings MODEL` lists both), an option by its "
+                           "name or label",
             "additionalProperties": {"type": ["string", "number", "array"], "items": {"type": "string"}}}
 
 STEPS: dict[str, dict] = {
