@@ -554,7 +554,7 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
         part = load_plan_partly(path_or_plan)
         plan, problems = part.plan, list(part.problems)
         if plan is None:
-            raise_problems(problems, str(path_or_plan))
+            raise_problems(problems, part.file)
     prof = profile(firmware or plan.vehicle.firmware)
     state = _State(warnings=[f"component_id_chosen: {n}" for n in plan.notes])
     try:

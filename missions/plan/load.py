@@ -81,13 +81,14 @@ class PartPlan(NamedTuple):
 
     plan: Plan | None
     problems: list[Problem]
+    file: str                       # how locations name the plan file (raise_problems sorts by it)
 
 
 def parse_plan(text: str, path: str = "<plan>", base_dir: str | Path | None = None) -> Plan:
     """Parse plan text (see module doc). `path` names it in locations; areas resolve against `base_dir`."""
-    plan, problems = parse_plan_partly(text, path, base_dir)
+    plan, problems, _ = parse_plan_partly(text, path, base_dir)
     raise_problems(problems, path)
-    assert plan is not None        # no problem: the whole plan was built
+    assert plan is not None        # without a problem the whole plan is built (or the builder raised)
     return plan
 
 
@@ -127,24 +128,24 @@ def parse_plan_partly(text: str, path: str = "<plan>", base_dir: str | Path | No
                         hint="put large areas in KML/GeoJSON files next to the plan")
     data, doc = parse_yaml(text, path, problems)
     if data is None and problems:
-        return PartPlan(None, problems)
+        return PartPlan(None, problems, path)
     if not isinstance(data, dict):
         doc.report((), f"a plan is a mapping of keys, got {describe(data)}",
                    "start from `wiris mission schema` or examples/")
-        return PartPlan(None, problems)
+        return PartPlan(None, problems, path)
     schema_problems(data, doc, problems)
     resolved = check_meaning(data, doc, base)
     affected = _affected(problems, data) if problems else (set(), set())
     if affected is None:
-        return PartPlan(None, problems)
+        return PartPlan(None, problems, path)
     locations = {p: f"{path}:{l + 1}:{c + 1}" for p, (l, c) in doc.values.items()}
     locations[()] = path
     try:
         return PartPlan(build_plan(data, resolved, path, base, MappingProxyType(locations),
-                                   skip_payloads=affected[0], skip_steps=affected[1]), problems)
+                                   skip_payloads=affected[0], skip_steps=affected[1]), problems, path)
     except (KeyError, TypeError, ValueError, StopIteration) as e:
         if problems:        # a part the problems left half-checked: they are what to fix
-            return PartPlan(None, problems)
+            return PartPlan(None, problems, path)
         # a gap between schema and builder: a bug
         raise PlanError(f"internal: the plan passed validation but could not be built ({type(e).__name__}: {e})",
                         where=path, hint="please report this with the plan") from None
@@ -170,12 +171,8 @@ def load_plan(path: str | Path) -> Plan:
     """Read and parse a plan file (size-capped, UTF-8); "-" or /dev/stdin reads standard input, whose
     relative area paths are then relative to the current directory."""
     part = load_plan_partly(path)
-    raise_problems(part.problems, part.plan.path if part.plan else _label(path))
+    raise_problems(part.problems, part.file)
     return part.plan
-
-
-def _label(path: str | Path) -> str:
-    return STDIN_LABEL if names_stdin(path, PLAN_FILE) else str(path)
 
 
 def load_plan_partly(path: str | Path) -> PartPlan:
