@@ -699,9 +699,10 @@ def summary_lines(rep: MissionReport) -> list[str]:
             f, s = _overlap_text(rep.overlap[name])
             extra = f", coverage {100 * rep.coverage[name]:.2f} %, min overlap front {f} side {s}"
         lines.append(f"  {name}: {n} photos{extra}")
-    for s in rep.steps:
-        lines.append(f"  {s.summary()}")
-        lines.extend(f"    assumes {a}" for a in s.facts.assumptions)
+    lines.extend(f"  {s.summary()}" for s in rep.steps)
+    # the steps mostly share their assumptions: each is said once
+    assumed = dict.fromkeys(a for s in rep.steps for a in s.facts.assumptions)
+    lines.extend(f"  assumes {a}" for a in assumed)
     return lines + _findings_lines(rep)
 
 
