@@ -18,6 +18,7 @@ class Vehicle:
     speed_mps: float | None         # None: `auto`, the fastest the cameras allow (missions.thermal.speed)
     max_mission_items: int | None = None
     max_speed_mps: float | None = None
+    max_altitude_m: float | None = None     # a permit's ceiling above home; None: MAX_AGL_M (120 m) holds
 
 
 @dataclass(frozen=True)
