@@ -35,7 +35,13 @@ def build_plan(data: dict, resolved: Resolved, path: str, base_dir: Path, locati
         vehicle=Vehicle(v["firmware"], v["frame"], float(v["speed_mps"]), v.get("max_mission_items")),
         home=Home(float(h["lat"]), float(h["lon"]), float(h["alt_amsl_m"])),
         payloads=payloads, mission=tuple(steps), path=path, base_dir=str(base_dir), notes=tuple(resolved.notes),
-        locations=locations)
+        locations=locations, fence_margin_m=_fence_margin(data), corridor_scan=bool((data.get("qgc") or {}).get(
+            "corridor_scan", False)))
+
+
+def _fence_margin(data: dict) -> float | None:
+    fence = data.get("fence")
+    return None if fence is None else float(fence["margin_m"])
 
 
 def _default_name(path: str) -> str:
