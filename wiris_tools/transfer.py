@@ -786,6 +786,8 @@ def load_for_upload(path: str, mission_type: int = MISSION_TYPE_MISSION, *, part
     elif suffix in WPL_SUFFIXES:
         _require_mission(p, mission_type, "a WPL 110 file holds a mission")
         chosen, home = load_wpl(p)
+    elif suffix in CAPTURE_SUFFIXES and mission_type == mavlink2.MAV_MISSION_TYPE_FENCE:
+        chosen, home = _capture_plan_fence(p, firmware)
     elif suffix in CAPTURE_SUFFIXES:
         _require_mission(p, mission_type, "a capture plan compiles to a mission")
         chosen, home = _capture_plan_part(p, part, firmware)
@@ -819,6 +821,15 @@ def _capture_plan_part(p, part: int | None, firmware: str | None) -> LoadedList:
     compiled = _compiled_without_errors(p, firmware)
     parts = list(compiled.parts) if compiled.parts else [compiled.items]
     return LoadedList(list(parts[_part_index(p, part, len(parts), compiled.item_limit)]), compiled.home)
+
+
+def _capture_plan_fence(p, firmware: str | None) -> LoadedList:
+    """The fence capture plan `p` compiles to: its exclusion zones and `fence: {margin_m}` inclusion polygon."""
+    compiled = _compiled_without_errors(p, firmware)
+    if not compiled.fence:
+        raise PlanError("the capture plan has no fence: no survey has exclude: zones and it has no fence: key",
+                        where=str(p), hint="add fence: {margin_m: 30} for an inclusion fence around the flight")
+    return LoadedList(list(compiled.fence), compiled.home)
 
 
 def _compiled_without_errors(p, firmware: str | None):

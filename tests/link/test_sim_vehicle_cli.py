@@ -105,3 +105,23 @@ def test_bad_sim_vehicle_input_is_refused_with_a_message(args, code, fragment):
     r = run("sim", "vehicle", *args, "--duration", "0.1")
     assert r.exit_code == code, r.output
     assert fragment in r.output and "Traceback" not in r.output
+
+
+def test_fence_upload_straight_from_a_capture_plan(tmp_path):
+    from missions.emit.items import MISSION_TYPE_FENCE
+    from wiris_tools.vehicle_sim import VehicleSim
+
+    path = _zone_plan(tmp_path, "px4")
+    compiled = compile_plan(path)
+    with VehicleSim(flavour="px4") as sim:
+        r = run("mission", "upload", path, "--type", "fence", "--verify", "--connect", f"udpout:127.0.0.1:{sim.port}")
+        assert r.exit_code == 0, r.output
+        held = sim.items(MISSION_TYPE_FENCE)
+    assert [(f.command, f.param1, f.x, f.y) for f in held] == [(f.command, f.param1, f.x, f.y) for f in compiled.fence]
+
+
+def test_fence_upload_of_a_capture_plan_without_a_fence_says_how_to_get_one(tmp_path):
+    path = small_plan(tmp_path, camera_change=False)
+    r = run("mission", "upload", path, "--type", "fence", "--connect", "udpout:127.0.0.1:9")
+    assert r.exit_code == 1 and "Traceback" not in r.output
+    assert f"{path}: the capture plan has no fence" in r.output and "fence: {margin_m: 30}" in r.output
