@@ -516,9 +516,9 @@ def _warn_about_unknown_optics(c: _Compile) -> None:
 
 def _fence(c: _Compile, items: tuple[MissionItem, ...]) -> tuple[MissionItem, ...]:
     """The fence: each zone the vehicle must not enter as an exclusion polygon, and with the plan's
-    `fence: {margin_m: M}` an inclusion polygon M metres around everything the mission flies. A path that enters
-    an exclusion zone is warned about: with the fence enabled the vehicle would breach it there."""
-    from missions.geometry.fence import exclusion_polygon, inclusion_polygon, path_entries
+    `fence: {margin_m: M}` an inclusion polygon M metres around everything the mission flies. (A path through a
+    zone is the report's path_over_exclusion warning: with the fence enabled the vehicle breaches it there.)"""
+    from missions.geometry.fence import exclusion_polygon, inclusion_polygon
 
     out: list[MissionItem] = []
     seen: set[tuple] = set()
@@ -529,10 +529,6 @@ def _fence(c: _Compile, items: tuple[MissionItem, ...]) -> tuple[MissionItem, ..
                 seen.add(ring)
                 out.extend(exclusion_polygon(ring))
     home = c.plan.home
-    for where in path_entries(items, (home.lat, home.lon), [z.geometry for z in c.state.fence_zones],
-                              [z.projection for z in c.state.fence_zones]):
-        c.warn("path_enters_fence_exclusion", f"the path from {where} flies through an exclusion zone of the "
-               "fence: with the fence enabled the vehicle breaches it there (route the flight around the zone)")
     if c.plan.fence_margin_m is not None:
         out.extend(inclusion_polygon(items, (home.lat, home.lon), c.plan.fence_margin_m))
     return tuple(out)

@@ -16,7 +16,8 @@ Conventions (shared with missions.formats.wpl and the transfer tools):
 What is written is what QGroundControl writes (MissionController, GeoFenceController,
 RallyPointController): `fileType` "Plan", `version` 1, `groundStation` "QGroundControl";
 `mission.version` 2 with firmwareType (MAV_AUTOPILOT), vehicleType (MAV_TYPE), cruiseSpeed,
-hoverSpeed, globalPlanAltitudeMode, plannedHomePosition and SimpleItems (NaN params as null);
+hoverSpeed, globalPlanAltitudeMode, plannedHomePosition and SimpleItems (NaN params as null), with a compiled
+mission's surveys (and corridors, when asked) as the ComplexItems of missions.formats.qgc_complex;
 `geoFence.version` 2 with `polygons` / `circles` (each version 1); `rallyPoints.version` 2. Both
 the geoFence and rallyPoints sections are always written (MAVSDK's importer fails silently without
 them). Keys sorted and four-space indents, like Qt's QJsonDocument.

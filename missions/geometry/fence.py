@@ -2,7 +2,6 @@
 
     items = exclusion_polygon(ring)                              # a zone the vehicle must not enter
     items = inclusion_polygon(mission_items, home, margin_m=30)  # a polygon around the whole flight
-    entries = path_entries(mission_items, home, zones, projections)
 
 Fence items are what the fence list carries on the wire (MISSION_TYPE_FENCE): one
 NAV_FENCE_POLYGON_VERTEX_EXCLUSION / _INCLUSION per vertex, param1 = the polygon's vertex count, frame GLOBAL,
@@ -12,7 +11,7 @@ in order around the polygon, not closed (common.xml; QGC's geoFence and MAVSDK's
 from __future__ import annotations
 
 import math
-from typing import Any, Iterator, Sequence
+from typing import Sequence
 
 from missions.emit.items import FRAME_GLOBAL, FRAME_MISSION, MISSION_TYPE_FENCE, MissionItem, deg_to_e7, mavlink
 from missions.geometry.geo import LocalProjection
@@ -57,22 +56,4 @@ def inclusion_polygon(items: Sequence[MissionItem], home: tuple[float, float], m
     return _polygon(ring, mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION)
 
 
-def path_entries(items: Sequence[MissionItem], home: tuple[float, float], zones: Sequence[Any],
-                 projections: Sequence[LocalProjection]) -> Iterator[str]:
-    """Where the flight (home, then each position in order) first crosses into each zone (shapely geometry in
-    its projection): "home to item 3", "item 7 to item 8"."""
-    from shapely.geometry import LineString
-
-    path = [(0, home[0], home[1])] + _positions(items)
-    for zone, proj in zip(zones, projections):
-        inner = zone.buffer(-0.01)          # touching the edge is not entering
-        if inner.is_empty:
-            continue
-        for (a, alat, alon), (b, blat, blon) in zip(path, path[1:]):
-            seg = LineString([proj.point_to_xy(alat, alon), proj.point_to_xy(blat, blon)])
-            if seg.intersects(inner):
-                yield f"{'home' if a == 0 else f'item {a}'} to item {b}"
-                break
-
-
-__all__ = ["exclusion_polygon", "inclusion_polygon", "path_entries"]
+__all__ = ["exclusion_polygon", "inclusion_polygon"]

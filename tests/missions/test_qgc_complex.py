@@ -212,23 +212,6 @@ def test_inclusion_fence_lies_margin_m_around_the_whole_flight(tmp_path):
     assert [p["inclusion"] for p in doc["geoFence"]["polygons"]] == [False, True]
 
 
-def test_a_path_through_an_exclusion_zone_is_warned_about(tmp_path):
-    # the transit from home to a waypoint beyond the zone crosses it
-    path = _zone_plan(tmp_path)
-    path.write_text(path.read_text().replace(
-        "  - waypoint: {lat: 50.1105, lon: 14.5035,", "  - waypoint: {lat: 50.1125, lon: 14.5055,"))
-    c = compile_plan(path)
-    codes = [w.code for w in c.warnings if hasattr(w, "code")]
-    assert "path_enters_fence_exclusion" not in codes
-    path.write_text(path.read_text().replace("  - takeoff: {alt_m: 40}\n", "  - takeoff: {alt_m: 40}\n"
-                                             "  - waypoint: {lat: 50.1117, lon: 14.5046, alt_m: 40}\n"
-                                             "  - waypoint: {lat: 50.1113, lon: 14.5054, alt_m: 40}\n"))
-    c = compile_plan(path)
-    msgs = [w.message for w in c.warnings if getattr(w, "code", "") == "path_enters_fence_exclusion"]
-    # items 1 take-off, 2 speed change, 3 and 4 the waypoints: the leg between them crosses the zone
-    assert len(msgs) == 1 and "item 3 to item 4" in msgs[0]
-
-
 @pytest.mark.parametrize("fence,fragment", [
     ("fence: {margin_m: -3}", "margin_m"),
     ("fence: {margin_m: thirty}", "margin_m"),
