@@ -7,7 +7,8 @@ Pipeline, as `compile_plan` reads: load (schema, locations) -> the payloads' cam
 function `_STEPS` names for its type: a survey or corridor goes area -> geometry (missions.geometry.survey,
 missions.geometry.corridor) -> items (missions.emit.emitter, firmware × camera) -> firmware check
 (missions.emit.firmware) -> item limit / parts -> setup sequence (missions.emit.setup) -> Lua bridge
-(missions.emit.lua) -> autopilot params (missions.emit.params) -> warnings. What the steps add up as they go
+(missions.emit.lua) -> autopilot params (missions.emit.params) -> warnings -> fence (the survey steps' exclusion
+zones and the plan's inclusion fence, missions.geometry.fence). What the steps add up as they go
 (warnings, areas, altitudes, what the RedEdges fly) is one `_State`, local to the compile. Pure: no sockets, no
 files written; errors are PlanError with the plan's file:line:col.
 

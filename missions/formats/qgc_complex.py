@@ -30,7 +30,7 @@ exclusion zones, other turnarounds and, for hover capture, other photo points.
 from __future__ import annotations
 
 import math
-from typing import Any, Iterable, Sequence
+from typing import Any, Callable, Iterable, Sequence
 
 from missions.compiled import PayloadInfo, TransectPattern
 from missions.emit.items import FRAME_MISSION, MissionItem, mavlink
@@ -58,8 +58,12 @@ def transect_start(items: Sequence[MissionItem], first: int, end: int) -> int:
     return end
 
 
+SimpleItemWriter = Callable[[MissionItem, int], dict]
+
+
 def mission_items_json(items: Sequence[MissionItem], patterns: Iterable[TransectPattern],
-                       payloads: Iterable[PayloadInfo], simple_item, *, corridor_scan: bool = False) -> list[dict]:
+                       payloads: Iterable[PayloadInfo], simple_item: SimpleItemWriter, *,
+                       corridor_scan: bool = False) -> list[dict]:
     """The .plan's mission.items for `items`: SimpleItems, and one ComplexItem per pattern (a corridor only with
     `corridor_scan`). `simple_item(item, jump_id)` writes one SimpleItem (planfile's); doJumpId counts every
     flattened item from 1, as QGC numbers them."""

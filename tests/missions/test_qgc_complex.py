@@ -108,6 +108,10 @@ def test_flattened_items_are_exactly_the_compiled_ones_with_simple_items_around(
     assert [it["command"] for it in items[:k]] == [mavlink.MAV_CMD_NAV_TAKEOFF, mavlink.MAV_CMD_DO_CHANGE_SPEED]
     assert all(it["type"] == "SimpleItem" for it in items[:k] + items[k + 1:])
     assert {it["command"] for it in inner} <= TRANSECT_COMMANDS
+    # MissionItem::load's required keys and types for each stored item
+    assert all(_has_keys(it, {"type": STRING, "frame": NUMBER, "command": NUMBER, "params": ARRAY,
+                              "autoContinue": BOOL}) == [] and it["type"] == "SimpleItem" and len(it["params"]) == 7
+               for it in inner)
     assert inner[0]["command"] == mavlink.MAV_CMD_NAV_WAYPOINT
     # doJumpId numbers every flattened item from 1, as QGC does
     flat = items[:k] + inner + items[k + 1:]

@@ -42,8 +42,8 @@ def sim() -> None:
 
 
 @sim.command("vehicle")
-@connect_option("udpin:127.0.0.1:14550 (a ground station connects with udpout:127.0.0.1:14550) or "
-                "udpout:127.0.0.1:14550 (towards a listening ground station)")
+@connect_option("udpin:127.0.0.1:14550 (a ground station then connects with udpout:127.0.0.1:14550) or "
+                "udpout:127.0.0.1:14550 (towards a GCS that listens)")
 @click.option("--firmware", type=click.Choice(["ardupilot", "px4"]), required=True,
               help="Whose mission protocol and storage to play.")
 @click.option("--system", type=click.IntRange(1, 255), default=1, show_default=True, help="The vehicle's system id.")
