@@ -904,3 +904,23 @@ def test_apply_with_an_unknown_payload_sends_nothing(two_camera_setup, name, fra
         assert str(path) in result.output and "Traceback" not in result.output
         with emu.lock:
             assert emu.state.value("emissivity") != pytest.approx(0.98)    # nothing reached the camera
+
+
+def test_a_setup_step_whose_payload_is_no_name_is_refused_where_it_is(tmp_path):
+    path = tmp_path / "flight.setup.json"
+    doc = json.loads(dumps_setup("flight", _compiled_like_steps()))
+    doc["steps"][1]["payload"] = 7
+    path.write_text(json.dumps(doc))
+    result = CliRunner().invoke(cli, ["camera", "apply", str(path), "--payload", "thermal", "--connect",
+                                      "udpout:127.0.0.1:9"])
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    assert f"{path}: step 2" in result.output and "payload 7 is not a payload name" in result.output
+    assert "hint: " in result.output
+
+
+def test_apply_payload_on_a_file_whose_steps_name_none(tmp_path):
+    path = _setup_file(tmp_path, _compiled_like_steps())       # SetupStep's payload left empty
+    result = CliRunner().invoke(cli, ["camera", "apply", path, "--payload", "thermal", "--connect",
+                                      "udpout:127.0.0.1:9"])
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    assert "no step names its payload" in result.output and "compile the plan again" in result.output
