@@ -34,13 +34,13 @@ from typing import Any, Callable, Iterable, Sequence
 
 from missions.compiled import PayloadInfo, TransectPattern
 from missions.emit.items import FRAME_MISSION, MissionItem, mavlink
+from missions.formats.planfile import ALT_MODE_RELATIVE   # the compiler flies altitudes above home
 from missions.geometry.geo import great_circle_m
 
 SURVEY_VERSION = 5              # SurveyComplexItem::_saveCommon; MAVSDK's importer reads exactly this one
 CORRIDOR_VERSION = 2            # CorridorScanComplexItem::_saveCommon
 TRANSECT_VERSION = 2            # TransectStyleComplexItem::_save
 CAMERA_CALC_VERSION = 2         # CameraCalc::save
-ALT_MODE_RELATIVE = 1           # QGroundControlQmlGlobal::AltMode: the compiler flies altitudes above home
 CUSTOM_CAMERA = "Custom Camera"  # CameraCalc::canonicalCustomCameraName: camera numbers stored in the file
 
 # What a pattern's stored Items may be: waypoints and the camera commands the emitter puts on a line.
