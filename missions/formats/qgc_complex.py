@@ -49,6 +49,9 @@ _TRANSECT_COMMANDS = frozenset({mavlink.MAV_CMD_NAV_WAYPOINT, mavlink.MAV_CMD_DO
                                 mavlink.MAV_CMD_IMAGE_START_CAPTURE})
 
 
+_CAMERA_COMMANDS = _TRANSECT_COMMANDS - {mavlink.MAV_CMD_NAV_WAYPOINT}
+
+
 def transect_start(items: Sequence[MissionItem], first: int, end: int) -> int:
     """The first item of a step's [first, end) that belongs to its lines: its first waypoint (a speed change the
     step emitted before it stays a SimpleItem)."""
@@ -96,7 +99,7 @@ def _inner_item(simple: dict) -> dict:
 def _complex_item(p: TransectPattern, items: Sequence[MissionItem], inner: list[dict],
                   optics: PayloadInfo | None) -> dict[str, Any]:
     transect = {
-        "CameraCalc": camera_calc(p, optics),
+        "CameraCalc": camera_calc(p, optics, any(it.command in _CAMERA_COMMANDS for it in items)),
         "CameraShots": camera_shots(items, p.trigger_distance_m),
         "CameraTriggerInTurnAround": False,
         "HoverAndCapture": p.hover,
@@ -116,11 +119,14 @@ def _complex_item(p: TransectPattern, items: Sequence[MissionItem], inner: list[
             "version": SURVEY_VERSION}
 
 
-def camera_calc(p: TransectPattern, optics: PayloadInfo | None) -> dict[str, Any]:
+def camera_calc(p: TransectPattern, optics: PayloadInfo | None, triggered: bool = True) -> dict[str, Any]:
     """CameraCalc v2 from the lead payload's optics. The footprints QGC would compute from them are the
-    compiled ones, except that the compiler may have narrowed the spacing to fit a whole number of lines."""
+    compiled ones, except that the compiler may have narrowed the spacing to fit a whole number of lines.
+    `triggered` False (lines only RedEdges fly: they capture themselves) stores no trigger distance, so lines
+    QGC rebuilds carry no camera commands either (TransectStyleComplexItem::triggerCamera)."""
     calc: dict[str, Any] = {
-        "AdjustedFootprintFrontal": _num(p.trigger_distance_m), "AdjustedFootprintSide": _num(p.spacing_m),
+        "AdjustedFootprintFrontal": _num(p.trigger_distance_m if triggered else 0.0),
+        "AdjustedFootprintSide": _num(p.spacing_m),
         "CameraName": CUSTOM_CAMERA, "DistanceMode": ALT_MODE_RELATIVE, "DistanceToSurface": _num(p.altitude_m),
         "version": CAMERA_CALC_VERSION}
     if optics is None:         # a payload without known optics cannot lead a pattern; kept whole regardless

@@ -286,3 +286,20 @@ def test_mavsdk_refuses_a_plan_with_a_corridor_scan(tmp_path):
     c = compile_plan(_corridor_plan(tmp_path, False))
     res = mission_peers.mavsdk_import_plan(json.dumps(_plan_doc(c, tmp_path)), tmp_path, autopilot="px4")
     assert res["ok"] and len(res["mission"]) == len(c.items)
+
+
+def test_lines_only_a_rededge_flies_store_no_trigger_distance(tmp_path):
+    # the RedEdge captures itself: its lines carry no camera command, and neither would lines QGC rebuilds
+    text = (EXAMPLES / "field-multispectral.yaml").read_text().replace(
+        "      payloads: [thermal, multispectral]", "      payloads: [multispectral]")
+    plan = tmp_path / "rededge-only.yaml"
+    plan.write_text(text)
+    (tmp_path / "areas").symlink_to(EXAMPLES / "areas")        # the plan's area file, as beside the example
+    c = compile_plan(plan)
+    [survey] = _complex(_plan_doc(c, tmp_path))
+    transect = survey["TransectStyleComplexItem"]
+    assert {it["command"] for it in transect["Items"]} == {mavlink.MAV_CMD_NAV_WAYPOINT}
+    assert transect["CameraCalc"]["AdjustedFootprintFrontal"] == 0 and transect["CameraShots"] == 0
+    # with the WIRIS beside it the autopilot triggers, and the trigger distance is stored
+    [both] = _complex(_plan_doc(compile_plan(EXAMPLES / "field-multispectral.yaml"), tmp_path))
+    assert both["TransectStyleComplexItem"]["CameraCalc"]["AdjustedFootprintFrontal"] > 0
