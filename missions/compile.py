@@ -7,7 +7,8 @@ Pipeline, as `compile_plan` reads: load (schema, locations) -> the payloads' cam
 function `_STEPS` names for its type: a survey or corridor goes area -> geometry (missions.geometry.survey,
 missions.geometry.corridor) -> items (missions.emit.emitter, firmware × camera) -> firmware check
 (missions.emit.firmware) -> item limit / parts -> setup sequence (missions.emit.setup) -> Lua bridge
-(missions.emit.lua) -> autopilot params (missions.emit.params) -> warnings. What the steps add up as they go
+(missions.emit.lua) -> autopilot params (missions.emit.params) -> warnings -> fence (the survey steps' exclusion
+zones and the plan's inclusion fence, missions.geometry.fence). What the steps add up as they go
 (warnings, areas, altitudes, what the RedEdges fly) is one `_State`, local to the compile. Pure: no sockets, no
 files written; errors are PlanError with the plan's file:line:col.
 
@@ -24,7 +25,8 @@ from pathlib import Path
 from typing import Any, Callable, NamedTuple
 
 from cdf.catalogue import catalogue
-from missions.compiled import AreaInfo, CaptureSize, Compiled, PayloadInfo, PlanWarning, SetupStep, StepFacts
+from missions.compiled import (AreaInfo, CaptureSize, Compiled, PayloadInfo, PlanWarning, SetupStep, StepFacts,
+                               TransectPattern)
 from missions.emit.emitter import Emitted, Emitter, Track, TrackPoint, HOVER_HOLD_S
 from missions.emit.firmware import FirmwareProfile, check_items, profile, split_parts
 from missions.emit.items import MissionItem
@@ -96,6 +98,8 @@ class _State:
     warnings: list[PlanWarning | str]
     areas: list[AreaInfo] = field(default_factory=list)
     intent: list[SurveyPlan | CorridorPlan] = field(default_factory=list)
+    patterns: list[TransectPattern] = field(default_factory=list)
+    fence_zones: list[Area] = field(default_factory=list)     # zones the vehicle must not enter, as drawn
     altitudes: list[_Altitude] = field(default_factory=list)
     rededge_flights: dict[str, list[_RedEdgeFlight]] = field(default_factory=dict)
     rededge_checks: list[_RedEdgeCheck] = field(default_factory=list)
@@ -287,6 +291,56 @@ def _lines_step(c: _Compile, step: SurveyStep | CorridorStep, kind: str,
         trigger_distance_m=lines.route.trigger_distance_m, items=(first, c.emitter.item_count)))
     c.state.intent.append(lines.route)
     c.state.step_facts.append(_step_facts(c, step, kind, lead, footprint, lines.route))
+    c.state.patterns.append(_pattern(c, step, kind, lines, lead, alt, first))
+
+
+def _pattern(c: _Compile, step: SurveyStep | CorridorStep, kind: str, lines: _Lines, lead: PayloadInfo, alt: float,
+             first: int) -> TransectPattern:
+    """The step as QGC's survey or corridor editor holds it, around the items it just emitted."""
+    from missions.formats.qgc_complex import transect_start
+
+    end = c.emitter.item_count
+    common = dict(kind=kind, items=(transect_start(c.emitter.s.items, first, end), end), payload=lead.name,
+                  altitude_m=alt, front_pct=step.front_pct, side_pct=step.side_pct,
+                  spacing_m=lines.route.spacing_m, trigger_distance_m=lines.route.trigger_distance_m,
+                  turnaround_m=_turnaround_m(c, step), hover=step.trigger == "hover")
+    if isinstance(step, CorridorStep):
+        return TransectPattern(**common, line=tuple(tuple(p) for p in step.line), width_m=step.width_m)
+    return TransectPattern(**common, polygon=_outline(lines.area), angle_deg=lines.route.angle_deg,
+                           refly_90=step.refly_90)
+
+
+def _outline(area: Area) -> tuple[tuple[float, float], ...]:
+    """One polygon around the surveyed area, (lat, lon), not closed: QGC's survey has one outline and no holes, so
+    an area the exclusions cut into pieces (or several polygons) is written as their convex hull."""
+    g = area.geometry
+    ring = g.exterior if g.geom_type == "Polygon" else g.convex_hull.exterior
+    return _latlon_ring(area, ring)
+
+
+def _latlon_ring(area: Area, ring: Any) -> tuple[tuple[float, float], ...]:
+    import numpy as np
+
+    xy = np.asarray(ring.coords)[:-1]
+    lat, lon = area.projection.to_latlon(xy[:, 0], xy[:, 1])
+    return tuple((round(float(a), 7), round(float(b), 7)) for a, b in zip(lat, lon))
+
+
+def _turnaround_m(c: _Compile, step: SurveyStep | CorridorStep) -> float:
+    return step.turnaround_m if step.turnaround_m is not None else TURNAROUND_DEFAULT_M[c.plan.vehicle.frame]
+
+
+def fence_zone_sources(step: Any) -> tuple[Any, ...]:
+    """The zones of a step that go into the fence as exclusion polygons, as the plan gives them (file paths or
+    inline [lat, lon] lists): the zones the vehicle must not enter. A zone only to be left unphotographed may be
+    flown over, so it never belongs in a fence."""
+    return tuple(getattr(step, "exclude", ()))
+
+
+def _record_fence_zones(c: _Compile, step: SurveyStep) -> None:
+    for k, source in enumerate(fence_zone_sources(step)):
+        c.state.fence_zones.append(load_area(source, base_dir=c.plan.base_dir,
+                                             where=c.plan.step_where(step, "exclude", k)))
 
 
 def _step_facts(c: _Compile, step: SurveyStep | CorridorStep, kind: str, lead: PayloadInfo, footprint: Footprint,
@@ -427,6 +481,7 @@ def _line_inputs(c: _Compile, step: SurveyStep | CorridorStep, lead: PayloadInfo
 def _plan_survey_lines(c: _Compile, step: SurveyStep, inputs: _LineInputs) -> _Lines:
     area = load_area(step.area, exclude=step.exclude, base_dir=c.plan.base_dir,
                      where=c.plan.step_where(step, "area"))
+    _record_fence_zones(c, step)
     _check_reach(c.plan.home, area.projection.lat0, area.projection.lon0, "area", c.plan.step_where(step))
     route = plan_survey(area, inputs.footprint, step.front_pct, step.side_pct, angle_deg=step.angle_deg,
                         turnaround_m=inputs.turnaround_m, speed_mps=c.speed_mps,
@@ -595,6 +650,24 @@ def _mission_speed(plan: Plan, payloads: _Payloads, state: _State) -> float:
     state.warnings.append(PlanWarning("speed_auto", f"speed_mps: auto chose {chosen.speed_mps:g} m/s, the fastest "
                                       f"at which {chosen.limit.why}"))
     return chosen.speed_mps
+def _fence(c: _Compile, items: tuple[MissionItem, ...]) -> tuple[MissionItem, ...]:
+    """The fence: each zone the vehicle must not enter as an exclusion polygon, and with the plan's
+    `fence: {margin_m: M}` an inclusion polygon M metres around everything the mission flies. (A path through a
+    zone is the report's path_over_exclusion warning: with the fence enabled the vehicle breaches it there.)"""
+    from missions.geometry.fence import exclusion_polygon, inclusion_polygon
+
+    out: list[MissionItem] = []
+    seen: set[tuple] = set()
+    for zone in c.state.fence_zones:
+        for poly in zone.polygons:
+            ring = _latlon_ring(zone, poly.exterior)
+            if ring not in seen:
+                seen.add(ring)
+                out.extend(exclusion_polygon(ring))
+    home = c.plan.home
+    if c.plan.fence_margin_m is not None:
+        out.extend(inclusion_polygon(items, (home.lat, home.lon), c.plan.fence_margin_m))
+    return tuple(out)
 
 
 # -------------------------------------------------------------------------------------------- the driver
@@ -652,6 +725,7 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     lua = _lua_bridge(c, emitted)
     params = _params(c, emitted)
     _warn_about_unknown_optics(c)
+    fence = _fence(c, emitted.items)
     compiled = Compiled(
         name=plan.name, firmware=prof.name, frame=plan.vehicle.frame,
         home=(plan.home.lat, plan.home.lon, plan.home.alt_amsl_m), speed_mps=c.speed_mps, items=emitted.items,
@@ -660,7 +734,8 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
         payloads=tuple(payloads.optics[p.name] for p in plan.payloads if p.name in payloads.optics),
         areas=tuple(state.areas), setup=setup, lua=lua, params=params,
         warnings=tuple(dict.fromkeys(state.warnings)), intent=tuple(state.intent), inputs=input_files(plan),
-        step_facts=tuple(state.step_facts))
+        step_facts=tuple(state.step_facts), patterns=tuple(state.patterns), corridor_scan=plan.corridor_scan,
+        fence=fence)
     return _with_the_sun(plan, compiled)
 
 

@@ -110,6 +110,29 @@ class StepFacts:
 
 
 @dataclass(frozen=True)
+class TransectPattern:
+    """A survey or corridor step as QGroundControl's pattern editor knows it (missions.formats.qgc_complex writes
+    it as a ComplexItem around the items it emitted): the shape, the camera numbers that spaced its lines, and
+    where its transect items are in Compiled.items."""
+
+    kind: str                                   # "survey" | "corridor"
+    items: tuple[int, int]                      # [first, end) of the transect items (the first waypoint on)
+    payload: str                                # the payload whose optics set the lines
+    altitude_m: float
+    front_pct: float
+    side_pct: float
+    spacing_m: float                            # between lines
+    trigger_distance_m: float
+    turnaround_m: float
+    hover: bool
+    polygon: tuple[tuple[float, float], ...] = ()   # survey: the area's outer ring, (lat, lon)
+    angle_deg: float = 0.0                      # survey: the lines' direction, degrees from north
+    refly_90: bool = False
+    line: tuple[tuple[float, float], ...] = ()  # corridor: the centre line, (lat, lon)
+    width_m: float = 0.0                        # corridor
+
+
+@dataclass(frozen=True)
 class SetupStep:
     """One step of the pre-flight command sequence (NAME.setup.json)."""
 
@@ -161,6 +184,9 @@ class Compiled:
     inputs: tuple[str, ...] = field(default=(), compare=False)   # the files the plan was read from (never written)
     sun: tuple[Any, ...] = ()                   # missions.thermal.assess.StepSun per timed step (plans with `when`)
     step_facts: tuple[StepFacts, ...] = ()      # per survey or corridor step, what the compiler chose
+    patterns: tuple[TransectPattern, ...] = ()  # the surveys and corridors, for the .plan's ComplexItems
+    corridor_scan: bool = False                 # write corridors as QGC CorridorScan (MAVSDK 4.1 cannot read them)
+    fence: tuple[MissionItem, ...] = ()         # fence items (mission_type FENCE): exclusion zones, inclusion fence
 
     def payload(self, name: str) -> PayloadInfo:
         return next(p for p in self.payloads if p.name == name)

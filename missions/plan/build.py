@@ -45,13 +45,19 @@ def build_plan(data: dict, resolved: Resolved, path: str, base_dir: Path, locati
                         max_altitude_m=_float_or_none(v, "max_altitude_m")),
         home=Home(float(h["lat"]), float(h["lon"]), float(h["alt_amsl_m"])),
         payloads=payloads, mission=tuple(steps), path=path, base_dir=str(base_dir), notes=tuple(resolved.notes),
-        timing=_timing(data), locations=locations)
+        timing=_timing(data), locations=locations, fence_margin_m=_fence_margin(data),
+        corridor_scan=bool((data.get("qgc") or {}).get("corridor_scan", False)))
 
 
 def _timing(body: Mapping[str, Any]) -> Timing:
     """`when` (checked by the meaning pass) and `when_wind_mps` of a plan or step."""
     when = body.get("when")
     return Timing(parse_when(when) if when else None, _float_or_none(body, "when_wind_mps"))
+
+
+def _fence_margin(data: dict) -> float | None:
+    fence = data.get("fence")
+    return None if fence is None else float(fence["margin_m"])
 
 
 def _default_name(path: str) -> str:

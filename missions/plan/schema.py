@@ -234,6 +234,16 @@ def _build() -> dict:
                         "items": {"type": "object", "minProperties": 1, "maxProperties": 1,
                                   "properties": STEPS, "additionalProperties": False,
                                   "description": "one step: " + ", ".join(STEPS)}},
+            "fence": _obj({"margin_m": _num(5, 5000, desc="distance of the inclusion fence from everything the "
+                                                            "mission flies, m")},
+                          required=("margin_m",),
+                          desc="an inclusion fence around the whole flight, in the .plan's geoFence (exclusion "
+                               "zones go there whether or not this is given)"),
+            "qgc": _obj({"corridor_scan": {"type": "boolean", "default": False,
+                                           "description": "write corridors into the .plan as QGroundControl "
+                                                          "CorridorScan items (MAVSDK 4.1's importer then refuses "
+                                                          "the file)"}},
+                        desc="how the .plan presents the mission to QGroundControl"),
         },
     }
 

@@ -148,6 +148,8 @@ class Plan:
     base_dir: str = "."
     notes: tuple[str, ...] = ()          # decisions the loader took for the user (e.g. a moved component id)
     timing: Timing = Timing()            # `when` and `when_wind_mps` of the whole plan
+    fence_margin_m: float | None = None  # `fence: {margin_m}`: an inclusion fence this far around the flight
+    corridor_scan: bool = False          # `qgc: {corridor_scan: true}`: corridors as QGC CorridorScan items
     locations: Mapping[tuple, str] = field(default_factory=lambda: MappingProxyType({}), compare=False, repr=False)
 
     def payload(self, name: str) -> Payload:
