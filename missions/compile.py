@@ -18,9 +18,11 @@ no_optics, mission_split, px4_single_capture_all.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 import math
 from pathlib import Path
+
+import numpy as np
 from typing import Any, Callable, NamedTuple
 
 from cdf.catalogue import catalogue
@@ -33,11 +35,13 @@ from missions.emit.params import Param, autopilot_params
 from missions.emit.setup import RedEdgeSurvey, setup_steps
 from missions.errors import PlanError
 from missions.geometry import optics, survey
-from missions.geometry.area import Area, load_area
+from missions.geometry.area import Area
 from missions.geometry.corridor import CorridorPlan, plan_corridor
 from missions.geometry.footprint import Footprint
-from missions.geometry.geo import MAX_EXTENT_M
+from missions.geometry.geo import MAX_EXTENT_M, LocalProjection
 from missions.geometry.survey import SurveyPlan, plan_survey
+from missions.geometry.zones import (CameraPoint, StepZones, TransitRouter, Zone, area_clear_of, capture_reaches,
+                                     grown_union, keep_photos_out, path_inside, place_zones, plan_zones, zones_near)
 from missions.plan.load import (CameraStep, CorridorStep, LandStep, Plan, RtlStep, SurveyStep, TakeoffStep,
                                 WaypointStep, input_files, load_plan)
 from missions.plan.schema import MAX_AGL_M, MAX_ALTITUDE_M, MIN_ALTITUDE_M
@@ -107,6 +111,8 @@ class _Compile:
     payloads: _Payloads
     emitter: Emitter
     state: _State
+    zones: tuple[Zone, ...] = ()             # every zone of the plan (missions.geometry.zones.plan_zones)
+    transits: TransitRouter | None = None    # routes the flight between steps around the no-fly zones
 
     @property
     def speed_mps(self) -> float:
@@ -225,7 +231,8 @@ def _takeoff(c: _Compile, step: TakeoffStep) -> None:
 
 def _waypoint(c: _Compile, step: WaypointStep) -> None:
     _check_reach(c.plan.home, step.lat, step.lon, "waypoint", c.plan.step_where(step))
-    c.emitter.waypoint(step.lat, step.lon, step.alt_m, step.hold_s, step.capture,
+    _transit_to(c, step.lat, step.lon, step.alt_m, "flight to this waypoint", c.plan.step_where(step))
+    c.emitter.waypoint(step.lat, step.lon, step.alt_m, step.hold_s, _capture_clear_of_zones(c, step),
                        where=c.plan.step_where(step, "capture"))
     c.state.altitudes.append(_Altitude(step.alt_m, c.plan.step_where(step, "alt_m")))
 
@@ -235,6 +242,10 @@ def _camera(c: _Compile, step: CameraStep) -> None:
 
 
 def _rtl(c: _Compile, step: RtlStep) -> None:
+    last = c.emitter.s.last_pos
+    if last is not None:
+        # the vehicle flies home straight from where it is: from the last way round the zones, that is clear
+        _transit_to(c, c.plan.home.lat, c.plan.home.lon, last[2], "return home", c.plan.step_where(step))
     c.emitter.rtl()
 
 
@@ -242,6 +253,9 @@ def _land(c: _Compile, step: LandStep) -> None:
     here = c.plan.step_where(step)
     if step.lat is not None:
         _check_reach(c.plan.home, step.lat, step.lon, "landing point", here)
+        last = c.emitter.s.last_pos
+        if last is not None:
+            _transit_to(c, step.lat, step.lon, last[2], "flight to the landing point", here)
     c.emitter.land(step.lat, step.lon, where=here)
 
 
@@ -273,13 +287,17 @@ def _lines_step(c: _Compile, step: SurveyStep | CorridorStep, kind: str,
     except PlanError as e:
         raise _relocate(e, here) from None
     first = c.emitter.item_count
-    c.emitter.track(_track(c, step, lines.route, alt, lead), where=c.plan.step_where(step, "trigger"))
+    track = _photos_clear_of_zones(c, step, lines, _track(c, step, lines.route, alt, lead), alt, kind)
+    _check_path_clear_of_zones(c, step, lines, track, kind)
+    _transit_to(c, track.points[0].lat, track.points[0].lon, alt, f"flight to the {kind}'s first line", here)
+    c.emitter.track(track, where=c.plan.step_where(step, "trigger"))
     for w in lines.route.warnings:
         c.warn(w.code, f"{kind} at {here}: {w.message}")
     c.state.areas.append(AreaInfo(
         step=step.index, kind=kind, payloads=step.payloads, area=lines.area, altitude_m=alt,
         front_overlap=step.front_pct / 100.0, side_overlap=step.side_pct / 100.0, trigger=step.trigger,
-        trigger_distance_m=lines.route.trigger_distance_m, items=(first, c.emitter.item_count)))
+        trigger_distance_m=lines.route.trigger_distance_m, items=(first, c.emitter.item_count),
+        zones=_step_zones(c, step, lines, alt)))
     c.state.intent.append(lines.route)
 
 
@@ -363,8 +381,7 @@ def _line_inputs(c: _Compile, step: SurveyStep | CorridorStep, lead: PayloadInfo
 
 
 def _plan_survey_lines(c: _Compile, step: SurveyStep, inputs: _LineInputs) -> _Lines:
-    area = load_area(step.area, exclude=step.exclude, base_dir=c.plan.base_dir,
-                     where=c.plan.step_where(step, "area"))
+    area = area_clear_of(step.area, c.zones, c.plan.base_dir, c.plan.step_where(step, "area"))
     _check_reach(c.plan.home, area.projection.lat0, area.projection.lon0, "area", c.plan.step_where(step))
     route = plan_survey(area, inputs.footprint, step.front_pct, step.side_pct, angle_deg=step.angle_deg,
                         turnaround_m=inputs.turnaround_m, speed_mps=c.speed_mps,
@@ -395,6 +412,109 @@ def _track(c: _Compile, step: SurveyStep | CorridorStep, route: SurveyPlan | Cor
                  interval_s=(route.trigger_distance_m / c.speed_mps),
                  hold_s=max(HOVER_HOLD_S, lead.min_interval_s or 0.0),
                  autopilot_triggers=any(not c.payloads.is_rededge(n) for n in step.payloads))
+
+
+# ------------------------------------------------------------------------------------------------- zones
+
+def _step_footprint(c: _Compile, step: SurveyStep | CorridorStep, alt: float) -> Footprint | None:
+    """The footprint holding every photo the autopilot triggers on the step (the largest across and along of its
+    payloads of known optics), None when it triggers none."""
+    sizes = [c.payloads.optics[n].footprint_m(alt) for n in step.payloads
+             if n in c.payloads.optics and not c.payloads.is_rededge(n)]
+    return Footprint(max(s[0] for s in sizes), max(s[1] for s in sizes)) if sizes else None
+
+
+def _photos_clear_of_zones(c: _Compile, step: SurveyStep | CorridorStep, lines: _Lines, track: Track, alt: float,
+                           kind: str) -> Track:
+    """The track with its camera off wherever a footprint would reach a no-photo or exclude zone (grown by its
+    margin); hover photos there are dropped. Warned, with how many."""
+    photo_zones = [z for z in c.zones if z.keeps_photos_out]
+    fp = _step_footprint(c, step, alt)
+    if not photo_zones or fp is None or not track.autopilot_triggers:
+        return track
+    proj = lines.area.projection
+    forbidden = grown_union(place_zones(photo_zones, proj))
+    points = [CameraPoint(w.x, w.y, w.kind, w.yaw_deg) for w in lines.route.waypoints]
+    cam = keep_photos_out(points, track.spans, forbidden, fp, track.trigger_distance_m, step.trigger == "hover")
+    here = c.plan.step_where(step)
+    if cam.photos_dropped:
+        c.warn("zone_photo_dropped", f"{kind} at {here}: {cam.photos_dropped} hover photo(s) dropped (flown "
+               "through without a photo) because their footprint could reach a no-photo or exclude zone")
+    if cam.stretches_off:
+        c.warn("zone_camera_off", f"{kind} at {here}: the camera is off over {cam.stretches_off} stretch(es) of "
+               "its lines where a footprint would reach a no-photo or exclude zone (DO_SET_CAM_TRIGG_DIST 0, then "
+               "on again past it)")
+    if not cam.photos_dropped and not cam.stretches_off:
+        return track
+    lat, lon = proj.to_latlon([p.x for p in cam.points], [p.y for p in cam.points])
+    pts = tuple(TrackPoint(float(a), float(o), p.kind, p.yaw_deg) for p, a, o in zip(cam.points, lat, lon))
+    return replace(track, points=pts, spans=cam.spans)
+
+
+def _check_path_clear_of_zones(c: _Compile, step: SurveyStep | CorridorStep, lines: _Lines, track: Track,
+                               kind: str) -> None:
+    """A step's own path (lines, turnarounds, connections) must not enter a no-fly or exclude zone."""
+    path_zones = [z for z in c.zones if z.keeps_path_out]
+    if not path_zones:
+        return
+    proj = lines.area.projection
+    x, y = proj.to_xy([p.lat for p in track.points], [p.lon for p in track.points])
+    for pz, metres in path_inside(np.column_stack([x, y]), place_zones(path_zones, proj)):
+        hint = ("a corridor's lines are not routed around zones: move its line or narrow it so the lines keep "
+                "clear of the zone, or make the zone no_photo if it may be flown over") if kind == "corridor" \
+            else "redraw the zone or the area so that a way round the zone is left inside the area"
+        raise PlanError(f"the {kind}'s path runs {metres:.1f} m inside {pz.zone.label}",
+                        where=c.plan.step_where(step), hint=hint)
+
+
+def _transit_to(c: _Compile, lat: float, lon: float, alt: float, what: str, where: str) -> None:
+    """Waypoints round the no-fly and exclude zones between where the vehicle is and (lat, lon), at `alt`."""
+    if c.transits is None:
+        return
+    last = c.emitter.s.last_pos
+    start = last[:2] if last else (c.plan.home.lat, c.plan.home.lon)
+    for la, lo in c.transits.route(start, (lat, lon), what, where):
+        c.emitter.via(la, lo, alt)
+
+
+def _capture_clear_of_zones(c: _Compile, step: WaypointStep) -> str | None:
+    """The waypoint's capture, or None (dropped, warned) when its footprint could reach a no-photo zone."""
+    name = step.capture
+    photo_zones = [z for z in c.zones if z.keeps_photos_out]
+    if name is None or not photo_zones or name not in c.payloads.optics or c.transits is None:
+        return name
+    proj = c.transits.proj
+    fp = Footprint(*c.payloads.optics[name].footprint_m(step.alt_m))
+    x, y = proj.point_to_xy(step.lat, step.lon)
+    for z in place_zones(photo_zones, proj):
+        if capture_reaches(x, y, z.grown, fp):
+            c.warn("zone_photo_dropped", f"waypoint at {c.plan.step_where(step)}: the photo of {name} is dropped "
+                   f"(the waypoint is flown without it): its footprint could reach {z.zone.label}")
+            return None
+    return name
+
+
+def _step_zones(c: _Compile, step: SurveyStep | CorridorStep, lines: _Lines, alt: float) -> StepZones | None:
+    """The zones the report measures against this step: those a footprint from the step's area could reach."""
+    fp = _step_footprint(c, step, alt)
+    if not c.zones:
+        return None
+    reach = max(fp.across_m, fp.along_m) if fp is not None else 0.0
+    near = zones_near(c.zones, lines.area, reach)
+    return StepZones(near, reach) if near else None
+
+
+def _check_rededge_and_zones(plan: Plan, payloads: _Payloads, zones: tuple[Zone, ...]) -> None:
+    """A RedEdge shoots by itself whenever it is at its altitude: it cannot be switched off near a no-photo zone."""
+    photo_zones = [z for z in zones if z.keeps_photos_out]
+    flying = {n for s in plan.mission if isinstance(s, (SurveyStep, CorridorStep)) for n in s.payloads}
+    rededges = [n for n in flying if payloads.is_rededge(n)]
+    if photo_zones and rededges:
+        z = photo_zones[0]
+        raise PlanError(f"{rededges[0]} (a RedEdge) captures by itself in its overlap mode and cannot be switched "
+                        f"off near {z.label}", where=z.where,
+                        hint="fly the RedEdge in a plan without no_photo/exclude zones, or make the zone no_fly "
+                             "if only the flight over it is forbidden")
 
 
 _STEPS: dict[type, Callable[[_Compile, Any], None]] = {
@@ -468,7 +588,10 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     prof = profile(firmware or plan.vehicle.firmware)
     state = _State(warnings=[f"component_id_chosen: {n}" for n in plan.notes])
     payloads = _resolve_payloads(plan, prof, state)
-    c = _Compile(plan, prof, payloads, _emitter(plan, prof, payloads), state)
+    zones = plan_zones(plan)
+    _check_rededge_and_zones(plan, payloads, zones)
+    router = TransitRouter(zones, LocalProjection(plan.home.lat, plan.home.lon)) if zones else None
+    c = _Compile(plan, prof, payloads, _emitter(plan, prof, payloads), state, zones, router)
     _warn_about_the_start(c)
     for step in plan.mission:
         _STEPS[type(step)](c, step)

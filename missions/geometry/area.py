@@ -67,6 +67,8 @@ class Area:
     excluded: Any = None
     # pieces narrower than MIN_PART_WIDTH_M that the exclusions cut off and that were dropped: (count, m²)
     dropped: tuple[int, float] = (0, 0.0)
+    # the polygons as drawn, before the exclusions (and their margin) were taken away; None: not recorded
+    drawn: Any = None
 
     @property
     def area_m2(self) -> float:
@@ -494,8 +496,9 @@ def _polygonal(g: Any) -> Any:
 
 
 def build_area(polygons: Sequence[LatLonPolygon], exclusions: Sequence[LatLonPolygon] = (),
-               source: str = "", projection: LocalProjection | None = None) -> Area:
-    """Project, clean and validate polygons (centring the projection on them), union them, subtract exclusions."""
+               source: str = "", projection: LocalProjection | None = None, margin_m: float = 0.0) -> Area:
+    """Project, clean and validate polygons (centring the projection on them), union them, subtract exclusions
+    grown by `margin_m` (the position error a zone is kept clear by: missions.geometry.zones)."""
     import shapely
     from shapely.geometry.polygon import orient
 
@@ -516,12 +519,15 @@ def build_area(polygons: Sequence[LatLonPolygon], exclusions: Sequence[LatLonPol
     projected = [_project_polygon(p, projection) for p in polygons]
     geom = shapely.union_all(projected) if len(projected) > 1 else projected[0]
     _check_extent(geom, source)
+    drawn = geom
     from shapely.geometry import Polygon
     holes = [Polygon(r) for p in projected for r in p.interiors]
     cut = None
     dropped = (0, 0.0)
     if exclusions:
         cut = shapely.union_all([_project_polygon(e, projection) for e in exclusions])
+        if margin_m > 0:
+            cut = cut.buffer(margin_m, join_style="mitre")
         geom = geom.difference(cut)
         geom, dropped = _drop_slivers(_polygonal(geom), cut)
         if geom.is_empty:
@@ -536,7 +542,7 @@ def build_area(polygons: Sequence[LatLonPolygon], exclusions: Sequence[LatLonPol
         geom = MultiPolygon([orient(g, 1.0) for g in geom.geoms])
     zones = [*holes, *([cut] if cut is not None else [])]
     excluded = (shapely.union_all(zones) if len(zones) > 1 else zones[0]) if zones else Polygon()
-    return Area(geom, projection, source, excluded, dropped)
+    return Area(geom, projection, source, excluded, dropped, drawn)
 
 
 def _drop_slivers(geom: Any, cut: Any) -> tuple[Any, tuple[int, float]]:

@@ -14,6 +14,7 @@ from typing import Any, Callable, Mapping
 
 from cdf.catalogue import catalogue
 from missions.plan.meaning import Resolved
+from missions.plan.schema import ZONE_KINDS
 from missions.plan.types import (CameraStep, CorridorStep, Home, LandStep, Payload, Plan, RtlStep, Step, SurveyStep,
                                  TakeoffStep, Vehicle, WaypointStep)
 
@@ -87,10 +88,16 @@ def _survey(i: int, b: dict, cameras: Mapping[str, Any]) -> SurveyStep:
     return SurveyStep(
         i, _area_value(b["area"]), tuple(b["payloads"]), float(ov["front"]), float(ov["side"]),
         altitude_m=_float_or_none(b, "altitude_m"), gsd_cm=_float_or_none(b, "gsd_cm"),
-        exclude=tuple(_area_value(x) for x in b.get("exclude", ())),
         angle_deg=angle if angle == "auto" else float(angle),
         trigger=b.get("trigger", "distance"), turnaround_m=_float_or_none(b, "turnaround_m"),
-        refly_90=bool(b.get("refly_90", False)))
+        refly_90=bool(b.get("refly_90", False)), **_zone_fields(b))
+
+
+def _zone_fields(b: dict) -> dict[str, Any]:
+    """A survey's or corridor's zones (missions.geometry.zones) as the step's fields."""
+    out: dict[str, Any] = {k: tuple(_area_value(x) for x in b.get(k, ())) for k in ZONE_KINDS}
+    out["zone_margin_m"] = _float_or_none(b, "zone_margin_m")
+    return out
 
 
 def _corridor(i: int, b: dict, cameras: Mapping[str, Any]) -> CorridorStep:
@@ -98,7 +105,8 @@ def _corridor(i: int, b: dict, cameras: Mapping[str, Any]) -> CorridorStep:
     return CorridorStep(
         i, _pairs(b["line"]), float(b["width_m"]), tuple(b["payloads"]), float(ov["front"]), float(ov["side"]),
         altitude_m=_float_or_none(b, "altitude_m"), gsd_cm=_float_or_none(b, "gsd_cm"),
-        trigger=b.get("trigger", "distance"), turnaround_m=_float_or_none(b, "turnaround_m"))
+        trigger=b.get("trigger", "distance"), turnaround_m=_float_or_none(b, "turnaround_m"),
+        **_zone_fields(b))
 
 
 def _waypoint(i: int, b: dict, cameras: Mapping[str, Any]) -> WaypointStep:

@@ -61,6 +61,9 @@ class SurveyStep:
     trigger: str = "distance"
     turnaround_m: float | None = None
     refly_90: bool = False
+    no_fly: tuple[Any, ...] = ()          # zones (missions.geometry.zones): inline points or file paths
+    no_photo: tuple[Any, ...] = ()
+    zone_margin_m: float | None = None    # None: zones.DEFAULT_ZONE_MARGIN_M
 
 
 @dataclass(frozen=True)
@@ -75,6 +78,10 @@ class CorridorStep:
     gsd_cm: float | None = None
     trigger: str = "distance"
     turnaround_m: float | None = None
+    exclude: tuple[Any, ...] = ()
+    no_fly: tuple[Any, ...] = ()
+    no_photo: tuple[Any, ...] = ()
+    zone_margin_m: float | None = None
 
 
 @dataclass(frozen=True)
