@@ -69,6 +69,9 @@ class Area:
     dropped: tuple[int, float] = (0, 0.0)
     # the polygons as drawn, before the exclusions (and their margin) were taken away; None: not recorded
     drawn: Any = None
+    # what the route keeps its turnarounds and connections out of when that is more than `excluded`: the holes and
+    # the exclusions grown by their margin (build_area's margin_m); None: `excluded`
+    keep_out: Any = None
 
     @property
     def area_m2(self) -> float:
@@ -526,10 +529,9 @@ def build_area(polygons: Sequence[LatLonPolygon], exclusions: Sequence[LatLonPol
     dropped = (0, 0.0)
     if exclusions:
         cut = shapely.union_all([_project_polygon(e, projection) for e in exclusions])
-        if margin_m > 0:
-            cut = cut.buffer(margin_m, join_style="mitre")
-        geom = geom.difference(cut)
-        geom, dropped = _drop_slivers(_polygonal(geom), cut)
+        grown = cut.buffer(margin_m, join_style="mitre") if margin_m > 0 else cut
+        geom = geom.difference(grown)
+        geom, dropped = _drop_slivers(_polygonal(geom), grown)
         if geom.is_empty:
             raise PlanError("the area is empty once the exclusion zones are removed", where=source or None,
                             hint="check that the exclusions do not cover the whole area (pieces narrower than "
@@ -542,7 +544,8 @@ def build_area(polygons: Sequence[LatLonPolygon], exclusions: Sequence[LatLonPol
         geom = MultiPolygon([orient(g, 1.0) for g in geom.geoms])
     zones = [*holes, *([cut] if cut is not None else [])]
     excluded = (shapely.union_all(zones) if len(zones) > 1 else zones[0]) if zones else Polygon()
-    return Area(geom, projection, source, excluded, dropped, drawn)
+    keep_out = shapely.union_all([*holes, grown]) if exclusions and margin_m > 0 else None
+    return Area(geom, projection, source, excluded, dropped, drawn, keep_out)
 
 
 def _drop_slivers(geom: Any, cut: Any) -> tuple[Any, tuple[int, float]]:
