@@ -495,13 +495,15 @@ def _capture_clear_of_zones(c: _Compile, step: WaypointStep) -> str | None:
 
 
 def _step_zones(c: _Compile, step: SurveyStep | CorridorStep, lines: _Lines, alt: float) -> StepZones | None:
-    """The zones the report measures against this step: those a footprint from the step's area could reach."""
+    """The zones the report measures against this step: its own, and any other a footprint from its area could
+    reach."""
     fp = _step_footprint(c, step, alt)
     if not c.zones:
         return None
     reach = max(fp.across_m, fp.along_m) if fp is not None else 0.0
-    near = zones_near(c.zones, lines.area, reach)
-    return StepZones(near, reach) if near else None
+    near = set(zones_near(c.zones, lines.area, reach))
+    mine = tuple(z for z in c.zones if z.step == step.index or z in near)
+    return StepZones(mine, reach) if mine else None
 
 
 def _check_rededge_and_zones(plan: Plan, payloads: _Payloads, zones: tuple[Zone, ...]) -> None:
