@@ -40,8 +40,9 @@ from missions.geometry.corridor import CorridorPlan, plan_corridor
 from missions.geometry.footprint import Footprint
 from missions.geometry.geo import MAX_EXTENT_M, LocalProjection
 from missions.geometry.survey import SurveyPlan, plan_survey
-from missions.geometry.zones import (CameraPoint, StepZones, TransitRouter, Zone, area_clear_of, capture_reaches,
-                                     grown_union, keep_photos_out, path_inside, place_zones, plan_zones, zones_near)
+from missions.geometry.zones import (CameraPoint, StepZones, TransitRouter, Zone, ZoneRouter, area_clear_of,
+                                     capture_reaches, grown_union, keep_path_out, keep_photos_out, path_inside,
+                                     place_zones, plan_zones, zones_near)
 from missions.plan.load import (CameraStep, CorridorStep, LandStep, Plan, RtlStep, SurveyStep, TakeoffStep,
                                 WaypointStep, input_files, load_plan)
 from missions.plan.schema import MAX_AGL_M, MAX_ALTITUDE_M, MIN_ALTITUDE_M
@@ -287,7 +288,7 @@ def _lines_step(c: _Compile, step: SurveyStep | CorridorStep, kind: str,
     except PlanError as e:
         raise _relocate(e, here) from None
     first = c.emitter.item_count
-    track = _photos_clear_of_zones(c, step, lines, _track(c, step, lines.route, alt, lead), alt, kind)
+    track = _track_clear_of_zones(c, step, lines, _track(c, step, lines.route, alt, lead), alt, kind)
     _check_path_clear_of_zones(c, step, lines, track, kind)
     _transit_to(c, track.points[0].lat, track.points[0].lon, alt, f"flight to the {kind}'s first line", here)
     c.emitter.track(track, where=c.plan.step_where(step, "trigger"))
@@ -424,31 +425,42 @@ def _step_footprint(c: _Compile, step: SurveyStep | CorridorStep, alt: float) ->
     return Footprint(max(s[0] for s in sizes), max(s[1] for s in sizes)) if sizes else None
 
 
-def _photos_clear_of_zones(c: _Compile, step: SurveyStep | CorridorStep, lines: _Lines, track: Track, alt: float,
-                           kind: str) -> Track:
-    """The track with its camera off wherever a footprint would reach a no-photo or exclude zone (grown by its
-    margin); hover photos there are dropped. Warned, with how many."""
+def _track_clear_of_zones(c: _Compile, step: SurveyStep | CorridorStep, lines: _Lines, track: Track, alt: float,
+                          kind: str) -> Track:
+    """The track kept out of the no-fly and exclude zones (stretches ending at them, hops round them) and with its
+    camera off wherever a footprint would reach a no-photo or exclude zone (grown by its margin); hover photos in
+    either are dropped. Warned, with how many."""
+    path_zones = [z for z in c.zones if z.keeps_path_out]
     photo_zones = [z for z in c.zones if z.keeps_photos_out]
-    fp = _step_footprint(c, step, alt)
-    if not photo_zones or fp is None or not track.autopilot_triggers:
+    if not path_zones and not photo_zones:
         return track
     proj = lines.area.projection
-    forbidden = grown_union(place_zones(photo_zones, proj))
-    points = [CameraPoint(w.x, w.y, w.kind, w.yaw_deg) for w in lines.route.waypoints]
-    cam = keep_photos_out(points, track.spans, forbidden, fp, track.trigger_distance_m, step.trigger == "hover")
     here = c.plan.step_where(step)
-    if cam.photos_dropped:
-        c.warn("zone_photo_dropped", f"{kind} at {here}: {cam.photos_dropped} hover photo(s) dropped (flown "
-               "through without a photo) because their footprint could reach a no-photo or exclude zone")
-    if cam.stretches_off:
-        c.warn("zone_camera_off", f"{kind} at {here}: the camera is off over {cam.stretches_off} stretch(es) of "
-               "its lines where a footprint would reach a no-photo or exclude zone (DO_SET_CAM_TRIGG_DIST 0, then "
-               "on again past it)")
-    if not cam.photos_dropped and not cam.stretches_off:
+    start = tuple(CameraPoint(w.x, w.y, w.kind, w.yaw_deg) for w in lines.route.waypoints)
+    points, spans, dropped = start, tuple(track.spans), 0
+    if path_zones:
+        cam = keep_path_out(points, spans, ZoneRouter(place_zones(path_zones, proj)), f"{kind}'s path", here)
+        if cam.points != points:
+            c.warn("zone_detour", f"{kind} at {here}: its lines stop at no-fly or exclude zones (grown by their "
+                   "margin) and its hops go round them")
+        points, spans, dropped = cam.points, cam.spans, cam.photos_dropped
+    fp = _step_footprint(c, step, alt)
+    if photo_zones and fp is not None and track.autopilot_triggers:
+        forbidden = grown_union(place_zones(photo_zones, proj))
+        cam = keep_photos_out(points, spans, forbidden, fp, track.trigger_distance_m, step.trigger == "hover")
+        if cam.stretches_off:
+            c.warn("zone_camera_off", f"{kind} at {here}: the camera is off over {cam.stretches_off} stretch(es) "
+                   "of its lines where a footprint would reach a no-photo or exclude zone (DO_SET_CAM_TRIGG_DIST 0, "
+                   "then on again past it)")
+        points, spans, dropped = cam.points, cam.spans, dropped + cam.photos_dropped
+    if dropped:
+        c.warn("zone_photo_dropped", f"{kind} at {here}: {dropped} hover photo(s) dropped (flown through or left "
+               "out without a photo) because their footprint could reach a no-photo zone or they lie in a no-fly one")
+    if points == start and spans == tuple(track.spans):
         return track
-    lat, lon = proj.to_latlon([p.x for p in cam.points], [p.y for p in cam.points])
-    pts = tuple(TrackPoint(float(a), float(o), p.kind, p.yaw_deg) for p, a, o in zip(cam.points, lat, lon))
-    return replace(track, points=pts, spans=cam.spans)
+    lat, lon = proj.to_latlon([p.x for p in points], [p.y for p in points])
+    pts = tuple(TrackPoint(float(a), float(o), p.kind, p.yaw_deg) for p, a, o in zip(points, lat, lon))
+    return replace(track, points=pts, spans=spans)
 
 
 def _check_path_clear_of_zones(c: _Compile, step: SurveyStep | CorridorStep, lines: _Lines, track: Track,

@@ -400,49 +400,140 @@ def path_inside(xy: np.ndarray, zones: Sequence[PlacedZone]) -> list[tuple[Place
     return out
 
 
-class TransitRouter:
-    """Transits around the plan's no-fly and exclude zones, in one projection (the plan's home)."""
+class ZoneRouter:
+    """The shortest way between two points round no-fly and exclude zones placed in one projection's metres."""
 
-    def __init__(self, zones: Sequence[Zone], proj: LocalProjection) -> None:
-        self.proj = proj
-        self.zones = place_zones([z for z in zones if z.keeps_path_out], proj)
+    def __init__(self, placed: Sequence[PlacedZone]) -> None:
+        self.zones = [z for z in placed if z.zone.keeps_path_out]
 
-    def route(self, a_ll: tuple[float, float], b_ll: tuple[float, float], what: str,
-              where: str | None) -> list[tuple[float, float]]:
-        """The (lat, lon) points between a and b of the shortest way round the zones ([] when straight is clear)."""
+    def way_round(self, a: tuple[float, float], b: tuple[float, float], what: str,
+                  where: str | None) -> list[tuple[float, float]]:
+        """The points between a and b of the shortest way round the zones grown by their margin ([] when the
+        straight way keeps clear of them). An end inside a zone as drawn, or no way round, is a PlanError."""
         if not self.zones:
             return []
         from shapely.geometry import LineString, Point
-        a = tuple(float(v) for v in self.proj.point_to_xy(*a_ll))
-        b = tuple(float(v) for v in self.proj.point_to_xy(*b_ll))
-        for end, name in ((a, "starts"), (b, "ends")):
+        for end, verb in ((a, "starts"), (b, "ends")):
             for z in self.zones:
                 if z.drawn.buffer(-ZONE_EDGE_TOL_M).contains(Point(end)):
-                    raise PlanError(f"the {what} {name} inside {z.zone.label}", where=where,
+                    raise PlanError(f"the {what} {verb} inside {z.zone.label}", where=where,
                                     hint="move the point out of the zone, or redraw the zone")
         straight = LineString([a, b])
         near = [z for z in self.zones if z.grown.distance(straight) < _TRANSIT_CORRIDOR_M]
-        if not any(z.grown.intersects(straight) for z in near):
+        if not any(z.grown.buffer(-ZONE_EDGE_TOL_M).intersects(straight) for z in near):
             return []
-        xy = self._around(a, b, near, what, where)
-        lat, lon = self.proj.to_latlon([p[0] for p in xy], [p[1] for p in xy]) if xy else ([], [])
-        return list(zip(np.asarray(lat).tolist(), np.asarray(lon).tolist()))
+        return self._around(a, b, near, what, where)
 
-    def _around(self, a: tuple[float, float], b: tuple[float, float], near: list[PlacedZone], what: str,
+    @staticmethod
+    def _around(a: tuple[float, float], b: tuple[float, float], near: list[PlacedZone], what: str,
                 where: str | None) -> list[tuple[float, float]]:
         from shapely.geometry import LineString, Point, box
         keep_out = _union([z.grown.buffer(_ROUTE_CLEARANCE_M, join_style="mitre") for z in near])
         x0, y0, x1, y1 = keep_out.union(LineString([a, b])).bounds
         free = box(x0 - _DETOUR_BOX_M, y0 - _DETOUR_BOX_M, x1 + _DETOUR_BOX_M, y1 + _DETOUR_BOX_M).difference(keep_out)
-        # the free piece holding both ends (a zone ring or touching zones can enclose ground)
-        piece = next((g for g in leaf_parts(free, "Polygon")
-                      if g.distance(Point(a)) < _ROUTE_CLEARANCE_M * 2 + 1e-6
-                      and g.distance(Point(b)) < _ROUTE_CLEARANCE_M * 2 + 1e-6), None)
-        path = _InsidePaths(piece).path(a, b) if piece is not None else None
+        # the free piece nearest both ends (a zone ring or touching zones can enclose ground); an end within the
+        # margin is joined to it straight (it is outside the zone as drawn)
+        pieces = list(leaf_parts(free, "Polygon"))
+        pa = min(pieces, key=lambda g: g.distance(Point(a)), default=None)
+        pb = min(pieces, key=lambda g: g.distance(Point(b)), default=None)
+        path = _InsidePaths(pa).path(a, b) if pa is not None and pa is pb else None
         if path is None:
-            blocking = [z for z in near if z.grown.intersects(LineString([a, b]))]
+            blocking = [z for z in near if z.grown.intersects(LineString([a, b]))] or near
             names = ", ".join(z.zone.label for z in blocking)
             raise PlanError(f"the {what} cannot be routed around {names}", where=where,
                             hint="leave a way round the zone (zones that touch or enclose ground close it), "
                                  "simplify the zone (at most a few hundred vertices), or move the step")
         return path
+
+
+class TransitRouter:
+    """Transits round the plan's no-fly and exclude zones, in one projection (the plan's home)."""
+
+    def __init__(self, zones: Sequence[Zone], proj: LocalProjection) -> None:
+        self.proj = proj
+        self.router = ZoneRouter(place_zones([z for z in zones if z.keeps_path_out], proj))
+
+    def route(self, a_ll: tuple[float, float], b_ll: tuple[float, float], what: str,
+              where: str | None) -> list[tuple[float, float]]:
+        """The (lat, lon) points between a and b of the shortest way round the zones ([] when straight is clear)."""
+        if not self.router.zones:
+            return []
+        a = tuple(float(v) for v in self.proj.point_to_xy(*a_ll))
+        b = tuple(float(v) for v in self.proj.point_to_xy(*b_ll))
+        xy = self.router.way_round(a, b, what, where)  # type: ignore[arg-type]
+        if not xy:
+            return []
+        lat, lon = self.proj.to_latlon([p[0] for p in xy], [p[1] for p in xy])
+        return list(zip(np.asarray(lat).tolist(), np.asarray(lon).tolist()))
+
+
+def keep_path_out(points: Sequence[CameraPoint], spans: Sequence[tuple[int, int]], router: ZoneRouter,
+                  what: str, where: str | None) -> CameraPlan:
+    """`points`/`spans` (a step's track in metres) kept out of the router's no-fly and exclude zones grown by their
+    margin: a camera-on stretch that runs into one (a leg extended past the area's edge to finish its photo grid)
+    ends at the zone, points inside are left out (a hover photo there is dropped), and every hop that would cross
+    a zone goes round it."""
+    if not router.zones:
+        return CameraPlan(tuple(points), tuple(spans), 0, 0)
+    grown = _union([z.grown for z in router.zones])
+    cut, cut_spans = _cut_spans_at(points, spans, grown)
+    return _route_hops(cut, cut_spans, grown, router, what, where)
+
+
+def _cut_spans_at(points: Sequence[CameraPoint], spans: Sequence[tuple[int, int]],
+                  grown: Any) -> tuple[list[CameraPoint], list[tuple[int, int]]]:
+    """The camera-on spans less their stretches inside `grown`."""
+    starts = {a: b for a, b in spans}
+    out: list[CameraPoint] = []
+    new_spans: list[tuple[int, int]] = []
+    i = 0
+    while i < len(points):
+        if i not in starts:
+            out.append(points[i])
+            i += 1
+            continue
+        a, b = i, starts[i]
+        seg = points[a:b + 1]
+        line = _Polyline(np.array([(p.x, p.y) for p in seg], dtype=float))
+        bad = [(line.s[k] + t0, line.s[k] + t1) for k in range(len(seg) - 1)
+               for t0, t1 in _bad_stretches(line.xy[k], line.xy[k + 1], grown)]
+        on, pos = [], 0.0
+        for x0, x1 in _merge(bad):
+            if x0 > pos + 1e-6:
+                on.append((pos, x0))
+            pos = max(pos, x1)
+        if pos < line.length - 1e-6:
+            on.append((pos, line.length))
+        if on == [(0.0, line.length)] or not bad:
+            new_spans.append((len(out), len(out) + b - a))
+            out.extend(seg)
+        else:
+            _split_span(seg, line, on, out, new_spans)
+        i = b + 1
+    return out, new_spans
+
+
+def _route_hops(points: list[CameraPoint], spans: list[tuple[int, int]], grown: Any, router: ZoneRouter,
+                what: str, where: str | None) -> CameraPlan:
+    """Points inside `grown` left out (unless they open or close a span), hops between the others routed round."""
+    from shapely.geometry import Point
+    core = grown.buffer(-ZONE_EDGE_TOL_M, join_style="mitre")
+    ends = {k for ab in spans for k in ab}
+    span_of = {a: b for a, b in spans}
+    out: list[CameraPoint] = []
+    index: dict[int, int] = {}
+    dropped = 0
+    camera_until = -1
+    for k, p in enumerate(points):
+        if k not in ends and core.contains(Point(p.x, p.y)):
+            dropped += p.kind == "photo"
+            continue
+        if out and k > camera_until:
+            for x, y in router.way_round((out[-1].x, out[-1].y), (p.x, p.y), what, where):
+                out.append(CameraPoint(x, y, "via"))
+        index[k] = len(out)
+        out.append(p)
+        if k in span_of:
+            camera_until = span_of[k]
+    new_spans = tuple((index[a], index[b]) for a, b in spans)
+    return CameraPlan(tuple(out), new_spans, 0, dropped)

@@ -194,14 +194,32 @@ def test_a_no_fly_zone_round_home_cannot_be_avoided(tmp_path):
     assert "zones.yaml:" in e.value.message and e.value.hint
 
 
-def test_a_corridor_line_through_a_no_fly_zone_is_an_error_naming_it(tmp_path):
+def test_a_corridor_across_a_no_fly_zone_goes_round_it_with_the_camera_off(tmp_path):
+    zone = [[50.0999, 14.5014], [50.0999, 14.5016], [50.1001, 14.5016], [50.1001, 14.5014]]
     corridor = {"corridor": {"line": [[50.1000, 14.5000], [50.1000, 14.5030]], "width_m": 40,
                              "payloads": ["thermal"], "altitude_m": 40, "overlap": {"front": 80, "side": 60},
-                             "no_fly": [[[49.9999, 14.5014], [49.9999, 14.5016], [50.1001, 14.5016],
-                                         [50.1001, 14.5014]]]}}
+                             "no_fly": [zone]}}
+    c, _ = _compile(tmp_path, [corridor])
+    rep = report(c)
+    (row,) = rep.areas[0].zones
+    # photos may see a no-fly zone: the lines beside it do
+    assert row.kind == "no_fly" and row.flown_inside_m == 0.0 and row.photographed_m2 > 0
+    assert any(w.code == "zone_detour" for w in c.warnings)
+    sim = simulate(c)
+    x, y = sim.projection.to_xy([p[0] for p in zone], [p[1] for p in zone])
+    core = Polygon(list(zip(x, y))).buffer(-0.05)
+    assert shapely.LineString(sim.xy).intersection(core).length == 0.0
+
+
+def test_a_way_round_that_does_not_exist_is_an_error_naming_the_zone(tmp_path):
+    # a no-fly ring round the whole field: its lines cannot be reached from home
+    outer = [[50.0996, 14.4990], [50.0996, 14.5040], [50.1024, 14.5040], [50.1024, 14.4990]]
+    inner = [[50.0998, 14.4995], [50.0998, 14.5035], [50.1022, 14.5035], [50.1022, 14.4995]]
+    (tmp_path / "ring.geojson").write_text(json.dumps({"type": "Polygon", "coordinates": [
+        [[lon, lat] for lat, lon in outer + outer[:1]], [[lon, lat] for lat, lon in inner[::-1] + inner[-1:]]]}))
     with pytest.raises(PlanError) as e:
-        _compile(tmp_path, [corridor])
-    assert "corridor's path runs" in e.value.message and "no_fly zone" in e.value.message and e.value.hint
+        _compile(tmp_path, [_survey(no_fly=["ring.geojson"])])
+    assert "cannot be routed around no_fly zone 'ring.geojson'" in e.value.message and e.value.hint
 
 
 def test_a_corridor_keeps_its_photos_out_of_a_no_photo_zone(tmp_path):
