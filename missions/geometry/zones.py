@@ -53,6 +53,9 @@ _TRANSIT_CORRIDOR_M = 2_000.0
 _NEAR_AREA_M = 1_000.0
 # Free space for a detour: the box around the ends and the zones, this much bigger on every side.
 _DETOUR_BOX_M = 100.0
+# A zone of more vertices is routed round a simpler outline containing it (_routable), by this much.
+_ROUTE_VERTICES = 60
+_SIMPLIFY_M = 1.0
 # A way round is taken this much outside the grown zones, so that a path along one's edge is beside it.
 _ROUTE_CLEARANCE_M = 0.1
 
@@ -400,6 +403,15 @@ def path_inside(xy: np.ndarray, zones: Sequence[PlacedZone]) -> list[tuple[Place
     return out
 
 
+def _routable(grown: Any) -> Any:
+    """`grown`, or for a zone of many vertices (a circle drawn as hundreds of points) a simpler outline that
+    contains it (simplified by 1 m, grown by 1 m): the way-round graph holds a few hundred vertices at most."""
+    n = sum(len(r.coords) for p in leaf_parts(grown, "Polygon") for r in (p.exterior, *p.interiors))
+    if n <= _ROUTE_VERTICES:
+        return grown
+    return grown.simplify(_SIMPLIFY_M).buffer(_SIMPLIFY_M, join_style="mitre")
+
+
 class ZoneRouter:
     """The shortest way between two points round no-fly and exclude zones placed in one projection's metres."""
 
@@ -419,16 +431,23 @@ class ZoneRouter:
                     raise PlanError(f"the {what} {verb} inside {z.zone.label}", where=where,
                                     hint="move the point out of the zone, or redraw the zone")
         straight = LineString([a, b])
-        near = [z for z in self.zones if z.grown.distance(straight) < _TRANSIT_CORRIDOR_M]
-        if not any(z.grown.buffer(-ZONE_EDGE_TOL_M).intersects(straight) for z in near):
+        if not any(z.grown.buffer(-ZONE_EDGE_TOL_M).intersects(straight) for z in self.zones):
             return []
-        return self._around(a, b, near, what, where)
+        near = [z for z in self.zones if z.grown.distance(straight) < _TRANSIT_CORRIDOR_M]
+        # a way round the near zones may run into a farther one: then route round that one too
+        while True:
+            path = self._around(a, b, near, what, where)
+            way = LineString([a, *path, b])
+            more = [z for z in self.zones if z not in near and z.grown.buffer(-ZONE_EDGE_TOL_M).intersects(way)]
+            if not more:
+                return path
+            near += more
 
     @staticmethod
     def _around(a: tuple[float, float], b: tuple[float, float], near: list[PlacedZone], what: str,
                 where: str | None) -> list[tuple[float, float]]:
         from shapely.geometry import LineString, Point, box
-        keep_out = _union([z.grown.buffer(_ROUTE_CLEARANCE_M, join_style="mitre") for z in near])
+        keep_out = _union([_routable(z.grown).buffer(_ROUTE_CLEARANCE_M, join_style="mitre") for z in near])
         x0, y0, x1, y1 = keep_out.union(LineString([a, b])).bounds
         free = box(x0 - _DETOUR_BOX_M, y0 - _DETOUR_BOX_M, x1 + _DETOUR_BOX_M, y1 + _DETOUR_BOX_M).difference(keep_out)
         # the free piece nearest both ends (a zone ring or touching zones can enclose ground); an end within the

@@ -267,3 +267,24 @@ def test_bad_zone_keys_exit_1_located_and_write_nothing(tmp_path, key):
     assert "Traceback" not in r.output and f"{path.name}:" in r.output and "hint:" in r.output
     assert fragment in r.output
     assert list(out.iterdir()) == []
+
+
+def test_a_round_no_fly_zone_of_many_vertices_is_still_gone_round(tmp_path):
+    # a 30 m circle drawn with 720 points between home and the field: routed round a simpler outline containing it
+    import math
+    ring = [[50.0992 + 0.00027 * math.sin(t), 14.5015 + 0.00042 * math.cos(t)]
+            for t in (2 * math.pi * k / 720 for k in range(720))]
+    north = {"waypoint": {"lat": 50.1000, "lon": 14.5015, "alt_m": 40}}    # home, the circle, this: one line
+    c, _ = _compile(tmp_path, [north, _survey(no_fly=[ring])])
+    (row,) = report(c).areas[0].zones
+    assert row.flown_inside_m == 0.0
+    assert any(it.comment.startswith("via") for it in c.items)
+
+
+def test_a_fixed_wing_is_told_to_shrink_its_acceptance_radius(tmp_path):
+    doc = _doc([_survey(no_photo=[MIDDLE], turnaround_m=30, altitude_m=100, overlap={"front": 60, "side": 60})])
+    doc["vehicle"] = {"firmware": "px4", "frame": "vtol", "speed_mps": 9}
+    path = _write(tmp_path, doc)
+    c = compile_plan(parse_plan(path.read_text(), str(path), tmp_path))
+    w = next(w for w in c.warnings if w.code == "zone_camera_off")
+    assert "NAV_ACC_RAD" in w.message and "WP_RADIUS" in w.message
