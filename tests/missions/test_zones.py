@@ -288,3 +288,15 @@ def test_a_fixed_wing_is_told_to_shrink_its_acceptance_radius(tmp_path):
     c = compile_plan(parse_plan(path.read_text(), str(path), tmp_path))
     w = next(w for w in c.warnings if w.code == "zone_camera_off")
     assert "NAV_ACC_RAD" in w.message and "WP_RADIUS" in w.message
+
+
+@pytest.mark.parametrize("extra,fragment", [({"exclude": 5}, "exclude"), ({"no_photo": ["gone.kml"]}, "gone.kml"),
+                                            ({"zone_margin_m": 1000}, "zone_margin_m")])
+def test_bad_zone_keys_of_a_corridor_exit_1_located(tmp_path, extra, fragment):
+    corridor = {"corridor": {"line": [[50.1000, 14.5000], [50.1000, 14.5030]], "width_m": 40,
+                             "payloads": ["thermal"], "altitude_m": 40, "overlap": {"front": 80, "side": 60}, **extra}}
+    path = _write(tmp_path, _doc([corridor]))
+    out = tmp_path / "out"
+    r = CliRunner().invoke(cli, ["mission", "compile", str(path), "-o", str(out)])
+    assert r.exit_code == 1 and f"{path.name}:" in r.output and fragment in r.output and "hint:" in r.output
+    assert not out.exists() or list(out.iterdir()) == []
