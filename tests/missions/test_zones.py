@@ -10,6 +10,7 @@ import json
 from pathlib import Path
 
 from click.testing import CliRunner
+import numpy as np
 import pytest
 import shapely
 from shapely.geometry import Polygon
@@ -300,3 +301,44 @@ def test_bad_zone_keys_of_a_corridor_exit_1_located(tmp_path, extra, fragment):
     r = CliRunner().invoke(cli, ["mission", "compile", str(path), "-o", str(out)])
     assert r.exit_code == 1 and f"{path.name}:" in r.output and fragment in r.output and "hint:" in r.output
     assert not out.exists() or list(out.iterdir()) == []
+
+
+# ------------------------------------------------------------------------------------------------ property
+
+from hypothesis import given, settings, strategies as st  # noqa: E402
+
+from missions.geometry.footprint import Footprint  # noqa: E402
+from missions.geometry.zones import CameraPoint, keep_photos_out  # noqa: E402
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.floats(-60, 60), st.floats(-60, 60), st.floats(5, 40), st.floats(5, 40), st.floats(0, 179),
+       st.floats(3, 12), st.integers(1, 3))
+def test_no_position_with_the_camera_on_sees_the_zone(zx, zy, zw, zh, heading, trig, lines):
+    # straight lines across a square with a rectangular zone somewhere: wherever the camera is on (not only where
+    # the photos fall), a footprint along the line keeps clear of the zone
+    import math
+    fp = Footprint(20.0, 16.0)
+    zone = shapely.box(zx, zy, zx + zw, zy + zh)
+    d = (math.sin(math.radians(heading)), math.cos(math.radians(heading)))
+    n = (d[1], -d[0])
+    points, spans = [], []
+    for k in range(lines):
+        o = (k - lines // 2) * 15.0
+        a = (-100 * d[0] + o * n[0], -100 * d[1] + o * n[1])
+        b = (100 * d[0] + o * n[0], 100 * d[1] + o * n[1])
+        spans.append((len(points), len(points) + 1))
+        points += [CameraPoint(*a, "entry"), CameraPoint(*b, "exit")]
+    cam = keep_photos_out(points, spans, zone, fp, trig, hover=False)
+    centres = []
+    for s0, s1 in cam.spans:
+        line = np.array([(p.x, p.y) for p in cam.points[s0:s1 + 1]])
+        for a, b in zip(line[:-1], line[1:]):
+            t = np.linspace(0, 1, max(2, int(np.hypot(*(b - a)) / 0.25)))[:, None]
+            centres.append(a + (b - a) * t)
+    if not centres:
+        return
+    c = np.concatenate(centres)
+    da, dc = np.array(d) * fp.along_m / 2, np.array(n) * fp.across_m / 2
+    rings = np.stack([c - da - dc, c + da - dc, c + da + dc, c - da + dc, c - da - dc], axis=1)
+    assert shapely.area(shapely.intersection(shapely.polygons(rings), zone)).max() < 1e-6
