@@ -256,31 +256,47 @@ class _Polyline:
         return self.xy[k] + (self.xy[k + 1] - self.xy[k]) * t
 
 
-def _good_stretches(line: _Polyline, forbidden: Any, fp: Footprint) -> list[tuple[float, float]]:
-    """[s0, s1] of the span where every photo's footprint keeps clear of `forbidden` (distance along it)."""
-    import shapely
-    bad: list[tuple[float, float]] = []
-    cache: dict[float, Any] = {}
-    half_diag = math.hypot(fp.across_m, fp.along_m) / 2.0
-    for k in range(len(line.xy) - 1):
-        a, b = line.xy[k], line.xy[k + 1]
-        if np.hypot(*(b - a)) < 1e-9:
-            continue
-        from shapely.geometry import LineString
-        if not shapely.dwithin(LineString([a, b]), forbidden, half_diag):
-            continue
-        heading = round(math.degrees(math.atan2(b[0] - a[0], b[1] - a[1])) % 180.0, 6)
-        if heading not in cache:
-            cache[heading] = reach_of(forbidden, fp, heading)
-        bad.extend((line.s[k] + t0, line.s[k] + t1) for t0, t1 in _bad_stretches(a, b, cache[heading]))
+def _complement(bad: list[tuple[float, float]], length: float) -> list[tuple[float, float]]:
+    """[0, length] less the stretches `bad`, in order (a stretch of no length, a touch, takes nothing away)."""
+    bad = [(a, b) for a, b in bad if b - a > 1e-6]
     good, pos = [], 0.0
     for a, b in _merge(bad):
-        if a > pos + 1e-9:
+        if a > pos + 1e-6:
             good.append((pos, a))
         pos = max(pos, b)
-    if pos < line.length - 1e-9 or not bad:
-        good.append((pos, line.length))
+    if pos < length - 1e-6 or not bad:
+        good.append((pos, length))
     return good
+
+
+class _Reach:
+    """`reach_of` the forbidden ground by footprint heading, each computed once (a survey's lines share a few)."""
+
+    def __init__(self, forbidden: Any, fp: Footprint) -> None:
+        self.forbidden = forbidden
+        self.fp = fp
+        self.half_diag = math.hypot(fp.across_m, fp.along_m) / 2.0
+        self.by_heading: dict[float, Any] = {}
+
+    def of(self, heading_deg: float) -> Any:
+        h = round(heading_deg % 180.0, 6)      # the rectangle is symmetric: a heading and its reverse alike
+        if h not in self.by_heading:
+            self.by_heading[h] = reach_of(self.forbidden, self.fp, h)
+        return self.by_heading[h]
+
+
+def _good_stretches(line: _Polyline, reach: _Reach) -> list[tuple[float, float]]:
+    """[s0, s1] of the span where every photo's footprint keeps clear of the forbidden ground (distance along it)."""
+    import shapely
+    from shapely.geometry import LineString
+    bad: list[tuple[float, float]] = []
+    for k in range(len(line.xy) - 1):
+        a, b = line.xy[k], line.xy[k + 1]
+        if np.hypot(*(b - a)) < 1e-9 or not shapely.dwithin(LineString([a, b]), reach.forbidden, reach.half_diag):
+            continue
+        heading = math.degrees(math.atan2(b[0] - a[0], b[1] - a[1]))
+        bad.extend((line.s[k] + t0, line.s[k] + t1) for t0, t1 in _bad_stretches(a, b, reach.of(heading)))
+    return _complement(bad, line.length)
 
 
 def _camera_on_stretches(line: _Polyline, good: list[tuple[float, float]], trigger_m: float,
@@ -309,6 +325,7 @@ def keep_photos_out(points: Sequence[CameraPoint], spans: Sequence[tuple[int, in
     if hover:
         return _hover_photos_out(points, spans, forbidden, fp)
     exit_margin = min(DEFAULT_EXIT_MARGIN_M, 0.45 * trigger_m)
+    reach = _Reach(forbidden, fp)
     starts = {a: b for a, b in spans}
     out: list[CameraPoint] = []
     new_spans: list[tuple[int, int]] = []
@@ -322,7 +339,7 @@ def keep_photos_out(points: Sequence[CameraPoint], spans: Sequence[tuple[int, in
         a, b = i, starts[i]
         seg = points[a:b + 1]
         line = _Polyline(np.array([(p.x, p.y) for p in seg], dtype=float))
-        on = _camera_on_stretches(line, _good_stretches(line, forbidden, fp), trigger_m, exit_margin)
+        on = _camera_on_stretches(line, _good_stretches(line, reach), trigger_m, exit_margin)
         if on == [(0.0, line.length)]:
             new_spans.append((len(out), len(out) + b - a))
             out.extend(seg)
@@ -516,14 +533,8 @@ def _cut_spans_at(points: Sequence[CameraPoint], spans: Sequence[tuple[int, int]
         line = _Polyline(np.array([(p.x, p.y) for p in seg], dtype=float))
         bad = [(line.s[k] + t0, line.s[k] + t1) for k in range(len(seg) - 1)
                for t0, t1 in _bad_stretches(line.xy[k], line.xy[k + 1], grown)]
-        on, pos = [], 0.0
-        for x0, x1 in _merge(bad):
-            if x0 > pos + 1e-6:
-                on.append((pos, x0))
-            pos = max(pos, x1)
-        if pos < line.length - 1e-6:
-            on.append((pos, line.length))
-        if on == [(0.0, line.length)] or not bad:
+        on = _complement(bad, line.length)
+        if not bad:
             new_spans.append((len(out), len(out) + b - a))
             out.extend(seg)
         else:
