@@ -19,9 +19,12 @@ with a fresh reference position and one shot) RESUME_MARGIN_M past the first goo
 DO item once the waypoint before it is accepted, which ArduCopter does up to WPNAV_RADIUS (2 m) early. A hover stop
 whose footprint, at any heading, could reach such a zone is dropped (flown through without a photo).
 
-Transits (`TransitRouter`): the straight way between two points, or when it crosses a no-fly or exclude zone grown by
-its margin, the shortest way around them (visibility graph over the grown zones' vertices); a zone that cannot be
-avoided (one of the ends inside it, or no way round) is a PlanError naming it.
+The path (`keep_path_out`, `area_clear_of`): a survey's lines are laid on its area less the no-fly and exclude zones
+grown by their margin; a camera-on stretch its photo grid extends into one ends at it, points inside are left out,
+and every hop that would cross one goes round it (`ZoneRouter`). Transits (`TransitRouter`: to the first line,
+between steps, home): the straight way, or when it crosses a grown no-fly or exclude zone, the shortest way round
+them (visibility graph over the grown zones' vertices, route._InsidePaths). A zone that cannot be avoided (an end
+inside it, or no way round) is a PlanError naming it.
 """
 
 from __future__ import annotations
