@@ -22,6 +22,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 import math
 from pathlib import Path
+
+import numpy as np
 from typing import Any, Callable, NamedTuple
 
 from cdf.catalogue import catalogue
@@ -35,11 +37,14 @@ from missions.emit.params import Param, autopilot_params
 from missions.emit.setup import RedEdgeSurvey, setup_steps
 from missions.errors import PlanError, Problem
 from missions.geometry import optics, survey
-from missions.geometry.area import Area, load_area
+from missions.geometry.area import Area
 from missions.geometry.corridor import CorridorPlan, plan_corridor
 from missions.geometry.footprint import Footprint
-from missions.geometry.geo import MAX_EXTENT_M
+from missions.geometry.geo import MAX_EXTENT_M, LocalProjection
 from missions.geometry.survey import SurveyPlan, plan_survey
+from missions.geometry.zones import (RESUME_MARGIN_M, CameraPoint, StepZones, TransitRouter, Zone, ZoneRouter, area_clear_of,
+                                     capture_reaches, grown_union, keep_path_out, keep_photos_out, path_inside,
+                                     place_zones, plan_zones, zones_near)
 from missions.plan.load import (CameraStep, CorridorStep, LandStep, Plan, RtlStep, SurveyStep, TakeoffStep,
                                 WaypointStep, input_files, load_plan_partly, raise_problems)
 from missions.plan.meaning import Ceiling, ceiling_problem
@@ -99,7 +104,6 @@ class _State:
     areas: list[AreaInfo] = field(default_factory=list)
     intent: list[SurveyPlan | CorridorPlan] = field(default_factory=list)
     patterns: list[TransectPattern] = field(default_factory=list)
-    fence_zones: list[Area] = field(default_factory=list)     # zones the vehicle must not enter, as drawn
     altitudes: list[_Altitude] = field(default_factory=list)
     rededge_flights: dict[str, list[_RedEdgeFlight]] = field(default_factory=dict)
     rededge_checks: list[_RedEdgeCheck] = field(default_factory=list)
@@ -118,6 +122,8 @@ class _Compile:
     emitter: Emitter
     state: _State
     speed_mps: float                         # the plan's, or the one `auto` chose (`_mission_speed`)
+    zones: tuple[Zone, ...] = ()             # every zone of the plan (missions.geometry.zones.plan_zones)
+    transits: TransitRouter | None = None    # routes the flight between steps around the no-fly zones
 
     def warn(self, code: str, message: str) -> None:
         self.state.warnings.append(PlanWarning(code, message))
@@ -232,7 +238,8 @@ def _takeoff(c: _Compile, step: TakeoffStep) -> None:
 
 def _waypoint(c: _Compile, step: WaypointStep) -> None:
     _check_reach(c.plan.home, step.lat, step.lon, "waypoint", c.plan.step_where(step))
-    c.emitter.waypoint(step.lat, step.lon, step.alt_m, step.hold_s, step.capture,
+    _transit_to(c, step.lat, step.lon, step.alt_m, "flight to this waypoint", c.plan.step_where(step))
+    c.emitter.waypoint(step.lat, step.lon, step.alt_m, step.hold_s, _capture_clear_of_zones(c, step),
                        where=c.plan.step_where(step, "capture"))
     c.state.altitudes.append(_Altitude(step.alt_m, c.plan.step_where(step, "alt_m")))
 
@@ -243,6 +250,10 @@ def _camera(c: _Compile, step: CameraStep) -> None:
 
 
 def _rtl(c: _Compile, step: RtlStep) -> None:
+    last = c.emitter.s.last_pos
+    if last is not None:
+        # the vehicle flies home straight from where it is: from the last way round the zones, that is clear
+        _transit_to(c, c.plan.home.lat, c.plan.home.lon, last[2], "return home", c.plan.step_where(step))
     c.emitter.rtl()
 
 
@@ -250,6 +261,9 @@ def _land(c: _Compile, step: LandStep) -> None:
     here = c.plan.step_where(step)
     if step.lat is not None:
         _check_reach(c.plan.home, step.lat, step.lon, "landing point", here)
+        last = c.emitter.s.last_pos
+        if last is not None:
+            _transit_to(c, step.lat, step.lon, last[2], "flight to the landing point", here)
     c.emitter.land(step.lat, step.lon, where=here)
 
 
@@ -282,13 +296,17 @@ def _lines_step(c: _Compile, step: SurveyStep | CorridorStep, kind: str,
     except PlanError as e:
         raise _relocate(e, here) from None
     first = c.emitter.item_count
-    c.emitter.track(_track(c, step, lines.route, alt, lead), where=c.plan.step_where(step, "trigger"))
+    track = _track_clear_of_zones(c, step, lines, _track(c, step, lines.route, alt, lead), alt, kind)
+    _check_path_clear_of_zones(c, step, lines, track, kind)
+    _transit_to(c, track.points[0].lat, track.points[0].lon, alt, f"flight to the {kind}'s first line", here)
+    c.emitter.track(track, where=c.plan.step_where(step, "trigger"))
     for w in lines.route.warnings:
         c.warn(w.code, f"{kind} at {here}: {w.message}")
     c.state.areas.append(AreaInfo(
         step=step.index, kind=kind, payloads=step.payloads, area=lines.area, altitude_m=alt,
         front_overlap=step.front_pct / 100.0, side_overlap=step.side_pct / 100.0, trigger=step.trigger,
-        trigger_distance_m=lines.route.trigger_distance_m, items=(first, c.emitter.item_count)))
+        trigger_distance_m=lines.route.trigger_distance_m, items=(first, c.emitter.item_count),
+        zones=_step_zones(c, step, lines, alt)))
     c.state.intent.append(lines.route)
     c.state.step_facts.append(_step_facts(c, step, kind, lead, footprint, lines.route))
     c.state.patterns.append(_pattern(c, step, kind, lines, lead, alt, first))
@@ -328,19 +346,6 @@ def _latlon_ring(area: Area, ring: Any) -> tuple[tuple[float, float], ...]:
 
 def _turnaround_m(c: _Compile, step: SurveyStep | CorridorStep) -> float:
     return step.turnaround_m if step.turnaround_m is not None else TURNAROUND_DEFAULT_M[c.plan.vehicle.frame]
-
-
-def fence_zone_sources(step: Any) -> tuple[Any, ...]:
-    """The zones of a step that go into the fence as exclusion polygons, as the plan gives them (file paths or
-    inline [lat, lon] lists): the zones the vehicle must not enter. A zone only to be left unphotographed may be
-    flown over, so it never belongs in a fence."""
-    return tuple(getattr(step, "exclude", ()))
-
-
-def _record_fence_zones(c: _Compile, step: SurveyStep) -> None:
-    for k, source in enumerate(fence_zone_sources(step)):
-        c.state.fence_zones.append(load_area(source, base_dir=c.plan.base_dir,
-                                             where=c.plan.step_where(step, "exclude", k)))
 
 
 def _step_facts(c: _Compile, step: SurveyStep | CorridorStep, kind: str, lead: PayloadInfo, footprint: Footprint,
@@ -479,9 +484,7 @@ def _line_inputs(c: _Compile, step: SurveyStep | CorridorStep, lead: PayloadInfo
 
 
 def _plan_survey_lines(c: _Compile, step: SurveyStep, inputs: _LineInputs) -> _Lines:
-    area = load_area(step.area, exclude=step.exclude, base_dir=c.plan.base_dir,
-                     where=c.plan.step_where(step, "area"))
-    _record_fence_zones(c, step)
+    area = area_clear_of(step.area, c.zones, c.plan.base_dir, c.plan.step_where(step, "area"))
     _check_reach(c.plan.home, area.projection.lat0, area.projection.lon0, "area", c.plan.step_where(step))
     route = plan_survey(area, inputs.footprint, step.front_pct, step.side_pct, angle_deg=step.angle_deg,
                         turnaround_m=inputs.turnaround_m, speed_mps=c.speed_mps,
@@ -520,6 +523,127 @@ def _hover_hold_s(lead: PayloadInfo) -> float:
     then take the photo (the camera's minimum capture interval)."""
     settle = 5.0 * (lead.time_constant_ms or 0.0) / 1000.0
     return max(HOVER_HOLD_S, settle + (lead.min_interval_s or 0.0))
+
+
+# ------------------------------------------------------------------------------------------------- zones
+
+def _step_footprint(c: _Compile, step: SurveyStep | CorridorStep, alt: float) -> Footprint | None:
+    """The footprint holding every photo the autopilot triggers on the step (the largest across and along of its
+    payloads of known optics), None when it triggers none."""
+    sizes = [c.payloads.optics[n].footprint_m(alt) for n in step.payloads
+             if n in c.payloads.optics and not c.payloads.is_rededge(n)]
+    return Footprint(max(s[0] for s in sizes), max(s[1] for s in sizes)) if sizes else None
+
+
+def _track_clear_of_zones(c: _Compile, step: SurveyStep | CorridorStep, lines: _Lines, track: Track, alt: float,
+                          kind: str) -> Track:
+    """The track kept out of the no-fly and exclude zones (stretches ending at them, hops round them) and with its
+    camera off wherever a footprint would reach a no-photo or exclude zone (grown by its margin); hover photos in
+    either are dropped. Warned, with how many."""
+    path_zones = [z for z in c.zones if z.keeps_path_out]
+    photo_zones = [z for z in c.zones if z.keeps_photos_out]
+    if not path_zones and not photo_zones:
+        return track
+    proj = lines.area.projection
+    here = c.plan.step_where(step)
+    start = tuple(CameraPoint(w.x, w.y, w.kind, w.yaw_deg) for w in lines.route.waypoints)
+    points, spans, dropped = start, tuple(track.spans), 0
+    if path_zones:
+        cam = keep_path_out(points, spans, ZoneRouter(place_zones(path_zones, proj)), f"{kind}'s path", here)
+        if cam.points != points:
+            c.warn("zone_detour", f"{kind} at {here}: its lines stop at no-fly or exclude zones (grown by their "
+                   "margin) and its hops go round them")
+        points, spans, dropped = cam.points, cam.spans, cam.photos_dropped
+    fp = _step_footprint(c, step, alt)
+    if photo_zones and fp is not None and track.autopilot_triggers:
+        forbidden = grown_union(place_zones(photo_zones, proj))
+        cam = keep_photos_out(points, spans, forbidden, fp, track.trigger_distance_m, step.trigger == "hover")
+        if cam.stretches_off:
+            # the camera comes back on RESUME_MARGIN_M past the zone's reach, for a copter's 2 m early acceptance; a
+            # fixed-wing accepts a waypoint much earlier (ArduPlane's WP_RADIUS is 90 m by default)
+            plane = (" A fixed-wing accepts a waypoint up to its acceptance radius early (ArduPlane WP_RADIUS, PX4 "
+                     f"NAV_ACC_RAD): set it to at most {RESUME_MARGIN_M:g} m for this mission, or the camera comes "
+                     "back on before the zone is behind it.") if c.plan.vehicle.frame != "copter" else ""
+            c.warn("zone_camera_off", f"{kind} at {here}: the camera is off over {cam.stretches_off} stretch(es) "
+                   "of its lines where a footprint would reach a no-photo or exclude zone (DO_SET_CAM_TRIGG_DIST 0, "
+                   "then on again past it)." + plane)
+        points, spans, dropped = cam.points, cam.spans, dropped + cam.photos_dropped
+    if dropped:
+        c.warn("zone_photo_dropped", f"{kind} at {here}: {dropped} hover photo(s) dropped (flown through or left "
+               "out without a photo) because their footprint could reach a no-photo zone or they lie in a no-fly one")
+    if points == start and spans == tuple(track.spans):
+        return track
+    lat, lon = proj.to_latlon([p.x for p in points], [p.y for p in points])
+    pts = tuple(TrackPoint(float(a), float(o), p.kind, p.yaw_deg) for p, a, o in zip(points, lat, lon))
+    return replace(track, points=pts, spans=spans)
+
+
+def _check_path_clear_of_zones(c: _Compile, step: SurveyStep | CorridorStep, lines: _Lines, track: Track,
+                               kind: str) -> None:
+    """A step's own path (lines, turnarounds, connections) must not enter a no-fly or exclude zone."""
+    path_zones = [z for z in c.zones if z.keeps_path_out]
+    if not path_zones:
+        return
+    proj = lines.area.projection
+    x, y = proj.to_xy([p.lat for p in track.points], [p.lon for p in track.points])
+    for pz, metres in path_inside(np.column_stack([x, y]), place_zones(path_zones, proj)):
+        hint = ("a corridor's lines are not routed around zones: move its line or narrow it so the lines keep "
+                "clear of the zone, or make the zone no_photo if it may be flown over") if kind == "corridor" \
+            else "redraw the zone or the area so that a way round the zone is left inside the area"
+        raise PlanError(f"the {kind}'s path runs {metres:.1f} m inside {pz.zone.label}",
+                        where=c.plan.step_where(step), hint=hint)
+
+
+def _transit_to(c: _Compile, lat: float, lon: float, alt: float, what: str, where: str) -> None:
+    """Waypoints round the no-fly and exclude zones between where the vehicle is and (lat, lon), at `alt`."""
+    if c.transits is None:
+        return
+    last = c.emitter.s.last_pos
+    start = last[:2] if last else (c.plan.home.lat, c.plan.home.lon)
+    for la, lo in c.transits.route(start, (lat, lon), what, where):
+        c.emitter.via(la, lo, alt)
+
+
+def _capture_clear_of_zones(c: _Compile, step: WaypointStep) -> str | None:
+    """The waypoint's capture, or None (dropped, warned) when its footprint could reach a no-photo zone."""
+    name = step.capture
+    photo_zones = [z for z in c.zones if z.keeps_photos_out]
+    if name is None or not photo_zones or name not in c.payloads.optics or c.transits is None:
+        return name
+    proj = c.transits.proj
+    fp = Footprint(*c.payloads.optics[name].footprint_m(step.alt_m))
+    x, y = proj.point_to_xy(step.lat, step.lon)
+    for z in place_zones(photo_zones, proj):
+        if capture_reaches(x, y, z.grown, fp):
+            c.warn("zone_photo_dropped", f"waypoint at {c.plan.step_where(step)}: the photo of {name} is dropped "
+                   f"(the waypoint is flown without it): its footprint could reach {z.zone.label}")
+            return None
+    return name
+
+
+def _step_zones(c: _Compile, step: SurveyStep | CorridorStep, lines: _Lines, alt: float) -> StepZones | None:
+    """The zones the report measures against this step: its own, and any other a footprint from its area could
+    reach."""
+    fp = _step_footprint(c, step, alt)
+    if not c.zones:
+        return None
+    reach = max(fp.across_m, fp.along_m) if fp is not None else 0.0
+    near = set(zones_near(c.zones, lines.area, reach))
+    mine = tuple(z for z in c.zones if z.step == step.index or z in near)
+    return StepZones(mine, reach) if mine else None
+
+
+def _check_rededge_and_zones(plan: Plan, payloads: _Payloads, zones: tuple[Zone, ...]) -> None:
+    """A RedEdge shoots by itself whenever it is at its altitude: it cannot be switched off near a no-photo zone."""
+    photo_zones = [z for z in zones if z.keeps_photos_out]
+    flying = {n for s in plan.mission if isinstance(s, (SurveyStep, CorridorStep)) for n in s.payloads}
+    rededges = [n for n in flying if payloads.is_rededge(n)]
+    if photo_zones and rededges:
+        z = photo_zones[0]
+        raise PlanError(f"{rededges[0]} (a RedEdge) captures by itself in its overlap mode and cannot be switched "
+                        f"off near {z.label}", where=z.where,
+                        hint="fly the RedEdge in a plan without no_photo/exclude zones, or make the zone no_fly "
+                             "if only the flight over it is forbidden")
 
 
 _STEPS: dict[type, Callable[[_Compile, Any], None]] = {
@@ -650,6 +774,10 @@ def _mission_speed(plan: Plan, payloads: _Payloads, state: _State) -> float:
     state.warnings.append(PlanWarning("speed_auto", f"speed_mps: auto chose {chosen.speed_mps:g} m/s, the fastest "
                                       f"at which {chosen.limit.why}"))
     return chosen.speed_mps
+
+
+# ------------------------------------------------------------------------------------------------- fence
+
 def _fence(c: _Compile, items: tuple[MissionItem, ...]) -> tuple[MissionItem, ...]:
     """The fence: each zone the vehicle must not enter as an exclusion polygon, and with the plan's
     `fence: {margin_m: M}` an inclusion polygon M metres around everything the mission flies. (A path through a
@@ -658,16 +786,32 @@ def _fence(c: _Compile, items: tuple[MissionItem, ...]) -> tuple[MissionItem, ..
 
     out: list[MissionItem] = []
     seen: set[tuple] = set()
-    for zone in c.state.fence_zones:
-        for poly in zone.polygons:
-            ring = _latlon_ring(zone, poly.exterior)
-            if ring not in seen:
-                seen.add(ring)
-                out.extend(exclusion_polygon(ring))
+    for ring in _fence_rings(c):
+        if ring not in seen:
+            seen.add(ring)
+            out.extend(exclusion_polygon(ring))
     home = c.plan.home
     if c.plan.fence_margin_m is not None:
         out.extend(inclusion_polygon(items, (home.lat, home.lon), c.plan.fence_margin_m))
     return tuple(out)
+
+
+def _fence_rings(c: _Compile) -> list[tuple[tuple[float, float], ...]]:
+    """The outline (lat, lon) of every zone the vehicle must not enter (no_fly and exclude; a no_photo zone may
+    be flown over), cleaned as the compiler keeps out of it."""
+    import numpy as np
+
+    proj = LocalProjection(c.plan.home.lat, c.plan.home.lon)
+    rings = []
+    for zone in c.zones:
+        if not zone.keeps_path_out:
+            continue
+        g = zone.xy(proj)
+        for poly in getattr(g, "geoms", [g]):
+            xy = np.asarray(poly.exterior.coords)[:-1]
+            lat, lon = proj.to_latlon(xy[:, 0], xy[:, 1])
+            rings.append(tuple((round(float(a), 7), round(float(b), 7)) for a, b in zip(lat, lon)))
+    return rings
 
 
 # -------------------------------------------------------------------------------------------- the driver
@@ -703,9 +847,12 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     try:
         payloads = _resolve_payloads(plan, prof, state)
         speed = _mission_speed(plan, payloads, state)
+        zones = plan_zones(plan)
+        _check_rededge_and_zones(plan, payloads, zones)
     except PlanError as e:
         raise_problems(problems + _problems_of(e), plan.path)
-    c = _Compile(plan, prof, payloads, _emitter(plan, prof, payloads, speed), state, speed)
+    router = TransitRouter(zones, LocalProjection(plan.home.lat, plan.home.lon)) if zones else None
+    c = _Compile(plan, prof, payloads, _emitter(plan, prof, payloads, speed), state, speed, zones, router)
     _warn_about_the_start(c)
     problems += _compile_steps(c)
     if problems:

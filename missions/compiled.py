@@ -71,6 +71,9 @@ class AreaInfo:
     # The report measures the step's overlaps, photo count and path against them; None (an AreaInfo built by
     # hand, without a mission) measures every photo and the whole path near the area.
     items: tuple[int, int] | None = None
+    # The zones near the step (missions.geometry.zones.StepZones): the report's zone table and the coverable area.
+    # None: no zone near it.
+    zones: Any = None
 
 
 @dataclass(frozen=True)

@@ -862,7 +862,7 @@ def _capture_plan_fence(p, firmware: str | None) -> LoadedList:
     """The fence capture plan `p` compiles to: its exclusion zones and `fence: {margin_m}` inclusion polygon."""
     compiled = _compiled_without_errors(p, firmware)
     if not compiled.fence:
-        raise PlanError("the capture plan has no fence: no survey has exclude: zones and it has no fence: key",
+        raise PlanError("the capture plan has no fence: no step has no_fly: or exclude: zones and it has no fence: key",
                         where=str(p), hint="add fence: {margin_m: 30} for an inclusion fence around the flight")
     made_for = next((code for code, name in CHECKED_FIRMWARES.items() if name == compiled.firmware), None)
     return LoadedList(list(compiled.fence), compiled.home, made_for)

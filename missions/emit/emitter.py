@@ -244,6 +244,10 @@ class Emitter:
         if capture is not None:
             self._add(self._capture(capture, where))
 
+    def via(self, lat: float, lon: float, alt_m: float) -> None:
+        """A waypoint of a transit routed round a no-fly zone (missions.geometry.zones)."""
+        self._add(_nav(mavlink.MAV_CMD_NAV_WAYPOINT, lat, lon, alt_m, comment="via (round a no-fly zone)"))
+
     def _capture(self, payload: str | None, where: str | None) -> MissionItem:
         """One photo: IMAGE_START_CAPTURE(total 1). `payload` None = every camera."""
         if payload is not None and self.cameras[payload].protocol == "rededge-serial":

@@ -42,6 +42,7 @@ from missions.measure.coverage import (coverage_fraction, footprint_polygons, mi
                                        outside_length_m)
 from missions.measure.flight import Photo, Simulation, simulate
 from missions.measure.numbers import StepNumbers, step_numbers
+from missions.measure.zones import ZoneMeasure, ZoneRow, measure_zones, photographed_warnings
 from missions.plan.schema import MAX_AGL_M
 
 # Coverage below this is worth a warning: the examples and the tests hold the compiler to it.
@@ -149,6 +150,11 @@ class AreaRow:
     photos: Mapping[str, int]                 # the step's own photos
     path: StepPath | None                     # None: the step has no payload, its path was not measured
     photos_in_zones: Mapping[str, int]        # the whole flight's photos centred inside the step's zones
+    # the no_fly / no_photo / exclude zones near the step (missions.measure.zones); coverage is measured on the
+    # coverable area when there are any
+    zones: tuple[ZoneRow, ...] = ()
+    coverable_m2: float | None = None
+    zone_margin_m: float | None = None
 
     def to_json(self) -> dict[str, Any]:
         out: dict[str, Any] = {"step": self.step, "kind": self.kind, "area_m2": self.area_m2,
@@ -159,6 +165,10 @@ class AreaRow:
         if self.path is not None:
             out.update(self.path.to_json())
             out["photos_in_zones"] = dict(self.photos_in_zones)
+        if self.zones:
+            out["zone_margin_m"] = self.zone_margin_m
+            out["coverable_m2"] = self.coverable_m2
+            out["zones"] = [z.to_json() for z in self.zones]
         return out
 
 
@@ -297,6 +307,7 @@ class StepMeasure:
     area: AreaInfo
     payloads: tuple[PayloadMeasure, ...]
     path: StepPath | None
+    zones: ZoneMeasure | None = None
 
 
 @dataclass(frozen=True)
@@ -397,10 +408,46 @@ def _measure_step(compiled: Compiled, area_info: AreaInfo, path: np.ndarray | No
         return StepMeasure(area_info, (), None)
     geom = area_geometry(area_info.area, sim.projection)
     zones = _zones(area_info.area, sim.projection)
-    payloads = tuple(_measure_payload(area_info, geom, zones, n, compiled.payload(n), photos_of.get(n, []))
+    table = _zone_table(compiled, area_info, geom, photos_of, sim) if area_info.zones is not None else None
+    measured = geom if table is None else table.coverable
+    payloads = tuple(_measure_payload(area_info, measured, zones, n, compiled.payload(n), photos_of.get(n, []))
                      for n in area_info.payloads)
     over_m, over_camera_m = _over_zones_m(sim, zones)
-    return StepMeasure(area_info, payloads, StepPath(_outside_m(sim.xy, path, geom), over_m, over_camera_m))
+    return StepMeasure(area_info, payloads, StepPath(_outside_m(sim.xy, path, geom), over_m, over_camera_m), table)
+
+
+def _footprint_union(ph: _PhotoArrays, idx: np.ndarray, payload: PayloadInfo) -> Any:
+    """The ground under the footprints of the photos `idx` (the simulation's metres)."""
+    import shapely   # heavy: loads only when a plan has an area
+    from shapely.geometry import Polygon
+
+    polys = [footprint_polygons(np.column_stack([ph.x[ks], ph.y[ks]]),
+                                np.radians([ph.photos[k].heading_deg for k in ks]),
+                                Footprint(*payload.footprint_m(alt))) for alt, ks in ph.by_altitude(idx).items()]
+    return shapely.union_all(np.concatenate(polys)) if polys else Polygon()
+
+
+def _zone_table(compiled: Compiled, area_info: AreaInfo, geom: Any, photos_of: Mapping[str, Sequence[Photo]],
+                sim: Simulation) -> ZoneMeasure:
+    """The step's zone table (missions.measure.zones): photographed by any photo of the flight, lost as the step's
+    lead payload leaves it uncovered."""
+    import shapely   # heavy: loads only when a plan has an area
+
+    zones_xy = shapely.union_all([z.xy(sim.projection) for z in area_info.zones.zones])
+    everything = []
+    for p in compiled.payloads:
+        ph = _PhotoArrays.of(photos_of.get(p.name, []))
+        everything.append(_footprint_union(ph, ph.reaching(zones_xy, p), p))
+    lead = next((n for n in area_info.payloads if any(p.name == n for p in compiled.payloads)), None)
+    if lead is None:
+        from shapely.geometry import Polygon
+        lead_covered = Polygon()
+    else:
+        ph = _PhotoArrays.of(photos_of.get(lead, []))
+        pay = compiled.payload(lead)
+        lead_covered = _footprint_union(ph, ph.reaching(geom.union(zones_xy), pay), pay)
+    return measure_zones(area_info.zones, area_info.area, sim.projection, sim.xy, lead_covered,
+                         shapely.union_all(everything))
 
 
 def _step_paths(compiled: Compiled, sim: Simulation) -> list[np.ndarray | None]:
@@ -520,7 +567,10 @@ def _area_row(step: StepMeasure) -> AreaRow:
                    overlap=_frozen({m.name: m.overlap.rounded() for m in step.payloads}),
                    photos=_frozen({m.name: m.photos for m in step.payloads}),
                    path=None if step.path is None else step.path.rounded(),
-                   photos_in_zones=_frozen({m.name: m.photos_in_zones for m in step.payloads}))
+                   photos_in_zones=_frozen({m.name: m.photos_in_zones for m in step.payloads}),
+                   zones=step.zones.rows if step.zones else (),
+                   coverable_m2=_r(step.zones.coverable.area, 1) if step.zones else None,
+                   zone_margin_m=step.zones.margin_m if step.zones else None)
 
 
 def _mission_coverage(steps: Sequence[StepMeasure]) -> Mapping[str, float]:
@@ -603,6 +653,7 @@ def _step_warnings(step: StepMeasure, row: AreaRow) -> list[Finding]:
                                                    f"< requested {100 * a.side_overlap:.0f} %"))
     if row.path is not None and row.path.over_gaps_m > 1.0:
         out.append(Finding("path_over_exclusion", _over_zones_text(row, row.path)))
+    out.extend(Finding(code, msg) for code, msg in photographed_warnings(a.step, a.kind, row.zones))
     return out
 
 
@@ -744,6 +795,13 @@ def format_report(rep: MissionReport) -> str:
                                                 f"{100 * a.requested.side:g} %"))
         numbers = next((s for s in rep.steps if s.facts.step == a.step), None)
         rows += [(f"  {k}", v) for k, v in (numbers.rows() if numbers else [])]
+        if a.zones:
+            rows.append((f"  zones (margin {a.zone_margin_m:g} m)",
+                         f"coverage measured on {a.coverable_m2:.0f} m² that can be covered"))
+        for z in a.zones:
+            rows.append((f"  {z.kind} {z.name}", f"{z.area_m2:.0f} m², {z.flown_inside_m:.0f} m flown inside, "
+                                                 f"{z.photographed_m2:.0f} m² photographed, {z.lost_m2:.0f} m² of "
+                                                 "the area lost to it"))
     rows.append(("speed", f"{rep.speed_mps:g} m/s"))
     rows += [(f"sun step {s.step}", _sun_text(s)) for s in rep.sun]
     width = max(len(k) for k, _ in rows)

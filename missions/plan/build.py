@@ -14,6 +14,7 @@ from typing import Any, Callable, Collection, Mapping
 
 from cdf.catalogue import catalogue
 from missions.plan.meaning import Resolved
+from missions.plan.schema import ZONE_KINDS
 from missions.plan.types import (CameraStep, CorridorStep, Home, LandStep, Payload, Plan, RtlStep, Step, SurveyStep,
                                  TakeoffStep, Target, Timing, Vehicle, WaypointStep)
 from missions.thermal.blur import DEFAULT_BLUR_PX
@@ -112,13 +113,19 @@ def _survey(i: int, b: dict, cameras: Mapping[str, Any]) -> SurveyStep:
     return SurveyStep(
         i, _area_value(b["area"]), tuple(b["payloads"]), float(ov["front"]), float(ov["side"]),
         altitude_m=_float_or_none(b, "altitude_m"), gsd_cm=_float_or_none(b, "gsd_cm"),
-        exclude=tuple(_area_value(x) for x in b.get("exclude", ())),
         angle_deg=angle if angle == "auto" else float(angle),
         trigger=b.get("trigger", "distance"), turnaround_m=_float_or_none(b, "turnaround_m"),
         refly_90=bool(b.get("refly_90", False)), blur_px=float(b.get("blur_px", DEFAULT_BLUR_PX)), timing=_timing(b),
         target=Target(float(b["target"]["tilt_deg"]), float(b["target"]["azimuth_deg"])) if "target" in b else None,
         camera_pitch_deg=float(b.get("camera_pitch_deg", 0.0)),
-        profile=pv_profile(b["profile"]) if "profile" in b else None)
+        profile=pv_profile(b["profile"]) if "profile" in b else None, **_zone_fields(b))
+
+
+def _zone_fields(b: dict) -> dict[str, Any]:
+    """A survey's or corridor's zones (missions.geometry.zones) as the step's fields."""
+    out: dict[str, Any] = {k: tuple(_area_value(x) for x in b.get(k, ())) for k in ZONE_KINDS}
+    out["zone_margin_m"] = _float_or_none(b, "zone_margin_m")
+    return out
 
 
 def _corridor(i: int, b: dict, cameras: Mapping[str, Any]) -> CorridorStep:
@@ -127,7 +134,7 @@ def _corridor(i: int, b: dict, cameras: Mapping[str, Any]) -> CorridorStep:
         i, _pairs(b["line"]), float(b["width_m"]), tuple(b["payloads"]), float(ov["front"]), float(ov["side"]),
         altitude_m=_float_or_none(b, "altitude_m"), gsd_cm=_float_or_none(b, "gsd_cm"),
         trigger=b.get("trigger", "distance"), turnaround_m=_float_or_none(b, "turnaround_m"),
-        blur_px=float(b.get("blur_px", DEFAULT_BLUR_PX)), timing=_timing(b))
+        blur_px=float(b.get("blur_px", DEFAULT_BLUR_PX)), timing=_timing(b), **_zone_fields(b))
 
 
 def _waypoint(i: int, b: dict, cameras: Mapping[str, Any]) -> WaypointStep:

@@ -87,6 +87,20 @@ OVERLAP = _obj({
 TRIGGER = {"enum": ["distance", "interval", "hover"], "default": "distance",
            "description": "distance: DO_SET_CAM_TRIGG_DIST; interval: timed (PX4 only); hover: stop and shoot"}
 TURNAROUND = _num(0, 500, desc="straight run-in/out beyond each line end, metres (default 10 copter, 30 plane)")
+# The kinds of zone, by their key in a survey or corridor step (missions.geometry.zones says what each keeps out).
+ZONE_KINDS = ("no_fly", "no_photo", "exclude")
+# Zones a survey or corridor keeps clear of (missions.geometry.zones): every zone of the plan holds for the whole
+# flight, whichever step declares it.
+ZONES = {
+    "exclude": {"type": "array", "items": AREA,
+                "description": "zones not to fly over or photograph (no_fly and no_photo at once)"},
+    "no_fly": {"type": "array", "items": AREA,
+               "description": "zones the path stays out of (lines, turnarounds and transits); photos may see them"},
+    "no_photo": {"type": "array", "items": AREA,
+                 "description": "zones no photo footprint touches (the camera is off near them); may be flown over"},
+    "zone_margin_m": _num(0, 100, desc="position error the zones are kept clear by, metres (default 2)",
+                          hint="metres of margin around every zone, e.g. zone_margin_m: 2"),
+}
 
 SETTINGS = {"type": "object", "minProperties": 1,
             "description": "camera settings, checked against the camera catalogue: each by its plan name or its "
@@ -126,7 +140,7 @@ STEPS: dict[str, dict] = {
     "takeoff": _obj({"alt_m": ALTITUDE}, required=("alt_m",), desc="take off to alt_m above home"),
     "survey": _obj({
         "area": AREA,
-        "exclude": {"type": "array", "items": AREA, "description": "areas not to fly over or photograph"},
+        **ZONES,
         "payloads": PAYLOAD_LIST,
         "altitude_m": ALTITUDE,
         "gsd_cm": GSD,
@@ -150,6 +164,7 @@ STEPS: dict[str, dict] = {
         "trigger": TRIGGER,
         "turnaround_m": TURNAROUND,
         "blur_px": BLUR_PX, "when": WHEN, "when_wind_mps": WHEN_WIND,
+        **ZONES,
     }, required=("line", "width_m", "payloads", "overlap"), desc="corridor along a line"),
     "waypoint": _obj({
         "lat": _num(-90, 90, desc=_LAT), "lon": _num(-180, 180, desc=_LON), "alt_m": ALTITUDE,

@@ -85,6 +85,9 @@ class SurveyStep:
     target: Target | None = None
     camera_pitch_deg: float = 0.0
     profile: Any = None             # missions.thermal.pv.PvProfile, or None
+    no_fly: tuple[Any, ...] = ()          # zones (missions.geometry.zones): inline points or file paths
+    no_photo: tuple[Any, ...] = ()
+    zone_margin_m: float | None = None    # None: zones.DEFAULT_ZONE_MARGIN_M
 
 
 @dataclass(frozen=True)
@@ -101,6 +104,10 @@ class CorridorStep:
     turnaround_m: float | None = None
     blur_px: float = 1.0
     timing: Timing = Timing()
+    exclude: tuple[Any, ...] = ()
+    no_fly: tuple[Any, ...] = ()
+    no_photo: tuple[Any, ...] = ()
+    zone_margin_m: float | None = None
 
 
 @dataclass(frozen=True)
