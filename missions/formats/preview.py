@@ -10,7 +10,7 @@ on the mission, so meridians are vertical to well under a degree over any single
 
 One display list (polygons, lines, dots, text in pixel coordinates) feeds two renderers: SVG written
 directly (no dependency) and PNG with Pillow (2× supersampled, then reduced, for smooth lines). The HTML
-is self-contained: the inline SVG plus the report table, no network resources.
+is the interactive map of missions.formats.webmap (pan, zoom, clickable items; self-contained, offline).
 """
 
 from __future__ import annotations
@@ -525,18 +525,24 @@ def render_png(pic: Picture, path: Path, supersample: int = 2) -> None:
 
 # ------------------------------------------------------------------------------------------------ HTML
 
-def render_html(pic: Picture, rep: MissionReport) -> str:
-    return render("preview.html.j2", title=pic.title, svg=Markup(render_svg(pic)), rows=pic.rows,
-                  warnings=pic.warnings, errors=[e.message for e in rep.errors], areas=rep.areas)
+def render_html(compiled: Compiled, sim: Any, rep: MissionReport, pic: Picture, tiles: Any = None) -> str:
+    """The interactive map (missions.formats.webmap) with the legend's figures."""
+    from missions.formats.webmap import render_map_html
+
+    return render_map_html(compiled, sim, rep, pic.rows, tiles)
 
 
-def write_preview(compiled: Compiled, out: str | Path) -> Path:
-    """Render the preview to `out` (.svg, .png or .html, by suffix), written atomically."""
+def write_preview(compiled: Compiled, out: str | Path, tiles: Any = None) -> Path:
+    """Render the preview to `out` (.svg, .png or .html, by suffix), written atomically. `tiles`
+    (missions.formats.webmap.TileSource) puts a basemap under the HTML map."""
     out = Path(out)
     suffix = out.suffix.lower()
     if suffix not in (".svg", ".png", ".html", ".htm"):
         raise PlanError(f"cannot draw a preview as '{suffix or out.name}'", where=str(out),
                         hint="name the output .svg, .png or .html")
+    if tiles is not None and suffix not in (".html", ".htm"):
+        raise PlanError(f"a basemap (--tiles) is drawn only under the interactive map, not in a {suffix} file",
+                        where=str(out), hint="name the output FILE.html, or leave --tiles out")
     sim = simulate(compiled)
     rep = report(compiled, sim)
     pic = build_picture(compiled, sim, rep)
@@ -550,6 +556,6 @@ def write_preview(compiled: Compiled, out: str | Path) -> Path:
         if suffix == ".png":
             render_png(pic, tmp)
         else:
-            text = render_svg(pic) if suffix == ".svg" else render_html(pic, rep)
+            text = render_svg(pic) if suffix == ".svg" else render_html(compiled, sim, rep, pic, tiles)
             tmp.write_text(text, encoding="utf-8")
     return out
