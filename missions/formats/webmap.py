@@ -153,6 +153,26 @@ def _rings(projection: Any, ring: Sequence[tuple[float, float]]) -> list[list[fl
     return [_ll(a, b) for a, b in zip(lat.tolist(), lon.tolist())]
 
 
+ZONE_COLOURS = {"no_fly": "#b0122f", "no_photo": "#7b2cbf", "exclude": "#e6194b"}
+
+
+def _declared_zones(compiled: Compiled, projection: Any) -> list[dict]:
+    """The plan's zones as the compiler gives them on each step (AreaInfo.zones, missions.geometry.zones.StepZones:
+    kind, name, and the polygon as drawn), each once."""
+    out, seen = [], set()
+    for a in compiled.areas:
+        step_zones = getattr(a, "zones", None)
+        for z in getattr(step_zones, "zones", None) or ():
+            if (z.kind, z.name, z.where) in seen:
+                continue
+            seen.add((z.kind, z.name, z.where))
+            drawn = z.xy(projection)
+            for poly in getattr(drawn, "geoms", [drawn]):
+                out.append({"kind": z.kind, "name": z.name, "colour": ZONE_COLOURS.get(z.kind, "#e6194b"),
+                            "ring": _rings(projection, list(poly.exterior.coords))})
+    return out
+
+
 def map_data(compiled: Compiled, sim: Any, rep: MissionReport, tiles: TileSource | None = None) -> dict:
     """Everything the page draws, as JSON-ready values (degrees, 7 decimals)."""
     where = _part_of_each_item(compiled)
@@ -178,7 +198,7 @@ def map_data(compiled: Compiled, sim: Any, rep: MissionReport, tiles: TileSource
         "title": compiled.name, "firmware": compiled.firmware, "parts": len(compiled.parts),
         "home": _ll(compiled.home[0], compiled.home[1]),
         "start": _ll(*latlon[0]) if latlon else None, "end": _ll(*latlon[-1]) if latlon else None,
-        "areas": areas, "zones": zones, "path": _path_by_part(sim, where), "arrows": _arrows(sim),
+        "areas": areas, "zones": zones, "declared_zones": _declared_zones(compiled, sim.projection), "path": _path_by_part(sim, where), "arrows": _arrows(sim),
         "items": items, "photos": photo_rows, "photo_stride": photo_stride,
         "footprints": footprints, "footprint_stride": fp_stride,
         "payloads": [{"name": n, "colour": PAYLOAD_COLOURS[min(k, 2)]} for k, n in enumerate(names)],

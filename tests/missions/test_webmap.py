@@ -300,3 +300,28 @@ def test_tiles_come_only_from_the_named_server_with_its_attribution(plans, open_
     assert "test tiles ©" in m.page.inner_text(".leaflet-control-attribution")
     assert m.errors == []
     assert json.loads(m.js("JSON.stringify(wirisMap.data.tiles)"))["attribution"] == "test tiles ©"
+
+
+def test_the_zones_a_step_carries_are_drawn_with_their_kind(compiled):
+    # The zones feature hands each step its zones (AreaInfo.zones.zones: kind, name, where, xy(projection));
+    # here one stand-in zone of that shape, a square inside the survey, stands for them.
+    from dataclasses import fields, replace
+    from types import SimpleNamespace
+
+    from shapely.geometry import box
+
+    c = compiled["one"]
+    sim = simulate(c)
+    x, y = sim.projection.point_to_xy(50.1115, 14.5050)
+    zone = SimpleNamespace(kind="no_photo", name="substation", where="plan.yaml:9:7",
+                           xy=lambda proj: box(x - 10, y - 10, x + 10, y + 10))
+    zoned = replace(c, areas=tuple(SimpleNamespace(**({f.name: getattr(a, f.name) for f in fields(a)}
+                                                      | {"zones": SimpleNamespace(zones=(zone, zone))}))
+                                   for a in c.areas))
+    data = map_data(zoned, sim, report(c, sim))
+    assert len(data["declared_zones"]) == 1                     # each zone once, though two steps list it
+    z = data["declared_zones"][0]
+    assert z["kind"] == "no_photo" and z["name"] == "substation" and len(z["ring"]) == 5
+    lats = [p[0] for p in z["ring"]]
+    assert min(lats) < 50.1115 < max(lats)
+    assert map_data(c, sim, report(c, sim))["declared_zones"] == []
