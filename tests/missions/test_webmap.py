@@ -46,7 +46,8 @@ def _chromium() -> str | None:
 @pytest.fixture(scope="module")
 def plans(tmp_path_factory):
     d = tmp_path_factory.mktemp("webmap-plans")
-    return {"one": small_plan(d, "one"), "split": small_plan(d, "split", limit=16)}
+    return {"one": small_plan(d, "one"), "split": small_plan(d, "split", limit=16),
+            "px4": small_plan(d, "px4", firmware="px4", camera_change=False)}
 
 
 @pytest.fixture(scope="module")
@@ -75,6 +76,10 @@ def test_every_item_is_listed_with_its_upload_number(compiled):
     hover = next(row for row in positioned if row["altitude"] == "30 m above home")
     assert hover["at"] == pytest.approx([50.1105, 14.5035], abs=1e-6)
     assert data["tiles"] is None and data["start"] and data["end"]
+    px4 = compiled["px4"]
+    px4_sim = simulate(px4)
+    rows = map_data(px4, px4_sim, report(px4, px4_sim))["items"]
+    assert [row["seq"] for row in rows] == list(range(len(px4.items)))                 # PX4 numbers from 0
 
 
 def test_a_split_mission_is_drawn_in_one_colour_per_part(compiled):
