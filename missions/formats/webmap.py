@@ -24,6 +24,7 @@ from typing import Any, Sequence
 from urllib.parse import urlsplit
 
 from markupsafe import Markup
+import numpy as np
 
 from missions.compiled import Compiled
 from missions.emit.items import FRAME_GLOBAL, FRAME_GLOBAL_RELATIVE_ALT, FRAME_GLOBAL_TERRAIN_ALT, MissionItem
@@ -191,6 +192,7 @@ def map_data(compiled: Compiled, sim: Any, rep: MissionReport, tiles: TileSource
                                                                         default=0),
                    "alt_m": round(p.alt_m, 1), "item": seq_of.get(p.item)}
                   for n, p in enumerate(photos) if n % photo_stride == 0]
+    spacing = [math.hypot(b.x - a.x, b.y - a.y) for a, b in zip(photos, photos[1:]) if a.span == b.span]
     footprints = [_rings(sim.projection, footprint_ring(p, compiled.payload(p.payloads[0])))
                   for p in photos[::fp_stride] if p.payloads]
     latlon = sim.latlon
@@ -200,6 +202,8 @@ def map_data(compiled: Compiled, sim: Any, rep: MissionReport, tiles: TileSource
         "start": _ll(*latlon[0]) if latlon else None, "end": _ll(*latlon[-1]) if latlon else None,
         "areas": areas, "zones": zones, "declared_zones": _declared_zones(compiled, sim.projection), "path": _path_by_part(sim, where), "arrows": _arrows(sim),
         "items": items, "photos": photo_rows, "photo_stride": photo_stride,
+        # the photos' spacing along a line sizes their dots to the zoom (a dense line must not hide the path)
+        "photo_spacing_m": round(float(np.median(spacing)), 2) if spacing else None,
         "footprints": footprints, "footprint_stride": fp_stride,
         "payloads": [{"name": n, "colour": PAYLOAD_COLOURS[min(k, 2)]} for k, n in enumerate(names)],
         "part_colours": [PART_COLOURS[k % len(PART_COLOURS)] for k in range(len(compiled.parts))],

@@ -209,6 +209,12 @@ def test_pan_and_zoom(compiled, open_map, tmp_path):
     m.page.mouse.up()
     c1 = m.js("wirisMap.map.getCenter()")
     assert c1["lng"] < c0["lng"] and c1["lat"] > c0["lat"]    # dragged right and down: the view moved west, north
+    # photo dots shrink when zoomed out, so that a dense line of them does not hide the path
+    radius = "Object.values(wirisMap.overlays['photo points']._layers)[0].getRadius()"
+    for zoom, expected in ((12, 0.7), (20, 3.0)):
+        m.js(f"() => {{ wirisMap.map.setZoom({zoom}, {{animate: false}}); }}")
+        m.page.wait_for_function(f"wirisMap.map.getZoom() === {zoom}", timeout=10_000)
+        assert m.js(radius) == pytest.approx(expected)
     assert m.errors == []
 
 
