@@ -107,6 +107,7 @@ class _Compile:
     payloads: _Payloads
     emitter: Emitter
     state: _State
+    terrain: Any = None                      # missions.terrain.model.Terrain when the plan names a DEM
 
     @property
     def speed_mps(self) -> float:
@@ -273,7 +274,10 @@ def _lines_step(c: _Compile, step: SurveyStep | CorridorStep, kind: str,
     except PlanError as e:
         raise _relocate(e, here) from None
     first = c.emitter.item_count
-    c.emitter.track(_track(c, step, lines.route, alt, lead), where=c.plan.step_where(step, "trigger"))
+    track = _track(c, step, lines.route, alt, lead)
+    if c.terrain is not None:
+        track = _terrain_track(c, step, kind, track)
+    c.emitter.track(track, where=c.plan.step_where(step, "trigger"))
     for w in lines.route.warnings:
         c.warn(w.code, f"{kind} at {here}: {w.message}")
     c.state.areas.append(AreaInfo(
@@ -397,6 +401,20 @@ def _track(c: _Compile, step: SurveyStep | CorridorStep, route: SurveyPlan | Cor
                  autopilot_triggers=any(not c.payloads.is_rededge(n) for n in step.payloads))
 
 
+def _terrain_track(c: _Compile, step: SurveyStep | CorridorStep, kind: str, track: Track) -> Track:
+    """The track following the DEM (missions.terrain.lines); where the rates keep it above its band, a warning."""
+    from missions.terrain.lines import terrain_track
+
+    height = c.plan.step_where(step, "altitude_m" if step.altitude_m is not None else "gsd_cm")
+    followed = terrain_track(track, c.terrain, c.speed_mps, height)
+    if followed.over_tolerance_m > 0.01:
+        c.warn("terrain_rate_limited", f"{kind} at {c.plan.step_where(step)}: the ground falls or rises faster than "
+               f"vehicle.climb_mps {c.terrain.climb_mps:g} / descent_mps {c.terrain.descent_mps:g} m/s allow at "
+               f"{c.speed_mps:g} m/s: the lines fly up to {followed.over_tolerance_m:.1f} m above the tolerance "
+               "there (coarser GSD, never lower than the target)")
+    return followed
+
+
 _STEPS: dict[type, Callable[[_Compile, Any], None]] = {
     TakeoffStep: _takeoff, SurveyStep: _survey, CorridorStep: _corridor, WaypointStep: _waypoint,
     CameraStep: _camera, RtlStep: _rtl, LandStep: _land}
@@ -463,12 +481,64 @@ def _warn_about_unknown_optics(c: _Compile) -> None:
 
 # -------------------------------------------------------------------------------------------- the driver
 
+def _load_terrain(plan: Plan, prof: FirmwareProfile) -> Any:
+    """The plan's DEM and terrain settings (missions.terrain), None without one."""
+    if plan.terrain is None:
+        return None
+    from missions.terrain.dem import load_dem
+    from missions.terrain.model import Terrain, rates_for
+
+    t = plan.terrain
+    if t.frame == "terrain" and prof.name != "ardupilot":
+        raise PlanError(f"{prof.title} has no terrain frame in missions", where=plan.where("terrain", "frame"),
+                        hint="use terrain.frame: amsl (waypoint altitudes above mean sea level from the DEM, which "
+                             "every firmware flies), or fly ArduPilot")
+    dem = load_dem(t.dem, plan.base_dir, t.vertical, where=plan.where("terrain", "dem"))
+    climb, descent = rates_for(plan.vehicle.frame, plan.vehicle.climb_mps, plan.vehicle.descent_mps)
+    return Terrain(dem, t.frame, t.tolerance_m, t.clearance_m, climb, descent)
+
+
+def _home_amsl(plan: Plan, terrain: Any, state: _State) -> float:
+    """Home's elevation: the plan's, else the DEM's below home (a plan without either is refused at loading)."""
+    if terrain is None:
+        return float(plan.home.alt_amsl_m)
+    ground = float(terrain.dem.ground_at(plan.home.lat, plan.home.lon, "home", plan.where("home"))[0])
+    if plan.home.alt_amsl_m is None:
+        return round(ground, 2)
+    if abs(plan.home.alt_amsl_m - ground) > 5.0:
+        state.warnings.append(PlanWarning("home_elevation_differs", f"home.alt_amsl_m {plan.home.alt_amsl_m:g} m is "
+                                          f"{plan.home.alt_amsl_m - ground:+.1f} m from the DEM's {ground:.1f} m "
+                                          "there; relative altitudes (take-off, waypoints, RTL) use the plan's"))
+    return float(plan.home.alt_amsl_m)
+
+
+def _check_clearance(compiled: Compiled, terrain: Any, plan: Plan) -> None:
+    """Every metre of the re-flown path at least terrain.clearance_m above the DEM, or a PlanError saying where."""
+    from missions.measure.flight import simulate
+    from missions.terrain.clearance import path_clearance
+
+    c = path_clearance(compiled, simulate(compiled), terrain.dem)
+    if c is None or c.min_m >= terrain.clearance_m - 0.005:
+        return
+    base = 1 if compiled.firmware == "ardupilot" else 0
+    item = compiled.items[c.item] if 0 <= c.item < len(compiled.items) else None
+    raise PlanError(f"the path passes {c.min_m:.1f} m above the ground at {c.lat:.6f}, {c.lon:.6f} (altitude "
+                    f"{c.amsl_m:.1f} m AMSL over ground at {c.ground_m:.1f} m), below terrain.clearance_m "
+                    f"{terrain.clearance_m:g} m, flying to item {c.item + base}"
+                    + (f" ({item.comment})" if item is not None and item.comment else ""),
+                    where=plan.where("terrain"),
+                    hint="raise the take-off altitude or the step's altitude_m, add a waypoint step above the "
+                         "ground in the way, or lower terrain.clearance_m if the ground there is known clear")
+
+
 def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -> Compiled:
     plan = path_or_plan if isinstance(path_or_plan, Plan) else load_plan(path_or_plan)
     prof = profile(firmware or plan.vehicle.firmware)
     state = _State(warnings=[f"component_id_chosen: {n}" for n in plan.notes])
+    terrain = _load_terrain(plan, prof)
+    home_amsl = _home_amsl(plan, terrain, state)
     payloads = _resolve_payloads(plan, prof, state)
-    c = _Compile(plan, prof, payloads, _emitter(plan, prof, payloads), state)
+    c = _Compile(plan, prof, payloads, _emitter(plan, prof, payloads), state, terrain)
     _warn_about_the_start(c)
     for step in plan.mission:
         _STEPS[type(step)](c, step)
@@ -480,12 +550,20 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     setup = _setup(c)
     lua = _lua_bridge(c, emitted)
     params = _params(c, emitted)
+    if terrain is not None and terrain.frame == "terrain":
+        params = (*params, ("TERRAIN_ENABLE", 1.0, "the survey lines fly in the terrain frame "
+                            "(MAV_FRAME_GLOBAL_TERRAIN_ALT): ArduPilot needs terrain data, from the ground station "
+                            "or its SD card, before it accepts them"))
     _warn_about_unknown_optics(c)
-    return Compiled(
+    compiled = Compiled(
         name=plan.name, firmware=prof.name, frame=plan.vehicle.frame,
-        home=(plan.home.lat, plan.home.lon, plan.home.alt_amsl_m), speed_mps=c.speed_mps, items=emitted.items,
+        home=(plan.home.lat, plan.home.lon, home_amsl), speed_mps=c.speed_mps, items=emitted.items,
         parts=parts.parts, item_limit=parts.limit,
         # PayloadInfo only for payloads whose optics are known: the report measures coverage with them
         payloads=tuple(payloads.optics[p.name] for p in plan.payloads if p.name in payloads.optics),
         areas=tuple(state.areas), setup=setup, lua=lua, params=params,
-        warnings=tuple(dict.fromkeys(state.warnings)), intent=tuple(state.intent), inputs=input_files(plan))
+        warnings=tuple(dict.fromkeys(state.warnings)), intent=tuple(state.intent), inputs=input_files(plan),
+        terrain=terrain)
+    if terrain is not None:
+        _check_clearance(compiled, terrain, plan)
+    return compiled

@@ -121,6 +121,8 @@ class Compiled:
     warnings: tuple[PlanWarning, ...] = ()
     intent: tuple[Any, ...] = field(default=(), compare=False)   # planner geometry, for previews only
     inputs: tuple[str, ...] = field(default=(), compare=False)   # the files the plan was read from (never written)
+    # missions.terrain.model.Terrain: the DEM the lines follow and the report measures over; None: flat ground
+    terrain: Any = field(default=None, compare=False)
 
     def payload(self, name: str) -> PayloadInfo:
         return next(p for p in self.payloads if p.name == name)

@@ -15,7 +15,7 @@ from typing import Any, Callable, Mapping
 from cdf.catalogue import catalogue
 from missions.plan.meaning import Resolved
 from missions.plan.types import (CameraStep, CorridorStep, Home, LandStep, Payload, Plan, RtlStep, Step, SurveyStep,
-                                 TakeoffStep, Vehicle, WaypointStep)
+                                 TakeoffStep, TerrainSettings, Vehicle, WaypointStep)
 
 
 def build_plan(data: dict, resolved: Resolved, path: str, base_dir: Path, locations: Mapping) -> Plan:
@@ -32,10 +32,11 @@ def build_plan(data: dict, resolved: Resolved, path: str, base_dir: Path, locati
     v, h = data["vehicle"], data["home"]
     return Plan(
         version=int(data["version"]), name=data.get("name") or _default_name(path),
-        vehicle=Vehicle(v["firmware"], v["frame"], float(v["speed_mps"]), v.get("max_mission_items")),
-        home=Home(float(h["lat"]), float(h["lon"]), float(h["alt_amsl_m"])),
+        vehicle=Vehicle(v["firmware"], v["frame"], float(v["speed_mps"]), v.get("max_mission_items"),
+                        _float_or_none(v, "climb_mps"), _float_or_none(v, "descent_mps")),
+        home=Home(float(h["lat"]), float(h["lon"]), _float_or_none(h, "alt_amsl_m")),
         payloads=payloads, mission=tuple(steps), path=path, base_dir=str(base_dir), notes=tuple(resolved.notes),
-        locations=locations)
+        locations=locations, terrain=_terrain(data.get("terrain")))
 
 
 def _default_name(path: str) -> str:
@@ -63,6 +64,15 @@ def _payload(name: str, p: dict, camera: Any, component_id: int) -> Payload:
         component_id=component_id, component_given="component_id" in p,
         landscape=p.get("orientation", "landscape") == "landscape",
         settings=_as_written(settings), values=_wire_values(camera, settings))
+
+
+def _terrain(t: dict | None) -> TerrainSettings | None:
+    if t is None:
+        return None
+    dem = t["dem"]
+    return TerrainSettings(dem=(dem,) if isinstance(dem, str) else tuple(dem), frame=t.get("frame", "amsl"),
+                           tolerance_m=_float_or_none(t, "tolerance_m"), clearance_m=float(t.get("clearance_m", 20.0)),
+                           vertical=t.get("vertical", "auto"))
 
 
 def _float_or_none(body: Mapping[str, Any], key: str) -> float | None:

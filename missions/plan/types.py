@@ -16,13 +16,27 @@ class Vehicle:
     frame: str                      # "copter" | "plane" | "vtol"
     speed_mps: float
     max_mission_items: int | None = None
+    climb_mps: float | None = None       # None: the frame's default (missions.terrain.settings)
+    descent_mps: float | None = None
 
 
 @dataclass(frozen=True)
 class Home:
     lat: float
     lon: float
-    alt_amsl_m: float
+    alt_amsl_m: float | None             # None: from the DEM (only with terrain.dem; the loader checks)
+
+
+@dataclass(frozen=True)
+class TerrainSettings:
+    """The plan's `terrain:` block as written; defaults are applied where the altitude is known
+    (missions.terrain.settings)."""
+
+    dem: tuple[str, ...]                 # file paths as written (relative to the plan)
+    frame: str = "amsl"                  # "amsl" | "terrain"
+    tolerance_m: float | None = None     # None: 10 % of each step's altitude
+    clearance_m: float = 20.0
+    vertical: str = "auto"               # "auto" | "egm96" | "ellipsoid"
 
 
 @dataclass(frozen=True)
@@ -121,6 +135,7 @@ class Plan:
     path: str = "<plan>"
     base_dir: str = "."
     notes: tuple[str, ...] = ()          # decisions the loader took for the user (e.g. a moved component id)
+    terrain: TerrainSettings | None = None
     locations: Mapping[tuple, str] = field(default_factory=lambda: MappingProxyType({}), compare=False, repr=False)
 
     def payload(self, name: str) -> Payload:
