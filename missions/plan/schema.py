@@ -199,7 +199,7 @@ def _build() -> dict:
             "home": _obj({"lat": _num(-90, 90, desc=_LAT), "lon": _num(-180, 180, desc=_LON),
                           "alt_amsl_m": _num(-500, 9000, desc="home altitude above mean sea level")},
                          required=("lat", "lon"),
-                         desc="the take-off point (alt_amsl_m required unless terrain.dem gives it)"),
+                         desc="the take-off point, alt_amsl_m its elevation (from terrain.dem when left out)"),
             "terrain": TERRAIN,
             "payloads": {"type": "object", "minProperties": 1,
                          "propertyNames": {"pattern": "^[A-Za-z_][A-Za-z0-9_-]{0,31}$"},

@@ -254,3 +254,14 @@ def test_follow_profile_respects_rates_and_band():
     flown = np.interp(fine, prof.xy[:, 0], prof.amsl_m)
     agl = flown - (100.0 + 40.0 * np.exp(-((fine - 200.0) / 40.0) ** 2))
     assert agl.min() >= 50.0 - 0.05 and agl.max() <= 55.0 + 0.05
+
+
+def test_preview_draws_contours_under_the_path_only_with_a_dem(tmp_path):
+    from missions.formats.preview import write_preview
+    compiled = compile_plan(_plan(tmp_path, T.hill(80, 150)))
+    svg = write_preview(compiled, tmp_path / "p.svg").read_text()
+    assert svg.count('class="terrain"') > 100 and "contours every 10 m (DEM)" in svg
+    assert svg.index('id="terrain"') < svg.index('id="path"')          # drawn first: under the path
+    flat = tmp_path / "flat.yaml"
+    flat.write_text(T.plan_text(None, T.square(150), home_alt=300.0))
+    assert 'class="terrain"' not in write_preview(compile_plan(flat), tmp_path / "f.svg").read_text()
