@@ -77,6 +77,7 @@ class Track:
     frame: int = FRAME_GLOBAL_RELATIVE_ALT
     altitudes: tuple[float, ...] | None = None
     over_tolerance_m: float = 0.0              # how far above its band the climb/descent rates forced it
+    highest_agl_m: float | None = None         # the most it rises above the ground (None: not followed)
 
     def altitude_of(self, i: int) -> float:
         return self.altitudes[i] if self.altitudes is not None else self.altitude_m

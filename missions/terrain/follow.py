@@ -14,7 +14,10 @@ waypoints are added along its segments where the ground asks for them. The rule,
    GSD there, reported by `FollowProfile.over_tolerance_m`, never lower).
 3. Waypoints: between two kept vertices as few as needed so that flying straight from one to the next keeps
    the height above ground within [target, target + tolerance] at every sample (or at the rate-limited height
-   where that is above the band). Chords between points of a rate-limited profile are within the rates too.
+   where that is above the band) and within the rates: each straight stretch runs as far as some slope keeps
+   it in the band (the interval of such slopes narrows sample by sample) and ends as low as it may. The band's
+   top is lowered where the ground falls faster than the vehicle may descend (`ceiling`), so from any point of
+   the band the next sample's band is within reach and the stretches never get stuck.
 """
 
 from __future__ import annotations
@@ -46,6 +49,7 @@ class FollowProfile(NamedTuple):
     vertex: np.ndarray            # (n,) int: index into the input path, or -1
     over_tolerance_m: float       # max over samples of (height above ground - target - tolerance), >= 0
     over_at_xy: tuple[float, float] | None
+    highest_agl_m: float          # the most the flown path rises above the ground (at a sample)
 
 
 def _samples(xy: np.ndarray, step_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -73,26 +77,42 @@ def rate_limited(target: np.ndarray, s: np.ndarray, climb_slope: float, descent_
     return z
 
 
-def _chord_ok(s: np.ndarray, z: np.ndarray, lo: np.ndarray, hi: np.ndarray, i: int, j: int) -> bool:
-    if j - i < 2:
-        return True
-    f = (s[i + 1:j] - s[i]) / (s[j] - s[i]) if s[j] > s[i] else np.zeros(j - i - 1)
-    line = z[i] + (z[j] - z[i]) * f
-    return bool(np.all(line >= lo[i + 1:j] - _EPS_M) and np.all(line <= hi[i + 1:j] + _EPS_M))
+def ceiling(target: np.ndarray, tolerance_m: float, floor: np.ndarray, s: np.ndarray,
+            descent_slope: float) -> np.ndarray:
+    """The band's top: target + tolerance (never below the floor), lowered where the ground falls away faster
+    than the vehicle may descend, so that from anywhere in the band the next sample's band is in reach."""
+    top = np.maximum(target + tolerance_m, floor)
+    ds = np.diff(s)
+    for k in range(len(top) - 2, -1, -1):
+        top[k] = min(top[k], top[k + 1] + descent_slope * ds[k])
+    return top
 
 
-def _breakpoints(s: np.ndarray, z: np.ndarray, lo: np.ndarray, hi: np.ndarray, a: int, b: int) -> list[int]:
-    """Sample indices in (a, b] where straight flight from the previous one keeps within [lo, hi], greedily
-    as far as possible each time."""
-    out: list[int] = []
-    i = a
-    while i < b:
-        j = i + 1
-        while j < b and _chord_ok(s, z, lo, hi, i, j + 1):
-            j += 1
-        out.append(j)
-        i = j
-    return out
+class _Stretch(NamedTuple):
+    end: int              # sample index where the straight stretch ends
+    height_m: float       # the height there
+
+
+def _longest_stretch(s: np.ndarray, lo: np.ndarray, hi: np.ndarray, i: int, z_i: float, last: int,
+                     climb_slope: float, descent_slope: float) -> _Stretch:
+    """From (s[i], z_i), the farthest sample up to `last` that one straight climb or descent reaches while staying
+    within [lo, hi] at every sample on the way and within the rates; it ends as low as it can (near the target).
+    The band's construction (`rate_limited`, `ceiling`) guarantees the next sample is always reachable."""
+    slope_lo, slope_hi = -descent_slope, climb_slope
+    end, end_lo = i + 1, None
+    for k in range(i + 1, last + 1):
+        run = s[k] - s[i]
+        if run <= 0:
+            continue
+        new_lo = max(slope_lo, (lo[k] - z_i) / run)
+        new_hi = min(slope_hi, (hi[k] - z_i) / run)
+        if new_lo > new_hi + 1e-12:
+            break
+        slope_lo, slope_hi, end, end_lo = new_lo, new_hi, k, new_lo
+    if end_lo is None:                      # a zero-length step (repeated vertex): stay level
+        return _Stretch(end, z_i)
+    height = z_i + end_lo * (s[end] - s[i])
+    return _Stretch(end, float(min(max(height, lo[end]), hi[end])))
 
 
 def follow_path(xy: np.ndarray, ground: Callable[[np.ndarray], np.ndarray], settings: FollowSettings,
@@ -103,14 +123,21 @@ def follow_path(xy: np.ndarray, ground: Callable[[np.ndarray], np.ndarray], sett
     g = ground(p)
     target = g + settings.target_agl_m
     z = rate_limited(target, s, settings.climb_slope, settings.descent_slope)
-    hi = np.maximum(target + settings.tolerance_m, z)
-    keep = [0]
+    hi = ceiling(target, settings.tolerance_m, z, s, settings.descent_slope)
+    keep, heights = [0], [float(z[0])]
     for a, b in zip(vidx[:-1], vidx[1:]):
-        keep.extend(_breakpoints(s, z, target, hi, int(a), int(b)))
+        i = int(a)
+        while i < int(b):
+            st = _longest_stretch(s, z, hi, i, heights[-1], int(b), settings.climb_slope, settings.descent_slope)
+            keep.append(st.end)
+            heights.append(st.height_m)
+            i = st.end
     keep_arr = np.array(keep)
     vertex_of = {int(k): v for v, k in enumerate(vidx.tolist())}
     over = z - target - settings.tolerance_m
     worst = int(np.argmax(over))
-    return FollowProfile(p[keep_arr], z[keep_arr], np.array([vertex_of.get(int(k), -1) for k in keep_arr]),
+    flown = np.interp(s, s[keep_arr], np.array(heights))
+    return FollowProfile(p[keep_arr], np.array(heights), np.array([vertex_of.get(int(k), -1) for k in keep_arr]),
                          max(0.0, float(over[worst])),
-                         (float(p[worst, 0]), float(p[worst, 1])) if over[worst] > _EPS_M else None)
+                         (float(p[worst, 0]), float(p[worst, 1])) if over[worst] > _EPS_M else None,
+                         float(np.max(flown - g)))

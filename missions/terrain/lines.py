@@ -61,4 +61,50 @@ def terrain_track(track: Track, terrain: Terrain, speed_mps: float, where: str |
             new_points.append(TrackPoint(float(lat[k]), float(lon[k]), KIND_TERRAIN))
     spans = tuple((index_of[a], index_of[b]) for a, b in track.spans)
     return replace(track, points=tuple(new_points), spans=spans, frame=FRAME_GLOBAL,
-                   altitudes=tuple(float(z) for z in prof.amsl_m), over_tolerance_m=prof.over_tolerance_m)
+                   altitudes=tuple(float(z) for z in prof.amsl_m), over_tolerance_m=prof.over_tolerance_m,
+                   highest_agl_m=prof.highest_agl_m)
+
+
+def front_overlap_scale(track: Track, terrain: Terrain, along_m: float, altitude_m: float) -> float:
+    """The factor (<= 1) for the trigger distance that holds the front overlap on the steepest camera-on stretch.
+
+    A footprint on ground sloping by s along the track, seen from h above its nadir, reaches b·h/(1 + s·b) uphill
+    and b·h/(1 - s·b) downhill (b = along_m / (2 h): the half-angle's tangent), so it is a trapezoid wider
+    downhill; the next photo's footprint is the same trapezoid moved on by the trigger distance d, and the strip
+    the pair does not share is the wide end: the overlap of their areas is 1 - (d / L)(1 + s·b)(1 - s²b²) instead
+    of 1 - d / L (L the flat footprint's length; at 30 % and b = 0.33, 1.4 points less). Scaling d by 1 / (1 + s·b)
+    holds it. The slope is the ground's mean over one footprint length, the steepest along any camera-on span."""
+    if not track.spans:
+        return 1.0
+    pts = track.points
+    proj = LocalProjection.centred_on([p.lat for p in pts], [p.lon for p in pts])
+    x, y = proj.to_xy([p.lat for p in pts], [p.lon for p in pts])
+    step = min(MAX_STEP_M, max(MIN_STEP_M, terrain.dem.resolution_m / 2.0))
+    steepest = 0.0
+    for a, b in track.spans:
+        xy = np.column_stack([x[a:b + 1], y[a:b + 1]])
+        seg = np.hypot(*np.diff(xy, axis=0).T)
+        s = np.concatenate([[0.0], np.cumsum(seg)])
+        if s[-1] <= along_m:
+            continue
+        at = np.arange(0.0, s[-1] + 1e-9, step)
+        px, py = np.interp(at, s, xy[:, 0]), np.interp(at, s, xy[:, 1])
+        lat, lon = proj.to_latlon(px, py)
+        g = terrain.dem.ground_amsl(lat, lon)
+        k = max(1, int(round(along_m / step)))
+        if len(g) > k:
+            steepest = max(steepest, float(np.nanmax(np.abs(g[k:] - g[:-k]) / (at[k:] - at[:-k]), initial=0.0)))
+    tan_half = along_m / (2.0 * altitude_m)
+    return 1.0 / (1.0 + steepest * tan_half)
+
+
+def side_overlap_scale(side_pct: float, altitude_m: float, highest_agl_m: float | None) -> float:
+    """The factor (<= 1) for the line spacing that holds the side overlap when the lines fly anywhere between the
+    target and `highest_agl_m` above the ground: a photo taken (1 + τ) times higher than its neighbour on the next
+    line shares with it [1 + τ/2 - spacing / W] / (1 + τ) of its width (W the target's footprint width), which
+    is the requested f when spacing = W (1 - f - τ (f - 1/2)). Above 50 % only; 1 when the band is unused."""
+    f = side_pct / 100.0
+    if highest_agl_m is None or f <= 0.5:
+        return 1.0
+    tau = max(0.0, highest_agl_m / altitude_m - 1.0)
+    return max(0.05, 1.0 - tau * (f - 0.5) / (1.0 - f))

@@ -265,3 +265,24 @@ def test_preview_draws_contours_under_the_path_only_with_a_dem(tmp_path):
     flat = tmp_path / "flat.yaml"
     flat.write_text(T.plan_text(None, T.square(150), home_alt=300.0))
     assert 'class="terrain"' not in write_preview(compile_plan(flat), tmp_path / "f.svg").read_text()
+
+
+def test_lines_up_a_slope_keep_the_front_overlap(tmp_path):
+    # north-south lines up a 30 % slope: a footprint is a trapezoid, consecutive ones share less of it unless
+    # the trigger distance shrinks (1.4 points less without it)
+    T.write_dem(tmp_path / "dem.tif", T.slope(30, azimuth_deg=0.0), half_m=900.0)
+    p = tmp_path / "plan.yaml"
+    p.write_text(T.plan_text("dem.tif", T.square(150)))
+    compiled = compile_plan(p)
+    flat_trigger = 0.2 * 40.17                        # WIRIS Pro 13 mm at 60 m: 40.2 m along, 80 % front
+    assert compiled.areas[0].trigger_distance_m < 0.93 * flat_trigger
+    rep = _holds_the_request(compiled)
+    assert rep.overlap["thermal"].front_min >= 0.795 and rep.overlap["thermal"].side_min >= 0.695
+
+
+def test_a_hill_fits_one_upload_and_holds_the_side_overlap(tmp_path):
+    # straight stretches as long as the tolerance band allows: the hill needs tens of waypoints, not hundreds
+    compiled = compile_plan(_plan(tmp_path, T.hill(80, 150)))
+    assert len(compiled.parts) == 1 and len(compiled.items) < 300
+    rep = _holds_the_request(compiled)
+    assert rep.overlap["thermal"].side_min >= 0.69          # lines within [60, 66] m: spacing sized for it
