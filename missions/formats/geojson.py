@@ -10,7 +10,8 @@ home, flat ground assumed as in the report). Every feature has a `kind` property
   waypoint    each NAV item's position: seq (as on the vehicle), command name, altitude
   home        the home position
   photo       each re-derived photo position: index, payloads, altitude, heading, mission item, time
-  footprint   each photo's ground footprint per payload (nadir rectangle at the photo's altitude)
+  footprint   each photo's ground footprint per payload (nadir rectangle at the photo's altitude; with a DEM the
+              view cone cut by the terrain, missions.terrain.reflight)
 
 `kml_out` renders the same collection, so the two files can never disagree.
 """
@@ -101,6 +102,9 @@ def _footprints(compiled: Compiled, sim: Simulation) -> list[dict]:
     owners = [(k, name) for k, p in enumerate(sim.photos) for name in p.payloads]
     if not owners:
         return []
+    if getattr(compiled, "terrain", None) is not None:      # cut by the DEM (missions.terrain.reflight)
+        from missions.terrain.reflight import footprint_rings
+        return _polygon_features(owners, footprint_rings(compiled, sim, owners), sim)
     ph = sim.photos
     idx = np.array([k for k, _ in owners])
     c = np.array([(ph[k].x, ph[k].y) for k in idx], dtype=float)
@@ -113,9 +117,15 @@ def _footprints(compiled: Compiled, sim: Simulation) -> list[dict]:
     n = np.column_stack([np.cos(h), -np.sin(h)])
     a, b = d * along[:, None], n * across[:, None]
     corners = np.stack([c - a - b, c + a - b, c + a + b, c - a + b, c - a - b], axis=1)   # as footprint_ring
+    return _polygon_features(owners, corners, sim)
+
+
+def _polygon_features(owners: list[tuple[int, str]], corners: np.ndarray, sim: Simulation) -> list[dict]:
+    """Footprint features from closed rings (m, k, 2) in the simulation's metres."""
+    k_pts = corners.shape[1]
     lat, lon = sim.projection.to_latlon(corners[..., 0].ravel(), corners[..., 1].ravel())
-    lat = np.round(lat, 7).reshape(-1, 5).tolist()
-    lon = np.round(lon, 7).reshape(-1, 5).tolist()
+    lat = np.round(lat, 7).reshape(-1, k_pts).tolist()
+    lon = np.round(lon, 7).reshape(-1, k_pts).tolist()
     return [{"type": "Feature", "properties": {"kind": "footprint", "photo": k, "payload": name},
              "geometry": {"type": "Polygon", "coordinates": [[[b, a] for a, b in zip(la, lo)]]}}
             for (k, name), la, lo in zip(owners, lat, lon)]

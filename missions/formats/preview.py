@@ -177,7 +177,13 @@ def _map_content(compiled: Compiled, sim: Any) -> _MapContent:
             areas.append(tuple(xy_rings))
     photos = tuple(sim.photos)
     fp_stride = max(1, math.ceil(len(photos) / MAX_FOOTPRINTS))
-    fps = tuple(tuple(footprint_ring(p, compiled.payload(p.payloads[0]))) for p in photos[::fp_stride] if p.payloads)
+    if getattr(compiled, "terrain", None) is not None:      # footprints cut by the DEM, as the report measures
+        from missions.terrain.reflight import footprint_rings
+        owners = [(k, p.payloads[0]) for k, p in enumerate(photos) if k % fp_stride == 0 and p.payloads]
+        fps = tuple(tuple(map(tuple, r.tolist())) for r in footprint_rings(compiled, sim, owners))
+    else:
+        fps = tuple(tuple(footprint_ring(p, compiled.payload(p.payloads[0]))) for p in photos[::fp_stride]
+                    if p.payloads)
     return _MapContent(tuple(areas), tuple((v.x, v.y) for v in sim.vertices), photos, fps, fp_stride)
 
 

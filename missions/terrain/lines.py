@@ -65,6 +65,19 @@ def terrain_track(track: Track, terrain: Terrain, speed_mps: float, where: str |
                    highest_agl_m=prof.highest_agl_m)
 
 
+def _photo_runs(track: Track) -> tuple[tuple[int, int], ...]:
+    """Hover lines: each run of consecutive photo stops, as (first, last) point indices."""
+    runs, start = [], None
+    for i, p in enumerate((*track.points, None)):
+        if p is not None and p.kind == "photo":
+            start = i if start is None else start
+        elif start is not None:
+            if i - 1 > start:
+                runs.append((start, i - 1))
+            start = None
+    return tuple(runs)
+
+
 def front_overlap_scale(track: Track, terrain: Terrain, along_m: float, altitude_m: float) -> float:
     """The factor (<= 1) for the trigger distance that holds the front overlap on the steepest camera-on stretch.
 
@@ -74,14 +87,15 @@ def front_overlap_scale(track: Track, terrain: Terrain, along_m: float, altitude
     the pair does not share is the wide end: the overlap of their areas is 1 - (d / L)(1 + s·b)(1 - s²b²) instead
     of 1 - d / L (L the flat footprint's length; at 30 % and b = 0.33, 1.4 points less). Scaling d by 1 / (1 + s·b)
     holds it. The slope is the ground's mean over one footprint length, the steepest along any camera-on span."""
-    if not track.spans:
+    spans = track.spans or _photo_runs(track)
+    if not spans:
         return 1.0
     pts = track.points
     proj = LocalProjection.centred_on([p.lat for p in pts], [p.lon for p in pts])
     x, y = proj.to_xy([p.lat for p in pts], [p.lon for p in pts])
     step = min(MAX_STEP_M, max(MIN_STEP_M, terrain.dem.resolution_m / 2.0))
     steepest = 0.0
-    for a, b in track.spans:
+    for a, b in spans:
         xy = np.column_stack([x[a:b + 1], y[a:b + 1]])
         seg = np.hypot(*np.diff(xy, axis=0).T)
         s = np.concatenate([[0.0], np.cumsum(seg)])

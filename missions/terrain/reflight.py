@@ -194,3 +194,15 @@ def step_ground(area_info: Any, tolerance_m: float, gp: GroundPhotos, idx: np.nd
 def ground_report(compiled: Any, sim: Any, steps: Sequence[StepGround]) -> GroundReport:
     t = compiled.terrain
     return GroundReport(t.dem.files, t.frame, t.clearance_m, path_clearance(compiled, sim, t.dem), tuple(steps))
+
+
+def footprint_rings(compiled: Any, sim: Any, owners: Sequence[tuple[int, str]]) -> np.ndarray:
+    """Closed ground footprint rings (m, 9, 2), simulation metres, of (photo index, payload name) pairs: the
+    GeoJSON/KML footprints and the preview's, cut by the DEM as the report measures them."""
+    out = np.zeros((len(owners), len(_RING) + 1, 2))
+    for name in dict.fromkeys(n for _, n in owners):
+        rows = [r for r, (_, n) in enumerate(owners) if n == name]
+        photos = [sim.photos[owners[r][0]] for r in rows]
+        ring = ground_photos(compiled, sim, photos, compiled.payload(name)).ring
+        out[rows] = np.concatenate([ring, ring[:, :1]], axis=1)
+    return out

@@ -286,3 +286,46 @@ def test_a_hill_fits_one_upload_and_holds_the_side_overlap(tmp_path):
     assert len(compiled.parts) == 1 and len(compiled.items) < 300
     rep = _holds_the_request(compiled)
     assert rep.overlap["thermal"].side_min >= 0.69          # lines within [60, 66] m: spacing sized for it
+
+
+def test_geojson_footprints_lie_on_the_ground(tmp_path):
+    from pyproj import Transformer
+    from shapely.geometry import Polygon
+    out = tmp_path / "out"
+    r = CliRunner().invoke(cli, ["mission", "compile", str(_plan(tmp_path, T.hill(80, 150))), "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    fc = json.loads((out / "terrain-test.geojson").read_text())
+    to_utm = Transformer.from_crs("EPSG:4326", "EPSG:32633", always_xy=True)
+    areas = []
+    for f in fc["features"]:
+        if f["properties"]["kind"] == "footprint":
+            ring = f["geometry"]["coordinates"][0]
+            assert len(ring) == 9                             # corners and edge midpoints, closed
+            areas.append(Polygon([to_utm.transform(lon, lat) for lon, lat in ring]).area)
+    flat_60m = 50.2 * 40.2                                    # WIRIS Pro 13 mm at 60 m above the ground
+    assert areas and 0.9 * flat_60m < min(areas) and max(areas) < 1.35 * flat_60m
+
+
+def test_corridor_by_gsd_and_hover_survey_follow_the_hill(tmp_path):
+    T.write_dem(tmp_path / "dem.tif", T.hill(80, 150))
+    base = T.plan_text("dem.tif", T.square(120))
+    a, b = T.offset(-200, -100), T.offset(200, 120)
+    corridor = base.replace(f"""  - survey:
+      area: {T.square(120)}
+      payloads: [thermal]
+      altitude_m: 60.0""", f"""  - corridor:
+      line: [[{a[0]}, {a[1]}], [{b[0]}, {b[1]}]]
+      width_m: 80
+      payloads: [thermal]
+      gsd_cm: 8""").replace("      angle_deg: 0.0\n", "")
+    assert "corridor" in corridor
+    (tmp_path / "corridor.yaml").write_text(corridor)
+    compiled = compile_plan(tmp_path / "corridor.yaml")
+    assert compiled.areas[0].altitude_m == pytest.approx(61.18, abs=0.01)      # 8 cm/px with 13 mm
+    _holds_the_request(compiled)
+    (tmp_path / "hover.yaml").write_text(base.replace("angle_deg: 0.0", "angle_deg: 0.0\n      trigger: hover"))
+    hover = compile_plan(tmp_path / "hover.yaml")
+    stops = [it for it in _survey_navs(hover) if it.param1 > 0]
+    ground = hover.terrain.dem.ground_amsl([it.lat for it in stops], [it.lon for it in stops])
+    assert stops and np.all(np.abs(np.array([it.z for it in stops]) - ground - 60.0) < 0.1)
+    _holds_the_request(hover)
