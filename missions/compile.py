@@ -562,6 +562,11 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     home_amsl = _home_amsl(plan, terrain, state)
     payloads = _resolve_payloads(plan, prof, state)
     c = _Compile(plan, prof, payloads, _emitter(plan, prof, payloads), state, terrain)
+    c.emitter.home_amsl_m = home_amsl
+    if terrain is not None and any(c.payloads.is_rededge(p.name) for p in plan.payloads):
+        c.warn("rededge_over_terrain", "a RedEdge in overlap mode spaces its photos by its own height above the "
+               "take-off point, not above the DEM: over rising or falling ground its front overlap and its "
+               "capture threshold (operatingAlt) differ from the plan's; the report measures what it does")
     _warn_about_the_start(c)
     for step in plan.mission:
         _STEPS[type(step)](c, step)

@@ -37,7 +37,7 @@ from missions.compiled import PlanWarning
 from missions.errors import PlanError
 from missions.emit.firmware import FirmwareProfile
 from missions.geometry.geo import great_circle_m
-from missions.emit.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem, deg_to_e7, mavlink
+from missions.emit.items import FRAME_GLOBAL, FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem, deg_to_e7, mavlink
 from missions.emit import lua as bridge
 from missions.emit.setup import commands_for
 
@@ -150,6 +150,9 @@ class Emitter:
         # in-flight value whose `when` a pre-flight setting meets travels (the plan loader judges alike)
         self.camera_state: dict[str, dict] = {name: dict(v) for name, v in (preflight or {}).items()}
         self.s = _State()
+        # home's elevation, for a height above home from an altitude above mean sea level (terrain-following
+        # lines emit FRAME_GLOBAL); None: every position is relative
+        self.home_amsl_m: float | None = None
 
     # ------------------------------------------------------------------------------------------ plumbing
     def _add(self, item: MissionItem) -> None:
@@ -363,6 +366,8 @@ class Emitter:
 
     def _check_glide(self, lat: float, lon: float, where: str | None) -> None:
         plat, plon, alt = self.s.last_pos
+        if self.s.last_frame == FRAME_GLOBAL and self.home_amsl_m is not None:
+            alt -= self.home_amsl_m
         dist = great_circle_m(plat, plon, lat, lon)
         need = alt / math.tan(math.radians(MAX_GLIDE_DEG))
         if alt > 0 and dist < need:

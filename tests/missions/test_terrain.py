@@ -329,3 +329,24 @@ def test_corridor_by_gsd_and_hover_survey_follow_the_hill(tmp_path):
     ground = hover.terrain.dem.ground_amsl([it.lat for it in stops], [it.lon for it in stops])
     assert stops and np.all(np.abs(np.array([it.z for it in stops]) - ground - 60.0) < 0.1)
     _holds_the_request(hover)
+
+
+def test_plane_landing_glide_is_judged_above_home_not_above_sea_level(tmp_path):
+    # the lines fly ~400 m above mean sea level, 100 m above home: a 1.4 km final approach is a 4° glide
+    T.write_dem(tmp_path / "dem.tif", T.hill(80, 150), half_m=2500.0, res_m=10.0)
+    lat, lon = T.offset(0.0, -1700.0)
+    text = (T.plan_text("dem.tif", T.square(150), altitude_m=100.0, takeoff_m=100.0, front=60, side=60,
+                        speed_mps=15.0).replace("frame: copter", "frame: plane")
+            .replace("  - rtl: {}", f"  - land: {{lat: {lat}, lon: {lon}}}"))
+    (tmp_path / "plane.yaml").write_text(text)
+    compiled = compile_plan(tmp_path / "plane.yaml")
+    assert compiled.items[-1].command == mavlink.MAV_CMD_NAV_LAND
+
+
+def test_rededge_over_terrain_is_warned(tmp_path):
+    text = T.plan_text("dem.tif", T.square(150)).replace(
+        "thermal: {camera: wiris-pro, imager: thermal, lens_mm: 13, component_id: 100}",
+        "thermal: {camera: rededge-mx}")
+    T.write_dem(tmp_path / "dem.tif", T.hill())
+    (tmp_path / "re.yaml").write_text(text)
+    assert any(w.code == "rededge_over_terrain" for w in compile_plan(tmp_path / "re.yaml").warnings)
