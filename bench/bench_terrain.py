@@ -2,8 +2,8 @@
 
     .venv/bin/python bench/bench_terrain.py
 
-Ground: synthetic DEM GeoTIFFs (tests/terrain_dems.py, 5 m pixels, UTM 33N): a 30 % slope rising east, and a
-hill 80 m high (Gaussian, sigma 150 m). Survey: a 300 m x 300 m square over it, WIRIS Pro 13 mm at 60 m, 80/70 %
+Ground: synthetic DEM GeoTIFFs (tests/terrain_dems.py, 5 m pixels, UTM 33N): a 30 % slope rising east (across
+the north-south lines), the same rising north (along them), and a hill 80 m high (Gaussian, sigma 150 m). Survey: a 300 m x 300 m square over it, WIRIS Pro 13 mm at 60 m, 80/70 %
 overlap, north-south lines, 5 m/s, copter (climb 2.5 m/s, descent 1.5 m/s), take-off 60 m, home 250 m south.
 flat:    the plan without `terrain:` (home's elevation from the DEM), its photos re-flown over the DEM;
 terrain: the plan with `terrain: {dem: ...}` (frame amsl, tolerance 10 % = 6 m, clearance 20 m).
@@ -47,8 +47,9 @@ def main() -> None:
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp)
-        for label, shape in (("slope 30 %", T.slope(30)), ("hill 80 m", T.hill(80, 150))):
-            T.write_dem(d / "dem.tif", shape)
+        for label, shape in (("slope 30 % across lines", T.slope(30)), ("slope 30 % along lines", T.slope(30, 0.0)),
+                             ("hill 80 m", T.hill(80, 150))):
+            T.write_dem(d / "dem.tif", shape, half_m=900.0)
             terrain_plan = d / "terrain.yaml"
             terrain_plan.write_text(T.plan_text("dem.tif", T.square(150)))
             followed = compile_plan(terrain_plan)
