@@ -350,3 +350,20 @@ def test_rededge_over_terrain_is_warned(tmp_path):
     T.write_dem(tmp_path / "dem.tif", T.hill())
     (tmp_path / "re.yaml").write_text(text)
     assert any(w.code == "rededge_over_terrain" for w in compile_plan(tmp_path / "re.yaml").warnings)
+
+
+@pytest.mark.parametrize("firmware, frame", [("ardupilot", "amsl"), ("ardupilot", "terrain"), ("px4", "amsl")])
+def test_terrain_missions_upload_and_verify_over_udp(tmp_path, firmware, frame):
+    # the compiled .plan through `upload_file --verify` against the vehicle simulator on 127.0.0.1, which
+    # gives items back in the frames each firmware uses (ArduPilot 0/10, PX4 GLOBAL_INT)
+    from wiris_tools.link import Link
+    from wiris_tools.transfer import upload_file
+    from wiris_tools.vehicle_sim import VehicleSim
+    extra = ", frame: terrain" if frame == "terrain" else ""
+    p = _plan(tmp_path, T.hill(80, 150), firmware=firmware, terrain_extra=extra)
+    out = tmp_path / "out"
+    r = CliRunner().invoke(cli, ["mission", "compile", str(p), "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    with VehicleSim(flavour=firmware, heartbeat_s=0.2) as sim, Link(f"udpout:127.0.0.1:{sim.port}") as link:
+        summary = upload_file(link, str(out / "terrain-test.plan"), verify=True, timeout=5)
+    assert summary["verified"]
