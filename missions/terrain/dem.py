@@ -276,3 +276,33 @@ def _resolution_m(ds: Any, horizontal: Any) -> float:
     axis = horizontal.axis_info[0] if horizontal.axis_info else None
     unit = float(axis.unit_conversion_factor) if axis is not None and axis.unit_conversion_factor else 1.0
     return max(rx, ry) * unit
+
+
+class PlaneGround:
+    """The DEM resampled on a regular grid of a metric plane (a LocalProjection), for many look-ups near each
+    other (the report's footprint rays): one coordinate transformation for the grid instead of one per ray.
+    Heights between grid nodes are bilinear; NaN where the DEM has none."""
+
+    MAX_NODES = 4_000_000
+
+    def __init__(self, dem: Dem, projection: Any, box: tuple[float, float, float, float], step_m: float) -> None:
+        x0, y0, x1, y1 = box
+        step = max(step_m, math.sqrt(max((x1 - x0) * (y1 - y0), 1.0) / self.MAX_NODES))
+        nx, ny = int(math.ceil((x1 - x0) / step)) + 2, int(math.ceil((y1 - y0) / step)) + 2
+        self.x0, self.y0, self.step = x0 - step / 2, y0 - step / 2, step
+        xs, ys = self.x0 + step * np.arange(nx), self.y0 + step * np.arange(ny)
+        X, Y = np.meshgrid(xs, ys)
+        lat, lon = projection.to_latlon(X.ravel(), Y.ravel())
+        self.z = dem.ground_amsl(lat, lon).reshape(ny, nx)
+
+    def at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        ny, nx = self.z.shape
+        c = (np.asarray(x, dtype=float) - self.x0) / self.step
+        r = (np.asarray(y, dtype=float) - self.y0) / self.step
+        inside = (c >= 0) & (c <= nx - 1) & (r >= 0) & (r <= ny - 1)
+        c, r = np.clip(c, 0, nx - 1.000001), np.clip(r, 0, ny - 1.000001)
+        c0, r0 = np.floor(c).astype(int), np.floor(r).astype(int)
+        fc, fr = c - c0, r - r0
+        z = self.z
+        v = (z[r0, c0] * (1 - fc) + z[r0, c0 + 1] * fc) * (1 - fr) + (z[r0 + 1, c0] * (1 - fc) + z[r0 + 1, c0 + 1] * fc) * fr
+        return np.where(inside, v, np.nan)

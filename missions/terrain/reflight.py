@@ -25,6 +25,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from missions.terrain.clearance import Clearance, is_terrain_item, path_clearance
+from missions.terrain.dem import PlaneGround
 
 GROUND_FLAT = "ground assumed flat at home elevation"
 _RAY_ITERATIONS = 24
@@ -32,7 +33,6 @@ _PARALLEL_SIN = math.sin(math.radians(20.0))
 # Multipliers (along, across) of the footprint's half extents, in ring order: corners and edge midpoints.
 _RING = np.array([(-1, -1), (0, -1), (1, -1), (1, 0), (1, 1), (0, 1), (-1, 1), (-1, 0)], dtype=float)
 _LEFT_MID, _RIGHT_MID = 1, 5           # the across-track edge midpoints through the centre
-_CHUNK = 512
 
 
 @dataclass(frozen=True)
@@ -113,9 +113,13 @@ def ground_photos(compiled: Any, sim: Any, photos: Sequence[Any], payload: Any) 
     across, along = payload.footprint_m(1.0)
     u = (d[:, None, :] * (_RING[None, :, 0:1] * along / 2) + nrm[:, None, :] * (_RING[None, :, 1:2] * across / 2))
     drop = np.repeat(np.maximum(hag, 0.0)[:, None], len(_RING), axis=1)
+    # the rays land within a footprint of their photo, 1.5 times its reach covers every iteration's guess
+    reach = 1.5 * float(np.max(np.abs(u))) * float(np.nanmax(np.maximum(hag, 0.0)) if len(hag) else 0.0) + 1.0
+    grid = PlaneGround(dem, proj, (c[:, 0].min() - reach, c[:, 1].min() - reach, c[:, 0].max() + reach,
+                                   c[:, 1].max() + reach), max(0.5, dem.resolution_m / 2.0))
     for _ in range(_RAY_ITERATIONS):
         pos = c[:, None, :] + u * drop[:, :, None]
-        g = _ground_xy(dem, proj, pos[..., 0].ravel(), pos[..., 1].ravel()).reshape(drop.shape)
+        g = grid.at(pos[..., 0].ravel(), pos[..., 1].ravel()).reshape(drop.shape)
         g = np.where(np.isfinite(g), g, below[:, None])
         drop = np.maximum(0.5 * drop + 0.5 * (z[:, None] - g), 0.0)
     ring = c[:, None, :] + u * drop[:, :, None]
@@ -148,6 +152,8 @@ def min_front_overlap(photos: Sequence[Any], gp: GroundPhotos, idx: np.ndarray) 
 
 
 def min_side_overlap(photos: Sequence[Any], gp: GroundPhotos, idx: np.ndarray, payload: Any) -> float | None:
+    import shapely
+
     if len(idx) < 2:
         return None
     c = np.array([(photos[k].x, photos[k].y) for k in idx], dtype=float)
@@ -156,30 +162,38 @@ def min_side_overlap(photos: Sequence[Any], gp: GroundPhotos, idx: np.ndarray, p
     d = np.column_stack([np.sin(h), np.cos(h)])
     nrm = np.column_stack([np.cos(h), -np.sin(h)])
     mids = gp.ring[idx][:, [_LEFT_MID, _RIGHT_MID], :]                     # (m, 2, 2)
-    half_along = payload.footprint_m(1.0)[1] / 2 * np.maximum(gp.hag_m[idx], 0.0)
+    hag = np.maximum(gp.hag_m[idx], 0.0)
+    across, along = payload.footprint_m(1.0)
+    # candidate neighbours: photos within one (widest) footprint width of each other, found with a tree
+    i, j = shapely.STRtree(shapely.points(c)).query(shapely.points(c), predicate="dwithin",
+                                                     distance=float(across * hag.max()) if len(hag) else 0.0)
+    rel = c[j] - c[i]
+    lat = np.einsum("pk,pk->p", rel, nrm[i])
+    keep = ((span[i] != span[j]) & (np.abs(np.sin(h[j] - h[i])) < _PARALLEL_SIN)
+            & (np.abs(np.einsum("pk,pk->p", rel, d[i])) <= along / 2 * hag[i]) & (np.abs(lat) > 1e-6))
+    i, j, lat = i[keep], j[keep], lat[keep]
+    if not len(i):
+        return None
+    # across-track extents through the centres, on photo i's own across axis
+    base = np.einsum("pk,pk->p", c[i], nrm[i])
+    ext_i = np.einsum("pqk,pk->pq", mids[i], nrm[i]) - base[:, None]
+    ext_j = np.einsum("pqk,pk->pq", mids[j], nrm[i]) - base[:, None]
+    lo_i, hi_i = ext_i.min(axis=1), ext_i.max(axis=1)
+    lo_j, hi_j = ext_j.min(axis=1), ext_j.max(axis=1)
+    ov = (np.minimum(hi_i, hi_j) - np.maximum(lo_i, lo_j)) / np.maximum(hi_i - lo_i, 1e-9)
     best = math.inf
-    for s in range(0, len(idx), _CHUNK):
-        i = np.arange(s, min(s + _CHUNK, len(idx)))
-        rel = c[None, :, :] - c[i, None, :]                                  # (ci, m, 2)
-        lat = np.einsum("imk,ik->im", rel, nrm[i])
-        alo = np.einsum("imk,ik->im", rel, d[i])
-        par = np.abs(np.sin(h[None, :] - h[i, None])) < _PARALLEL_SIN
-        cand = par & (span[None, :] != span[i, None]) & (np.abs(alo) <= half_along[i, None])
-        # across-track extents through the centres, on each photo's own across axis
-        own = np.einsum("ipk,ik->ip", mids[i] - c[i, None, :], nrm[i])     # (ci, 2)
-        lo_i, hi_i = own.min(axis=1), own.max(axis=1)
-        other = np.einsum("mpk,ik->imp", mids, nrm[i]) - np.einsum("ik,ik->i", c[i], nrm[i])[:, None, None]
-        lo_j, hi_j = other.min(axis=2), other.max(axis=2)
-        ov = (np.minimum(hi_i[:, None], hi_j) - np.maximum(lo_i[:, None], lo_j)) / np.maximum(hi_i - lo_i, 1e-9)[:, None]
-        for side in (1.0, -1.0):
-            m = cand & (side * lat > 1e-6)
-            dist = np.where(m, np.abs(lat), np.inf)
-            j = np.argmin(dist, axis=1)
-            has = np.isfinite(dist[np.arange(len(i)), j])
-            vals = ov[np.arange(len(i)), j][has]
-            vals = vals[vals > 0]                    # no overlap at all is a gap: coverage shows it
-            if len(vals):
-                best = min(best, float(vals.min()))
+    for side in (1.0, -1.0):
+        m = side * lat > 0
+        if not m.any():
+            continue
+        # each photo's nearest neighbour on this side: sort by (photo, distance), take the first of each photo
+        ii, dist, vals = i[m], np.abs(lat[m]), ov[m]
+        order = np.lexsort((dist, ii))
+        first = order[np.r_[True, ii[order][1:] != ii[order][:-1]]]
+        v = vals[first]
+        v = v[v > 0]                                  # no overlap at all is a gap: coverage shows it
+        if len(v):
+            best = min(best, float(v.min()))
     return None if math.isinf(best) else best
 
 
