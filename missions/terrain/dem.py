@@ -127,7 +127,7 @@ class Dem:
         bad = np.flatnonzero(~np.isfinite(z))
         if len(bad):
             la, lo = np.atleast_1d(lat)[bad[0]], np.atleast_1d(lon)[bad[0]]
-            raise PlanError(f"{what} at {la:.6f}, {lo:.6f} has no ground height in the DEM "
+            raise PlanError(f"no ground height in the DEM under {what} at {la:.6f}, {lo:.6f} "
                             f"({len(bad)} of {len(z)} sampled points): outside "
                             f"{'its file' if len(self._rasters) == 1 else 'all its files'} or on a nodata hole",
                             where=where,

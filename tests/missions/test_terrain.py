@@ -367,3 +367,20 @@ def test_terrain_missions_upload_and_verify_over_udp(tmp_path, firmware, frame):
     with VehicleSim(flavour=firmware, heartbeat_s=0.2) as sim, Link(f"udpout:127.0.0.1:{sim.port}") as link:
         summary = upload_file(link, str(out / "terrain-test.plan"), verify=True, timeout=5)
     assert summary["verified"]
+
+
+def test_check_prints_the_ground_it_measured_on(tmp_path):
+    r = CliRunner().invoke(cli, ["mission", "check", str(_plan(tmp_path, T.hill(80, 150)))])
+    assert r.exit_code == 0, r.output
+    assert "from the DEM: dem.tif (mean sea level (EGM96 assumed), 5.0 m)" in r.output
+    assert "clearance" in r.output and "step 1 above ground  60.0–" in r.output
+    flat = tmp_path / "flat.yaml"
+    flat.write_text(T.plan_text(None, T.square(150), home_alt=300.0))
+    r = CliRunner().invoke(cli, ["mission", "check", str(flat)])
+    assert "ground assumed flat at home elevation" in r.output
+    T.write_dem(tmp_path / "holes.tif", T.hill(), holes=[(0.0, 0.0, 30.0)])
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(T.plan_text("holes.tif", T.square(150)))
+    r = CliRunner().invoke(cli, ["mission", "check", "--json", str(bad)])
+    assert r.exit_code == 1
+    assert "nodata" in json.loads(r.stdout)["errors"][0]["message"]
