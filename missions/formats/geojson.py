@@ -81,12 +81,17 @@ def feature_collection(compiled: Compiled, sim: Simulation, rep: MissionReport) 
                       "geometry": {"type": "Point", "coordinates": [_r7(lon), _r7(lat), round(home_amsl + v.alt_m, 2)]}})
     n_fp = sum(len(p.payloads) for p in sim.photos)
     write_fp = n_fp <= MAX_FOOTPRINT_FEATURES
+    heights = _photo_heights(compiled, sim)
     for k, p in enumerate(sim.photos):
-        feats.append({"type": "Feature",
-                      "properties": {"kind": "photo", "index": k, "payloads": list(p.payloads),
-                                     "alt_m": round(p.alt_m, 2), "heading_deg": round(p.heading_deg, 2),
-                                     "item_seq": p.cause + seq_base if p.cause >= 0 else None, "time_s": round(p.time_s, 1)},
-                      "geometry": {"type": "Point", "coordinates": [_r7(p.lon), _r7(p.lat), round(home_amsl + p.alt_m, 2)]}})
+        props = {"kind": "photo", "index": k, "payloads": list(p.payloads),
+                 "alt_m": round(p.alt_m, 2), "heading_deg": round(p.heading_deg, 2),
+                 "item_seq": p.cause + seq_base if p.cause >= 0 else None, "time_s": round(p.time_s, 1)}
+        amsl = home_amsl + p.alt_m
+        if heights is not None:          # over a DEM: the camera's altitude and its height above the ground below
+            amsl = float(heights[0][k])
+            props["agl_m"] = round(float(heights[0][k] - heights[1][k]), 2)
+        feats.append({"type": "Feature", "properties": props,
+                      "geometry": {"type": "Point", "coordinates": [_r7(p.lon), _r7(p.lat), round(amsl, 2)]}})
     if write_fp:
         feats.extend(_footprints(compiled, sim))
     props: dict[str, Any] = {"plan": compiled.name, "firmware": compiled.firmware,
@@ -95,6 +100,15 @@ def feature_collection(compiled: Compiled, sim: Simulation, rep: MissionReport) 
         props["footprints_omitted"] = (f"{n_fp} footprints exceed {MAX_FOOTPRINT_FEATURES}; "
                                        "photo points are complete")
     return {"type": "FeatureCollection", "properties": props, "features": feats}
+
+
+def _photo_heights(compiled: Compiled, sim: Simulation) -> tuple[np.ndarray, np.ndarray] | None:
+    """(camera altitude AMSL, ground AMSL below) of every photo when the plan has a DEM, else None."""
+    if getattr(compiled, "terrain", None) is None or not sim.photos:
+        return None
+    from missions.terrain.reflight import camera_amsl
+    ground = compiled.terrain.dem.ground_amsl([p.lat for p in sim.photos], [p.lon for p in sim.photos])
+    return camera_amsl(compiled, sim.photos, ground), ground
 
 
 def _footprints(compiled: Compiled, sim: Simulation) -> list[dict]:

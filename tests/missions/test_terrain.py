@@ -164,7 +164,7 @@ def test_clearance_error_names_the_place_and_the_height(tmp_path):
 
 @pytest.mark.parametrize("case, expect", [
     ("hole", "nodata"), ("outside", "no ground height"), ("nocrs", "no coordinate reference system"),
-    ("text", "cannot be read as a raster"), ("missing", "not found")])
+    ("text", "cannot be read as a raster"), ("missing", "not found"), ("mars", "cannot be transformed from WGS84")])
 def test_bad_dems_are_clear_errors_and_write_nothing(tmp_path, case, expect):
     area = T.square(150)
     if case == "hole":
@@ -176,6 +176,14 @@ def test_bad_dems_are_clear_errors_and_write_nothing(tmp_path, case, expect):
         T.write_dem(tmp_path / "dem.tif", T.hill(), with_crs=False)
     elif case == "text":
         (tmp_path / "dem.tif").write_text("not a raster\n")
+    elif case == "mars":                  # a CRS of another body: PROJ has no way from WGS84 to it
+        import rasterio
+        from pyproj import CRS
+        from rasterio.transform import from_origin
+        with rasterio.open(tmp_path / "dem.tif", "w", driver="GTiff", width=10, height=10, count=1,
+                           dtype="float32", crs=rasterio.crs.CRS.from_wkt(CRS("IAU_2015:49900").to_wkt()),
+                           transform=from_origin(14.7, 50.1, 0.01, 0.01)) as ds:
+            ds.write(np.ones((10, 10), np.float32), 1)
     p = tmp_path / "plan.yaml"
     p.write_text(T.plan_text("dem.tif", area))
     out = tmp_path / "out"
@@ -304,6 +312,8 @@ def test_geojson_footprints_lie_on_the_ground(tmp_path):
             areas.append(Polygon([to_utm.transform(lon, lat) for lon, lat in ring]).area)
     flat_60m = 50.2 * 40.2                                    # WIRIS Pro 13 mm at 60 m above the ground
     assert areas and 0.9 * flat_60m < min(areas) and max(areas) < 1.35 * flat_60m
+    agl = [f["properties"]["agl_m"] for f in fc["features"] if f["properties"]["kind"] == "photo"]
+    assert agl and min(agl) >= 59.9 and max(agl) <= 66.1
 
 
 def test_corridor_by_gsd_and_hover_survey_follow_the_hill(tmp_path):
