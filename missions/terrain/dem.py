@@ -153,7 +153,7 @@ def _resolve(p: str, base_dir: str | Path) -> Path:
 
 def _read(path: Path, vertical: str, where: str | None) -> _Raster:
     import rasterio                       # heavy (GDAL): loads only for a plan with a DEM
-    from rasterio.errors import RasterioIOError
+    from rasterio.errors import RasterioError
 
     if not path.is_file():
         raise PlanError(f"DEM file {str(path)!r} {'is not a file' if path.exists() else 'not found'}", where=where,
@@ -161,7 +161,7 @@ def _read(path: Path, vertical: str, where: str | None) -> _Raster:
     try:
         with rasterio.open(path) as ds:
             return _raster(ds, path, vertical, where)
-    except RasterioIOError as e:
+    except RasterioError as e:           # not a raster, truncated, an unknown format: GDAL says which
         raise PlanError(f"DEM file {path.name} cannot be read as a raster: {_first_line(e)}", where=where,
                         hint="give a GeoTIFF (.tif) or an SRTM tile named like N50E014.hgt") from None
 
@@ -211,12 +211,11 @@ def _split_crs(crs: Any) -> tuple[Any, bool, Any]:
 
 def _transformer(horizontal: Any, path: Path, where: str | None) -> Any:
     from pyproj import CRS, Transformer
-    from pyproj.exceptions import ProjError
+    from pyproj.exceptions import CRSError, ProjError
 
     try:
         t = Transformer.from_crs(CRS.from_epsg(4326), horizontal, always_xy=True)
-        x, y = t.transform(0.0, 0.0)             # a transformation PROJ cannot carry out fails here, not later
-    except (ProjError, Exception) as e:          # pyproj raises several types for an impossible CRS
+    except (ProjError, CRSError) as e:           # e.g. a CRS of another body, or one PROJ has no way to
         raise PlanError(f"DEM file {path.name}'s CRS ({horizontal.name}) cannot be transformed from WGS84: "
                         f"{_first_line(e)}", where=where,
                         hint="reproject it to EPSG:4326 or a UTM zone with gdalwarp -t_srs") from None

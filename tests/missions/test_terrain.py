@@ -394,3 +394,11 @@ def test_check_prints_the_ground_it_measured_on(tmp_path):
     r = CliRunner().invoke(cli, ["mission", "check", "--json", str(bad)])
     assert r.exit_code == 1
     assert "nodata" in json.loads(r.stdout)["errors"][0]["message"]
+
+
+def test_a_truncated_geotiff_is_a_clear_error(tmp_path):
+    T.write_dem(tmp_path / "whole.tif", T.hill())
+    (tmp_path / "dem.tif").write_bytes((tmp_path / "whole.tif").read_bytes()[:3000])
+    with pytest.raises(PlanError) as e:
+        load_dem(["dem.tif"], tmp_path, where="plan.yaml:4:8")
+    assert "cannot be read as a raster" in e.value.message and e.value.where == "plan.yaml:4:8" and e.value.hint
