@@ -13,7 +13,8 @@ files written; errors are PlanError with the plan's file:line:col.
 
 Warnings are `PlanWarning(code, message)` values. Codes: altitude_above_120m, assumed_optics, trigger_interval_near_min,
 area_smaller_than_footprint (and the survey planner's own codes), no_takeoff, component_id_chosen,
-no_optics, mission_split, px4_single_capture_all.
+no_optics, mission_split, px4_single_capture_all; with a DEM (missions.terrain) terrain_rate_limited,
+home_elevation_differs, rededge_over_terrain.
 """
 
 from __future__ import annotations
@@ -464,8 +465,13 @@ def _split_into_parts(c: _Compile, items: tuple[MissionItem, ...]) -> _Parts:
 def _warn_about_altitudes(c: _Compile) -> None:
     for alt, where in c.state.altitudes:
         if alt > MAX_AGL_M:
-            c.warn("altitude_above_120m", f"{alt:g} m above home at {where}; most rules allow {MAX_AGL_M:g} m "
-                   "above ground without a permit (ground assumed flat at home's height)")
+            if c.terrain is None:
+                c.warn("altitude_above_120m", f"{alt:g} m above home at {where}; most rules allow {MAX_AGL_M:g} m "
+                       "above ground without a permit (ground assumed flat at home's height)")
+            else:
+                c.warn("altitude_above_120m", f"{alt:g} m at {where} (above the DEM's ground for a survey or "
+                       f"corridor, above home for the other steps); most rules allow {MAX_AGL_M:g} m above ground "
+                       "without a permit")
 
 
 def _setup(c: _Compile) -> tuple[SetupStep, ...]:

@@ -678,9 +678,9 @@ def _over_zones_text(row: AreaRow, path: StepPath) -> str:
 
 def _altitude_warnings(compiled: Compiled, sim: Simulation) -> list[Finding]:
     """The highest vertex above MAX_AGL_M, unless the compiler already warned (with the plan's file:line:col)."""
-    high = [v for v in sim.vertices if v.alt_m > MAX_AGL_M + 1e-6]
     if getattr(compiled, "terrain", None) is not None:
         return []        # above home is not above ground: the compiler checks the heights above the DEM
+    high = [v for v in sim.vertices if v.alt_m > MAX_AGL_M + 1e-6]
     if not high or any(w.code == "altitude_above_120m" for w in compiled.warnings):
         return []
     v = max(high, key=lambda v: v.alt_m)
