@@ -402,3 +402,30 @@ def test_a_truncated_geotiff_is_a_clear_error(tmp_path):
     with pytest.raises(PlanError) as e:
         load_dem(["dem.tif"], tmp_path, where="plan.yaml:4:8")
     assert "cannot be read as a raster" in e.value.message and e.value.where == "plan.yaml:4:8" and e.value.hint
+
+
+from hypothesis import given, settings, strategies as st   # noqa: E402
+
+
+@settings(max_examples=60, deadline=None)
+@given(bumps=st.lists(st.tuples(st.floats(0, 600), st.floats(-80, 80), st.floats(25, 150)), min_size=1, max_size=6),
+       climb=st.floats(0.1, 1.0), descent=st.floats(0.1, 1.0), tol=st.floats(0.5, 15.0),
+       cuts=st.lists(st.floats(1, 599), max_size=4))
+def test_followed_profile_stays_in_its_band_and_rates(bumps, climb, descent, tol, cuts):
+    def ground_of(x):
+        return 300.0 + sum(h * np.exp(-((x - c) / w) ** 2) for c, h, w in bumps)
+
+    xs = np.array(sorted({0.0, 600.0, *cuts}))
+    path = np.column_stack([xs, np.zeros_like(xs)])
+    prof = follow_path(path, lambda p: ground_of(p[:, 0]), FollowSettings(40.0, tol, climb, descent), 2.0)
+    assert [int(v) for v in prof.vertex if v >= 0] == list(range(len(xs)))      # every vertex kept, in order
+    dz, dx = np.diff(prof.amsl_m), np.diff(prof.xy[:, 0])
+    ok = dx > 1e-9
+    assert np.all(dz[ok] / dx[ok] <= climb + 1e-6) and np.all(-dz[ok] / dx[ok] <= descent + 1e-6)
+    fine = np.linspace(0.0, 600.0, 1201)
+    agl = np.interp(fine, prof.xy[:, 0], prof.amsl_m) - ground_of(fine)
+    # never below the target at the 2 m samples; between them a bump 25 m wide bends the ground by < 0.5 m
+    assert agl.min() >= 40.0 - 0.5
+    s = np.concatenate([[0.0], np.cumsum(np.diff(fine))])
+    limited = rate_limited(ground_of(fine) + 40.0, s, climb, descent) - ground_of(fine)
+    assert np.all(agl <= np.maximum(40.0 + tol, limited) + 1.0)     # the two profiles sample 2 m and 0.5 m
