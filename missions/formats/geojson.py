@@ -61,7 +61,8 @@ def feature_collection(compiled: Compiled, sim: Simulation, rep: MissionReport) 
             for hole in poly[1:]:
                 feats.append({"type": "Feature", "properties": {"kind": "gap", "step": a.step},
                               "geometry": {"type": "Polygon", "coordinates": [hole]}})
-    line = [[_r7(lon), _r7(lat), round(home_amsl + v.alt_m, 2)] for (lat, lon), v in zip(sim.latlon, sim.vertices)]
+    amsl = _vertex_amsl(compiled, sim)
+    line = [[_r7(lon), _r7(lat), round(z, 2)] for (lat, lon), z in zip(sim.latlon, amsl)]
     feats.append({"type": "Feature",
                   "properties": {"kind": "path", "length_m": rep.path_length_m, "flight_time_s": rep.flight_time_s,
                                  "flight_time_qgc_s": rep.flight_time_qgc_s},
@@ -70,7 +71,7 @@ def feature_collection(compiled: Compiled, sim: Simulation, rep: MissionReport) 
                   "geometry": {"type": "Point", "coordinates": [_r7(compiled.home[1]), _r7(compiled.home[0]), home_amsl]}})
     seq_base = 1 if compiled.firmware == "ardupilot" else 0
     seen: set[int] = set()
-    for (lat, lon), v in zip(sim.latlon, sim.vertices):
+    for (lat, lon), v, z in zip(sim.latlon, sim.vertices, amsl):
         if v.item < 0 or v.item in seen:
             continue
         seen.add(v.item)
@@ -78,7 +79,7 @@ def feature_collection(compiled: Compiled, sim: Simulation, rep: MissionReport) 
         feats.append({"type": "Feature",
                       "properties": {"kind": "waypoint", "seq": v.item + seq_base, "command": _command_name(it.command),
                                      "alt_m": round(v.alt_m, 2), "hold_s": v.hold_s, "comment": it.comment},
-                      "geometry": {"type": "Point", "coordinates": [_r7(lon), _r7(lat), round(home_amsl + v.alt_m, 2)]}})
+                      "geometry": {"type": "Point", "coordinates": [_r7(lon), _r7(lat), round(z, 2)]}})
     n_fp = sum(len(p.payloads) for p in sim.photos)
     write_fp = n_fp <= MAX_FOOTPRINT_FEATURES
     heights = _photo_heights(compiled, sim)
@@ -100,6 +101,15 @@ def feature_collection(compiled: Compiled, sim: Simulation, rep: MissionReport) 
         props["footprints_omitted"] = (f"{n_fp} footprints exceed {MAX_FOOTPRINT_FEATURES}; "
                                        "photo points are complete")
     return {"type": "FeatureCollection", "properties": props, "features": feats}
+
+
+def _vertex_amsl(compiled: Compiled, sim: Simulation) -> list[float]:
+    """Each path vertex's altitude above mean sea level: home's elevation plus its height above home, or over a
+    DEM the ground plus its height for a vertex in the terrain frame (missions.terrain.clearance)."""
+    if getattr(compiled, "terrain", None) is None or not sim.vertices:
+        return [compiled.home[2] + v.alt_m for v in sim.vertices]
+    from missions.terrain.clearance import vertex_heights
+    return vertex_heights(compiled, sim, compiled.terrain.dem)[0].tolist()
 
 
 def _photo_heights(compiled: Compiled, sim: Simulation) -> tuple[np.ndarray, np.ndarray] | None:

@@ -429,3 +429,26 @@ def test_followed_profile_stays_in_its_band_and_rates(bumps, climb, descent, tol
     s = np.concatenate([[0.0], np.cumsum(np.diff(fine))])
     limited = rate_limited(ground_of(fine) + 40.0, s, climb, descent) - ground_of(fine)
     assert np.all(agl <= np.maximum(40.0 + tol, limited) + 1.0)     # the two profiles sample 2 m and 0.5 m
+
+
+def test_geojson_path_altitudes_are_above_sea_level_in_both_frames(tmp_path):
+    for frame in ("amsl", "terrain"):
+        d = tmp_path / frame
+        d.mkdir()
+        extra = ", frame: terrain" if frame == "terrain" else ""
+        r = CliRunner().invoke(cli, ["mission", "compile", str(_plan(d, T.hill(80, 150), terrain_extra=extra)),
+                                     "-o", str(d / "out")])
+        assert r.exit_code == 0, r.output
+        fc = json.loads((d / "out" / "terrain-test.geojson").read_text())
+        dem = load_dem(["dem.tif"], d)
+        wps = [f for f in fc["features"] if f["properties"]["kind"] == "waypoint"
+               and f["properties"]["comment"] in ("entry", "exit")]
+        lon, lat, z = np.array([f["geometry"]["coordinates"] for f in wps]).T
+        agl = z - dem.ground_amsl(lat, lon)
+        if frame == "terrain":                    # held 60 m above the ground by the autopilot
+            assert wps and np.abs(agl - 60.0).max() < 0.1
+        else:                                     # the items' own altitudes, within the band
+            items = compile_plan(d / "plan.yaml").items
+            base = 1                              # ArduPilot numbers the mission from 1
+            assert np.allclose(z, [items[f["properties"]["seq"] - base].z for f in wps], atol=0.005)
+            assert agl.min() > 59.9 and agl.max() < 66.1
