@@ -115,9 +115,11 @@ def square(half_m: float, e_m: float = 0.0, n_m: float = 0.0) -> list[list[float
 def plan_text(dem: str | list[str] | None, area: list[list[float]], altitude_m: float = 60.0,
               front: float = 80, side: float = 70, terrain_extra: str = "", home_alt: float | None = None,
               firmware: str = "ardupilot", takeoff_m: float = 60.0, speed_mps: float = 5.0,
-              home_offset: tuple[float, float] = (0.0, -250.0), angle: float = 0.0, vehicle_extra: str = "") -> str:
-    """A survey plan over `area` with a WIRIS Pro 13 mm; `dem` None: no terrain block."""
-    hlat, hlon = offset(*home_offset)
+              home_offset: tuple[float, float] = (0.0, -250.0), angle: float = 0.0, vehicle_extra: str = "",
+              home_latlon: tuple[float, float] | None = None) -> str:
+    """A survey plan over `area` with a WIRIS Pro 13 mm; `dem` None: no terrain block; home `home_offset` metres
+    from CENTRE, or at `home_latlon`."""
+    hlat, hlon = home_latlon if home_latlon is not None else offset(*home_offset)
     alt = f", alt_amsl_m: {home_alt}" if home_alt is not None else ""
     dems = "" if dem is None else f"terrain: {{dem: {dem if isinstance(dem, str) else list(dem)}{terrain_extra}}}\n"
     return f"""version: 1

@@ -452,3 +452,17 @@ def test_geojson_path_altitudes_are_above_sea_level_in_both_frames(tmp_path):
             base = 1                              # ArduPilot numbers the mission from 1
             assert np.allclose(z, [items[f["properties"]["seq"] - base].z for f in wps], atol=0.005)
             assert agl.min() > 59.9 and agl.max() < 66.1
+
+
+def test_a_survey_over_the_real_dem_holds_the_request(tmp_path):
+    # 3 arc-second heights (~90 m pixels) around Fort Worth: lines every ~10 m sample, 169-258 m ground
+    import shutil
+    shutil.copy(DATA / "fort-worth-3arcsec.tif", tmp_path / "fw.tif")
+    lat0, lon0 = 32.6712, -97.3346
+    d = 0.0025
+    area = [[lat0 - d, lon0 - d], [lat0 - d, lon0 + d], [lat0 + d, lon0 + d], [lat0 + d, lon0 - d]]
+    text = T.plan_text("fw.tif", area, home_latlon=(lat0 - 2 * d, lon0))
+    (tmp_path / "fw.yaml").write_text(text)
+    compiled = compile_plan(tmp_path / "fw.yaml")
+    assert compiled.terrain.dem.files[0].vertical.startswith("mean sea level")
+    _holds_the_request(compiled)
