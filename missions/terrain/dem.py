@@ -151,9 +151,20 @@ def _resolve(p: str, base_dir: str | Path) -> Path:
     return path if path.is_absolute() else Path(base_dir) / path
 
 
+def _rasterio(where: str | None) -> Any:
+    """rasterio (GDAL), loaded only for a plan with a DEM; an optional dependency (the `terrain` extra)."""
+    try:
+        import rasterio
+        import rasterio.errors
+    except ImportError:
+        raise PlanError("reading a DEM needs rasterio, which is not installed", where=where,
+                        hint="pip install 'wiris-tools[terrain]' (or pip install rasterio) in the tools' "
+                             "environment") from None
+    return rasterio
+
+
 def _read(path: Path, vertical: str, where: str | None) -> _Raster:
-    import rasterio                       # heavy (GDAL): loads only for a plan with a DEM
-    from rasterio.errors import RasterioError
+    rasterio = _rasterio(where)
 
     if not path.is_file():
         raise PlanError(f"DEM file {str(path)!r} {'is not a file' if path.exists() else 'not found'}", where=where,
@@ -161,7 +172,7 @@ def _read(path: Path, vertical: str, where: str | None) -> _Raster:
     try:
         with rasterio.open(path) as ds:
             return _raster(ds, path, vertical, where)
-    except RasterioError as e:           # not a raster, truncated, an unknown format: GDAL says which
+    except rasterio.errors.RasterioError as e:     # not a raster, truncated, an unknown format: GDAL says which
         raise PlanError(f"DEM file {path.name} cannot be read as a raster: {_first_line(e)}", where=where,
                         hint="give a GeoTIFF (.tif) or an SRTM tile named like N50E014.hgt") from None
 

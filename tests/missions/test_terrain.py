@@ -466,3 +466,12 @@ def test_a_survey_over_the_real_dem_holds_the_request(tmp_path):
     compiled = compile_plan(tmp_path / "fw.yaml")
     assert compiled.terrain.dem.files[0].vertical.startswith("mean sea level")
     _holds_the_request(compiled)
+
+
+def test_without_rasterio_a_dem_plan_says_what_to_install(tmp_path, monkeypatch):
+    import sys
+    p = _plan(tmp_path, T.hill())
+    monkeypatch.setitem(sys.modules, "rasterio", None)          # as on an install without the terrain extra
+    with pytest.raises(PlanError) as e:
+        compile_plan(p)
+    assert "needs rasterio" in e.value.message and "wiris-tools[terrain]" in e.value.hint
