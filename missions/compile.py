@@ -14,7 +14,8 @@ files written; errors are PlanError with the plan's file:line:col.
 
 Warnings are `PlanWarning(code, message)` values. Codes: altitude_above_120m, assumed_optics, trigger_interval_near_min,
 area_smaller_than_footprint (and the survey planner's own codes), no_takeoff, component_id_chosen,
-no_optics, mission_split, px4_single_capture_all.
+no_optics, mission_split, px4_single_capture_all; with a DEM (missions.terrain) terrain_rate_limited,
+home_elevation_differs, rededge_over_terrain.
 """
 
 from __future__ import annotations
@@ -124,6 +125,7 @@ class _Compile:
     speed_mps: float                         # the plan's, or the one `auto` chose (`_mission_speed`)
     zones: tuple[Zone, ...] = ()             # every zone of the plan (missions.geometry.zones.plan_zones)
     transits: TransitRouter | None = None    # routes the flight between steps around the no-fly zones
+    terrain: Any = None                      # missions.terrain.model.Terrain when the plan names a DEM
 
     def warn(self, code: str, message: str) -> None:
         self.state.warnings.append(PlanWarning(code, message))
@@ -293,10 +295,14 @@ def _lines_step(c: _Compile, step: SurveyStep | CorridorStep, kind: str,
     _record_rededges(c, step, lead, alt)
     try:
         lines = plan_lines(c, step, _line_inputs(c, step, lead, footprint))
+        if c.terrain is not None:
+            lines = _lines_for_the_ground(c, step, lead, alt, footprint, lines, plan_lines)
     except PlanError as e:
         raise _relocate(e, here) from None
     first = c.emitter.item_count
     track = _track_clear_of_zones(c, step, lines, _track(c, step, lines.route, alt, lead), alt, kind)
+    if c.terrain is not None:
+        track = _terrain_track(c, step, kind, track)
     _check_path_clear_of_zones(c, step, lines, track, kind)
     _transit_to(c, track.points[0].lat, track.points[0].lon, alt, f"flight to the {kind}'s first line", here)
     c.emitter.track(track, where=c.plan.step_where(step, "trigger"))
@@ -377,7 +383,11 @@ def _capture_size(c: _Compile, name: str) -> CaptureSize:
 
 def _assumptions(c: _Compile, step: SurveyStep | CorridorStep) -> list[str]:
     """Every assumption the step's numbers rest on."""
-    out = ["flat ground at home's height: altitudes, footprints and GSD are above home, not above the terrain"]
+    if c.terrain is None:
+        out = ["flat ground at home's height: altitudes, footprints and GSD are above home, not above the terrain"]
+    else:
+        out = ["ground from the plan's DEM (terrain.dem): altitudes, footprints and GSD are above the ground below "
+               "the camera, as the DEM gives it"]
     for name in step.payloads:
         info = c.payloads.optics.get(name)
         if info is None:
@@ -646,6 +656,41 @@ def _check_rededge_and_zones(plan: Plan, payloads: _Payloads, zones: tuple[Zone,
                              "if only the flight over it is forbidden")
 
 
+def _lines_for_the_ground(c: _Compile, step: SurveyStep | CorridorStep, lead: PayloadInfo, alt: float,
+                          footprint: Footprint, lines: _Lines,
+                          plan_lines: Callable[[_Compile, Any, _LineInputs], _Lines]) -> _Lines:
+    """The lines planned again, once, with a shorter trigger distance and line spacing where the ground needs them
+    to hold the requested overlaps (missions.terrain.lines): footprints on a slope along the track are
+    trapezoids that consecutive photos share less of, and lines that fly higher than the target (within the
+    tolerance, where the ground bends) have wider photos beside narrower ones. Kept as planned when both
+    factors are within half a percent of 1."""
+    from missions.terrain.lines import front_overlap_scale, side_overlap_scale, terrain_track
+
+    track = _track(c, step, lines.route, alt, lead)
+    k_front = front_overlap_scale(track, c.terrain, footprint.along_m, alt)
+    followed = terrain_track(track, c.terrain, c.speed_mps, c.plan.step_where(step))
+    k_side = side_overlap_scale(step.side_pct, alt, followed.highest_agl_m)
+    if k_front > 0.995 and k_side > 0.995:
+        return lines
+    _check_triggering(c, step, lead, optics.trigger_m(lead, alt, step.front_pct) * k_front)
+    shorter = Footprint(footprint.across_m * k_side, footprint.along_m * k_front)
+    return plan_lines(c, step, _line_inputs(c, step, lead, shorter))
+
+
+def _terrain_track(c: _Compile, step: SurveyStep | CorridorStep, kind: str, track: Track) -> Track:
+    """The track following the DEM (missions.terrain.lines); where the rates keep it above its band, a warning."""
+    from missions.terrain.lines import terrain_track
+
+    height = c.plan.step_where(step, "altitude_m" if step.altitude_m is not None else "gsd_cm")
+    followed = terrain_track(track, c.terrain, c.speed_mps, height)
+    if followed.over_tolerance_m > 0.01:
+        c.warn("terrain_rate_limited", f"{kind} at {c.plan.step_where(step)}: the ground falls or rises faster than "
+               f"vehicle.climb_mps {c.terrain.climb_mps:g} / descent_mps {c.terrain.descent_mps:g} m/s allow at "
+               f"{c.speed_mps:g} m/s: the lines fly up to {followed.over_tolerance_m:.1f} m above the tolerance "
+               "there (coarser GSD, never lower than the target)")
+    return followed
+
+
 _STEPS: dict[type, Callable[[_Compile, Any], None]] = {
     TakeoffStep: _takeoff, SurveyStep: _survey, CorridorStep: _corridor, WaypointStep: _waypoint,
     CameraStep: _camera, RtlStep: _rtl, LandStep: _land}
@@ -674,10 +719,12 @@ def _warn_about_altitudes(c: _Compile) -> None:
     high = [a for a in c.state.altitudes if a.altitude_m > MAX_AGL_M]
     if high and c.plan.vehicle.max_altitude_m is not None:
         top = max(high, key=lambda a: a.altitude_m)
+        ground = ("ground assumed flat at home's height" if c.terrain is None else
+                  "a survey's or corridor's altitude is above the DEM's ground, the other steps' above home")
         c.warn("altitude_above_120m", f"the mission flies up to {top.altitude_m:g} m above home (at {top.where}), "
                f"above the {MAX_AGL_M:g} m most rules allow without a permit: flown under the permit the plan "
                f"states (vehicle.max_altitude_m: {c.plan.vehicle.max_altitude_m:g} at "
-               f"{c.plan.where('vehicle', 'max_altitude_m')}); ground assumed flat at home's height")
+               f"{c.plan.where('vehicle', 'max_altitude_m')}); {ground}")
 
 
 def _setup(c: _Compile) -> tuple[SetupStep, ...]:
@@ -832,6 +879,56 @@ def _compile_steps(c: _Compile) -> list[Problem]:
     return problems
 
 
+def _load_terrain(plan: Plan, prof: FirmwareProfile) -> Any:
+    """The plan's DEM and terrain settings (missions.terrain), None without one."""
+    if plan.terrain is None:
+        return None
+    from missions.terrain.dem import load_dem
+    from missions.terrain.model import Terrain, rates_for
+
+    t = plan.terrain
+    if t.frame == "terrain" and prof.name != "ardupilot":
+        raise PlanError(f"{prof.title} has no terrain frame in missions", where=plan.where("terrain", "frame"),
+                        hint="use terrain.frame: amsl (waypoint altitudes above mean sea level from the DEM, which "
+                             "every firmware flies), or fly ArduPilot")
+    dem = load_dem(t.dem, plan.base_dir, t.vertical, where=plan.where("terrain", "dem"))
+    climb, descent = rates_for(plan.vehicle.frame, plan.vehicle.climb_mps, plan.vehicle.descent_mps)
+    return Terrain(dem, t.frame, t.tolerance_m, t.clearance_m, climb, descent)
+
+
+def _home_amsl(plan: Plan, terrain: Any, state: _State) -> float:
+    """Home's elevation: the plan's, else the DEM's below home (a plan without either is refused at loading)."""
+    if terrain is None:
+        return float(plan.home.alt_amsl_m)
+    ground = float(terrain.dem.ground_at(plan.home.lat, plan.home.lon, "home", plan.where("home"))[0])
+    if plan.home.alt_amsl_m is None:
+        return round(ground, 2)
+    if abs(plan.home.alt_amsl_m - ground) > 5.0:
+        state.warnings.append(PlanWarning("home_elevation_differs", f"home.alt_amsl_m {plan.home.alt_amsl_m:g} m is "
+                                          f"{plan.home.alt_amsl_m - ground:+.1f} m from the DEM's {ground:.1f} m "
+                                          "there; relative altitudes (take-off, waypoints, RTL) use the plan's"))
+    return float(plan.home.alt_amsl_m)
+
+
+def _check_clearance(compiled: Compiled, terrain: Any, plan: Plan) -> None:
+    """Every metre of the re-flown path at least terrain.clearance_m above the DEM, or a PlanError saying where."""
+    from missions.measure.flight import simulate
+    from missions.terrain.clearance import path_clearance
+
+    c = path_clearance(compiled, simulate(compiled), terrain.dem)
+    if c is None or c.min_m >= terrain.clearance_m - 0.005:
+        return
+    base = 1 if compiled.firmware == "ardupilot" else 0
+    item = compiled.items[c.item] if 0 <= c.item < len(compiled.items) else None
+    raise PlanError(f"the path passes {c.min_m:.1f} m above the ground at {c.lat:.6f}, {c.lon:.6f} (altitude "
+                    f"{c.amsl_m:.1f} m AMSL over ground at {c.ground_m:.1f} m), below terrain.clearance_m "
+                    f"{terrain.clearance_m:g} m, flying to item {c.item + base}"
+                    + (f" ({item.comment})" if item is not None and item.comment else ""),
+                    where=plan.where("terrain"),
+                    hint="raise the take-off altitude or the step's altitude_m, add a waypoint step above the "
+                         "ground in the way, or lower terrain.clearance_m if the ground there is known clear")
+
+
 def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -> Compiled:
     """The compiled mission of a plan (a path or a loaded Plan), or one PlanError listing every problem of the
     plan and of its steps, ordered by where they are written."""
@@ -845,6 +942,8 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     prof = profile(firmware or plan.vehicle.firmware)
     state = _State(warnings=[f"component_id_chosen: {n}" for n in plan.notes])
     try:
+        terrain = _load_terrain(plan, prof)
+        home_amsl = _home_amsl(plan, terrain, state)
         payloads = _resolve_payloads(plan, prof, state)
         speed = _mission_speed(plan, payloads, state)
         zones = plan_zones(plan)
@@ -852,7 +951,12 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     except PlanError as e:
         raise_problems(problems + _problems_of(e), plan.path)
     router = TransitRouter(zones, LocalProjection(plan.home.lat, plan.home.lon)) if zones else None
-    c = _Compile(plan, prof, payloads, _emitter(plan, prof, payloads, speed), state, speed, zones, router)
+    c = _Compile(plan, prof, payloads, _emitter(plan, prof, payloads, speed), state, speed, zones, router, terrain)
+    c.emitter.home_amsl_m = home_amsl
+    if terrain is not None and any(c.payloads.is_rededge(p.name) for p in plan.payloads):
+        c.warn("rededge_over_terrain", "a RedEdge in overlap mode spaces its photos by its own height above the "
+               "take-off point, not above the DEM: over rising or falling ground its front overlap and its "
+               "capture threshold (operatingAlt) differ from the plan's; the report measures what it does")
     _warn_about_the_start(c)
     problems += _compile_steps(c)
     if problems:
@@ -871,18 +975,24 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     setup = _setup(c)
     lua = _lua_bridge(c, emitted)
     params = _params(c, emitted)
+    if terrain is not None and terrain.frame == "terrain":
+        params = (*params, ("TERRAIN_ENABLE", 1.0, "the survey lines fly in the terrain frame "
+                            "(MAV_FRAME_GLOBAL_TERRAIN_ALT): ArduPilot needs terrain data, from the ground station "
+                            "or its SD card, before it accepts them"))
     _warn_about_unknown_optics(c)
     fence = _fence(c, emitted.items)
     compiled = Compiled(
         name=plan.name, firmware=prof.name, frame=plan.vehicle.frame,
-        home=(plan.home.lat, plan.home.lon, plan.home.alt_amsl_m), speed_mps=c.speed_mps, items=emitted.items,
+        home=(plan.home.lat, plan.home.lon, home_amsl), speed_mps=c.speed_mps, items=emitted.items,
         parts=parts.parts, item_limit=parts.limit,
         # PayloadInfo only for payloads whose optics are known: the report measures coverage with them
         payloads=tuple(payloads.optics[p.name] for p in plan.payloads if p.name in payloads.optics),
         areas=tuple(state.areas), setup=setup, lua=lua, params=params,
         warnings=tuple(dict.fromkeys(state.warnings)), intent=tuple(state.intent), inputs=input_files(plan),
         step_facts=tuple(state.step_facts), patterns=tuple(state.patterns), corridor_scan=plan.corridor_scan,
-        fence=fence)
+        fence=fence, terrain=terrain)
+    if terrain is not None:
+        _check_clearance(compiled, terrain, plan)
     return _with_the_sun(plan, compiled)
 
 

@@ -190,6 +190,8 @@ class Compiled:
     patterns: tuple[TransectPattern, ...] = ()  # the surveys and corridors, for the .plan's ComplexItems
     corridor_scan: bool = False                 # write corridors as QGC CorridorScan (MAVSDK 4.1 cannot read them)
     fence: tuple[MissionItem, ...] = ()         # fence items (mission_type FENCE): exclusion zones, inclusion fence
+    # missions.terrain.model.Terrain: the DEM the lines follow and the report measures over; None: flat ground
+    terrain: Any = field(default=None, compare=False)
 
     def payload(self, name: str) -> PayloadInfo:
         return next(p for p in self.payloads if p.name == name)

@@ -177,7 +177,7 @@ def build_picture(compiled: Compiled, sim: Any = None, rep: MissionReport | None
     rep = rep or report(compiled, sim)
     content = _map_content(compiled, sim)
     frame = _Frame.fitting(content.points())
-    shapes = [*_map_shapes(compiled, content, frame), *_waypoint_shapes(compiled, sim, frame),
+    shapes = [*_terrain_shapes(compiled, sim, frame), *_map_shapes(compiled, content, frame), *_waypoint_shapes(compiled, sim, frame),
               *_home_shapes(compiled, sim.projection, frame), *_graticule_shapes(sim.projection, frame),
               *_scale_bar_shapes(frame.scale), *_north_arrow_shapes()]
     detail = _detail(content, frame)
@@ -208,8 +208,33 @@ def _map_content(compiled: Compiled, sim: Any) -> _MapContent:
             areas.append(tuple(xy_rings))
     photos = tuple(sim.photos)
     fp_stride = max(1, math.ceil(len(photos) / MAX_FOOTPRINTS))
-    fps = tuple(tuple(footprint_ring(p, compiled.payload(p.payloads[0]))) for p in photos[::fp_stride] if p.payloads)
+    if getattr(compiled, "terrain", None) is not None:      # footprints cut by the DEM, as the report measures
+        from missions.terrain.reflight import footprint_rings
+        owners = [(k, p.payloads[0]) for k, p in enumerate(photos) if k % fp_stride == 0 and p.payloads]
+        fps = tuple(tuple(map(tuple, r.tolist())) for r in footprint_rings(compiled, sim, owners))
+    else:
+        fps = tuple(tuple(footprint_ring(p, compiled.payload(p.payloads[0]))) for p in photos[::fp_stride]
+                    if p.payloads)
     return _MapContent(tuple(areas), tuple((v.x, v.y) for v in sim.vertices), photos, fps, fp_stride)
+
+
+def _terrain_shapes(compiled: Compiled, sim: Any, f: _Frame) -> list[Shape]:
+    """The DEM's contour lines under everything else (missions.terrain.shade), every fifth one darker, and a note
+    of the interval; nothing without a DEM."""
+    if getattr(compiled, "terrain", None) is None:
+        return []
+    from missions.terrain.shade import contours
+
+    box = (f.cx - (f.mx - PAD) / f.scale, f.cy - (MAP_H - f.my - PAD) / f.scale,
+           f.cx + (MAP_W - PAD - f.mx) / f.scale, f.cy + (f.my - PAD) / f.scale)
+    c = contours(compiled.terrain.dem, sim.projection, box)
+    if not c.segments:
+        return []
+    shapes = [Shape("polyline", (f.px(*a), f.px(*b)), stroke="#8c6d46" if round(level / c.interval_m) % 5 == 0
+                    else "#c9b79c", stroke_width=1.0, layer="terrain") for level, (a, b) in c.segments]
+    shapes.append(Shape("text", ((PAD + 34, MAP_H - 14),), text=f"contours every {c.interval_m:g} m (DEM)",
+                        size=11, fill=COLOURS["muted"], layer="terrain"))
+    return shapes
 
 
 def _footprint_shapes(fps: Sequence[Sequence[XY]], f: _Frame) -> list[Shape]:

@@ -33,7 +33,7 @@ import math
 from typing import Any, Callable, Iterable, Sequence
 
 from missions.compiled import PayloadInfo, TransectPattern
-from missions.emit.items import FRAME_MISSION, MissionItem, mavlink
+from missions.emit.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem, mavlink
 from missions.formats.planfile import ALT_MODE_RELATIVE   # the compiler flies altitudes above home
 from missions.geometry.geo import great_circle_m
 
@@ -88,7 +88,11 @@ def _writable(p: TransectPattern, items: Sequence[MissionItem], corridor_scan: b
     start, end = p.items
     if p.kind == "corridor" and not corridor_scan:
         return False
-    return 0 <= start < end <= len(items) and all(it.command in _TRANSECT_COMMANDS for it in items[start:end])
+    if not (0 <= start < end <= len(items) and all(it.command in _TRANSECT_COMMANDS for it in items[start:end])):
+        return False
+    # Lines that follow a DEM (AMSL or terrain frame) stay SimpleItems: QGC's survey keeps one altitude above
+    # home for the whole pattern and would rebuild them flat the first time it regenerates the pattern.
+    return all(it.frame in (FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION) for it in items[start:end])
 
 
 def _inner_item(simple: dict) -> dict:

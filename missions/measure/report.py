@@ -44,6 +44,7 @@ from missions.measure.flight import Photo, Simulation, simulate
 from missions.measure.numbers import StepNumbers, step_numbers
 from missions.measure.zones import ZoneMeasure, ZoneRow, measure_zones, photographed_warnings
 from missions.plan.schema import MAX_AGL_M
+from missions.terrain.reflight import GROUND_FLAT
 
 # Coverage below this is worth a warning: the examples and the tests hold the compiler to it.
 COVERAGE_TARGET = 0.995
@@ -201,6 +202,8 @@ class MissionReport:
     speed_mps: float = 0.0                    # the survey speed flown (the plan's, or the one `auto` chose)
     sun: tuple[Any, ...] = ()                 # missions.thermal.assess.StepSun per timed step (a plan with `when`)
     steps: tuple[StepNumbers, ...] = ()      # per survey or corridor step, the numbers a pilot reads
+    ground: str = GROUND_FLAT                 # where heights above ground come from
+    terrain: Any = None                       # missions.terrain.reflight.GroundReport when a DEM is given
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -228,7 +231,8 @@ class MissionReport:
             "speed_mps": self.speed_mps,
             "sun": [s.to_json() for s in self.sun],
             "steps": [s.to_json() for s in self.steps],
-        }
+            "ground": self.ground,
+        } | ({"terrain": self.terrain.to_json()} if self.terrain is not None else {})
 
 
 @dataclass(frozen=True)
@@ -383,8 +387,24 @@ def _min_overlaps(ph: _PhotoArrays, groups: dict[float, list[int]], payload: Pay
     return OverlapMin(_lowest(fronts), _lowest(sides))
 
 
+def _measure_payload_over_dem(area_info: AreaInfo, geom: Any, zones: Any, name: str, payload: PayloadInfo,
+                              photos: Sequence[Photo], ground: Any) -> PayloadMeasure:
+    """`_measure_payload` with footprints cut by the DEM (missions.terrain.reflight): coverage of every photo
+    whose ground footprint meets the area, overlaps of the step's own."""
+    import shapely
+    from missions.terrain import reflight
+
+    ph = _PhotoArrays.of(photos)
+    near = np.flatnonzero(shapely.intersects(ground.polygons, geom)) if len(photos) else np.zeros(0, int)
+    own = near if area_info.items is None else ph.taken_during(area_info.items)
+    overlap = OverlapMin(reflight.min_front_overlap(photos, ground, own),
+                         reflight.min_side_overlap(photos, ground, own, payload))
+    return PayloadMeasure(name, reflight.coverage_on_ground(geom, ground, near), overlap, int(len(own)),
+                          _photos_in(zones, photos))
+
+
 def _measure_payload(area_info: AreaInfo, geom: Any, zones: Any, name: str, payload: PayloadInfo,
-                     photos: Sequence[Photo]) -> PayloadMeasure:
+                     photos: Sequence[Photo], ground: Any = None) -> PayloadMeasure:
     """Coverage and overlaps of one payload's photos over one step's area `geom`.
 
     Coverage counts every photo whose footprint can reach the area: a neighbouring step's photo covers ground
@@ -392,6 +412,8 @@ def _measure_payload(area_info: AreaInfo, geom: Any, zones: Any, name: str, payl
     photos are measured against its own area. Without a range (an AreaInfo built by hand) the photos near the
     area stand in for them. The zones are checked against every photo: an exclusion is ground not to
     photograph, whichever step does it."""
+    if ground is not None:
+        return _measure_payload_over_dem(area_info, geom, zones, name, payload, photos, ground)
     ph = _PhotoArrays.of(photos)
     near = ph.reaching(geom, payload)
     own = near if area_info.items is None else ph.taken_during(area_info.items)
@@ -400,7 +422,8 @@ def _measure_payload(area_info: AreaInfo, geom: Any, zones: Any, name: str, payl
 
 
 def _measure_step(compiled: Compiled, area_info: AreaInfo, path: np.ndarray | None,
-                  photos_of: Mapping[str, Sequence[Photo]], sim: Simulation) -> StepMeasure:
+                  photos_of: Mapping[str, Sequence[Photo]], sim: Simulation,
+                  grounds: Mapping[str, Any] | None = None) -> StepMeasure:
     """One step's payloads and path, in the simulation's projection. The metres outside the area take the path
     segments the step flew (`path`, a mask over the simulation's segments, `_step_paths`; None: the whole path);
     the metres over its zones the whole flight, whichever step flies there."""
@@ -410,8 +433,8 @@ def _measure_step(compiled: Compiled, area_info: AreaInfo, path: np.ndarray | No
     zones = _zones(area_info.area, sim.projection)
     table = _zone_table(compiled, area_info, geom, photos_of, sim) if area_info.zones is not None else None
     measured = geom if table is None else table.coverable
-    payloads = tuple(_measure_payload(area_info, measured, zones, n, compiled.payload(n), photos_of.get(n, []))
-                     for n in area_info.payloads)
+    payloads = tuple(_measure_payload(area_info, measured, zones, n, compiled.payload(n), photos_of.get(n, []),
+                                      (grounds or {}).get(n)) for n in area_info.payloads)
     over_m, over_camera_m = _over_zones_m(sim, zones)
     return StepMeasure(area_info, payloads, StepPath(_outside_m(sim.xy, path, geom), over_m, over_camera_m), table)
 
@@ -528,9 +551,11 @@ def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | N
     sim = sim or simulate(compiled)
     names = [p.name for p in compiled.payloads]
     photos_of = {n: [p for p in sim.photos if n in p.payloads] for n in names}
-    steps = [_measure_step(compiled, a, path, photos_of, sim)
+    grounds = _ground_photos(compiled, sim, photos_of)
+    steps = [_measure_step(compiled, a, path, photos_of, sim, grounds)
              for a, path in zip(compiled.areas, _step_paths(compiled, sim))]
     rows = tuple(_area_row(s) for s in steps)
+    terrain = _ground_report(compiled, sim, photos_of, grounds)
     return MissionReport(
         plan=plan_path or compiled.name,
         name=compiled.name,
@@ -547,16 +572,56 @@ def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | N
         flight_time_qgc_s=_r(sim.flight_time_qgc_s, 1),
         max_altitude_m=_r(max((v.alt_m for v in sim.vertices), default=0.0), 2),
         area_m2=_r(sum(a.area.area_m2 for a in compiled.areas), 1),
-        gsd_cm=_gsd_ranges(compiled, photos_of),
+        gsd_cm=_gsd_ranges(compiled, photos_of, grounds),
         coverage=_mission_coverage(steps),
         overlap=_mission_overlap(steps),
         areas=rows,
-        warnings=tuple(_warnings(compiled, sim, steps, rows)),
+        warnings=tuple(_warnings(compiled, sim, steps, rows)) + _ground_warnings(terrain),
         errors=tuple(_errors(compiled)),
         speed_mps=compiled.speed_mps,
         sun=tuple(compiled.sun),
         steps=step_numbers(compiled, sim),
+        ground=GROUND_FLAT if terrain is None else terrain.ground,
+        terrain=terrain,
     )
+
+
+def _ground_photos(compiled: Compiled, sim: Simulation, photos_of: Mapping[str, Sequence[Photo]]) -> dict[str, Any]:
+    """Per payload, its photos over the DEM (heights above ground, footprints cut by the terrain); {} without one."""
+    if getattr(compiled, "terrain", None) is None:
+        return {}
+    from missions.terrain.reflight import ground_photos
+    return {n: ground_photos(compiled, sim, photos_of[n], compiled.payload(n)) for n in photos_of}
+
+
+def _ground_report(compiled: Compiled, sim: Simulation, photos_of: Mapping[str, Sequence[Photo]],
+                   grounds: Mapping[str, Any]) -> Any:
+    """The terrain section: DEM, minimum clearance, each step's heights above ground (its first payload's)."""
+    if not grounds:
+        return None
+    from missions.terrain.reflight import ground_report, step_ground
+
+    rows = []
+    for a in compiled.areas:
+        if not a.payloads or a.payloads[0] not in grounds:
+            continue
+        ph = _PhotoArrays.of(photos_of[a.payloads[0]])
+        own = ph.taken_during(a.items) if a.items is not None else np.arange(len(ph.photos))
+        rows.append(step_ground(a, compiled.terrain.tolerance_for(a.altitude_m), grounds[a.payloads[0]], own))
+    return ground_report(compiled, sim, rows)
+
+
+def _ground_warnings(terrain: Any) -> tuple[Finding, ...]:
+    if terrain is None:
+        return ()
+    out = [Finding("height_above_ground_off", f"step {s.step}: {s.outside_tolerance} photos are taken outside "
+                   f"{s.target_m:g}..{s.target_m + s.tolerance_m:g} m above the ground below them "
+                   f"({s.hag_min_m:.1f}..{s.hag_max_m:.1f} m)") for s in terrain.steps if s.outside_tolerance]
+    c = terrain.clearance
+    if c is not None and c.min_m < terrain.clearance_m - 0.005:
+        out.append(Finding("clearance", f"the path passes {c.min_m:.1f} m above the DEM at {c.lat:.6f}, {c.lon:.6f}, "
+                                        f"below the {terrain.clearance_m:g} m asked for"))
+    return tuple(out)
 
 
 def _area_row(step: StepMeasure) -> AreaRow:
@@ -597,10 +662,12 @@ def _mission_overlap(steps: Sequence[StepMeasure]) -> Mapping[str, OverlapMin]:
                     for n, ov in by_payload.items()})
 
 
-def _gsd_ranges(compiled: Compiled, photos_of: Mapping[str, Sequence[Photo]]) -> Mapping[str, GsdRange | None]:
+def _gsd_ranges(compiled: Compiled, photos_of: Mapping[str, Sequence[Photo]],
+                grounds: Mapping[str, Any] | None = None) -> Mapping[str, GsdRange | None]:
     out: dict[str, GsdRange | None] = {}
     for n, photos in photos_of.items():
-        alts = [p.alt_m for p in photos if p.alt_m > 0]
+        heights = grounds[n].hag_m.tolist() if grounds else [p.alt_m for p in photos]   # above the DEM, or home
+        alts = [a for a in heights if a > 0]
         pay = compiled.payload(n)
         out[n] = GsdRange(_r(pay.gsd_cm(min(alts)), 3), _r(pay.gsd_cm(max(alts)), 3)) if alts else None
     return _frozen(out)
@@ -673,6 +740,8 @@ def _over_zones_text(row: AreaRow, path: StepPath) -> str:
 
 def _altitude_warnings(compiled: Compiled, sim: Simulation) -> list[Finding]:
     """The highest vertex above MAX_AGL_M, unless the compiler already warned (with the plan's file:line:col)."""
+    if getattr(compiled, "terrain", None) is not None:
+        return []        # above home is not above ground: the compiler checks the heights above the DEM
     high = [v for v in sim.vertices if v.alt_m > MAX_AGL_M + 1e-6]
     if not high or any(w.code == "altitude_above_120m" for w in compiled.warnings):
         return []
@@ -804,6 +873,7 @@ def format_report(rep: MissionReport) -> str:
                                                  "the area lost to it"))
     rows.append(("speed", f"{rep.speed_mps:g} m/s"))
     rows += [(f"sun step {s.step}", _sun_text(s)) for s in rep.sun]
+    rows.extend(_ground_rows(rep))
     width = max(len(k) for k, _ in rows)
     out = [f"{k.ljust(width)}  {v}" for k, v in rows] + _findings_lines(rep)
     if not rep.warnings and not rep.errors:
@@ -832,6 +902,23 @@ def _sun_text(s: Any) -> str:
 def _clock_h(h: float) -> str:
     minutes = int(round(h * 60.0)) % (24 * 60)
     return f"{minutes // 60:02d}:{minutes % 60:02d}"
+
+
+def _ground_rows(rep: MissionReport) -> list[tuple[str, str]]:
+    """The ground the figures stand on; with a DEM the clearance and each step's heights above ground."""
+    rows = [("ground", rep.ground)]
+    t = rep.terrain
+    if t is None:
+        return rows
+    c = t.clearance
+    if c is not None:
+        rows.append(("clearance", f"at least {c.min_m:.1f} m above the DEM (asked {t.clearance_m:g} m; lowest at "
+                                  f"{c.lat:.6f}, {c.lon:.6f})"))
+    for s in t.steps:
+        if s.hag_min_m is not None:
+            rows.append((f"step {s.step} above ground", f"{s.hag_min_m:.1f}–{s.hag_max_m:.1f} m (target "
+                                                         f"{s.target_m:g} m, tolerance +{s.tolerance_m:g} m)"))
+    return rows
 
 
 def error_report(plan_path: str, err: Exception) -> UncompiledReport:

@@ -16,7 +16,7 @@ from cdf.catalogue import catalogue
 from missions.plan.meaning import Resolved
 from missions.plan.schema import ZONE_KINDS
 from missions.plan.types import (CameraStep, CorridorStep, Home, LandStep, Payload, Plan, RtlStep, Step, SurveyStep,
-                                 TakeoffStep, Target, Timing, Vehicle, WaypointStep)
+                                 TakeoffStep, Target, TerrainSettings, Timing, Vehicle, WaypointStep)
 from missions.thermal.blur import DEFAULT_BLUR_PX
 from missions.thermal.pv import pv_profile
 from missions.thermal.when import parse_when
@@ -43,11 +43,12 @@ def build_plan(data: dict, resolved: Resolved, path: str, base_dir: Path, locati
         version=int(data["version"]), name=data.get("name") or _default_name(path),
         vehicle=Vehicle(v["firmware"], v["frame"], None if v["speed_mps"] == "auto" else float(v["speed_mps"]),
                         v.get("max_mission_items"), max_speed_mps=_float_or_none(v, "max_speed_mps"),
-                        max_altitude_m=_float_or_none(v, "max_altitude_m")),
-        home=Home(float(h["lat"]), float(h["lon"]), float(h["alt_amsl_m"])),
+                        max_altitude_m=_float_or_none(v, "max_altitude_m"), climb_mps=_float_or_none(v, "climb_mps"),
+                        descent_mps=_float_or_none(v, "descent_mps")),
+        home=Home(float(h["lat"]), float(h["lon"]), _float_or_none(h, "alt_amsl_m")),
         payloads=payloads, mission=tuple(steps), path=path, base_dir=str(base_dir), notes=tuple(resolved.notes),
         timing=_timing(data), locations=locations, fence_margin_m=_fence_margin(data),
-        corridor_scan=bool((data.get("qgc") or {}).get("corridor_scan", False)))
+        corridor_scan=bool((data.get("qgc") or {}).get("corridor_scan", False)), terrain=_terrain(data.get("terrain")))
 
 
 def _timing(body: Mapping[str, Any]) -> Timing:
@@ -89,6 +90,15 @@ def _payload(name: str, p: dict, camera: Any, component_id: int) -> Payload:
         component_id=component_id, component_given="component_id" in p,
         landscape=p.get("orientation", "landscape") == "landscape",
         settings=_as_written(camera, settings), values=_wire_values(camera, settings))
+
+
+def _terrain(t: dict | None) -> TerrainSettings | None:
+    if t is None:
+        return None
+    dem = t["dem"]
+    return TerrainSettings(dem=(dem,) if isinstance(dem, str) else tuple(dem), frame=t.get("frame", "amsl"),
+                           tolerance_m=_float_or_none(t, "tolerance_m"), clearance_m=float(t.get("clearance_m", 20.0)),
+                           vertical=t.get("vertical", "auto"))
 
 
 def _float_or_none(body: Mapping[str, Any], key: str) -> float | None:

@@ -160,6 +160,8 @@ def input_files(plan: Plan) -> tuple[str, ...]:
             for src in (*area, *step.exclude, *step.no_fly, *step.no_photo):
                 if isinstance(src, str):
                     files.append(str(Path(src) if Path(src).is_absolute() else Path(plan.base_dir) / src))
+    for src in plan.terrain.dem if plan.terrain is not None else ():
+        files.append(str(Path(src) if Path(src).is_absolute() else Path(plan.base_dir) / src))
     return tuple(dict.fromkeys(files))
 
 

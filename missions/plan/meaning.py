@@ -55,7 +55,28 @@ def check_meaning(data: dict, doc: PositionedYaml, base_dir: Path) -> Resolved:
     _check_steps(data, _Written(doc, payloads, cameras, states, vehicle.get("frame"), base_dir,
                                 altitude_ceiling(vehicle)))
     check_thermal_keys(data, doc)
+    _check_terrain(data, doc, base_dir)
     return resolved
+
+
+def _check_terrain(data: dict, doc: PositionedYaml, base_dir: Path) -> None:
+    """Home's elevation comes from the plan or from the DEM; the DEM files exist (their contents are read by
+    the compiler, missions.terrain.dem)."""
+    terrain = data.get("terrain") if isinstance(data.get("terrain"), dict) else None
+    home = data.get("home") if isinstance(data.get("home"), dict) else None
+    if home is not None and "alt_amsl_m" not in home and terrain is None:
+        doc.report(("home",), "home needs alt_amsl_m (no terrain.dem to take it from)",
+                   "give home's elevation above mean sea level, e.g. alt_amsl_m: 312, or a DEM: terrain: {dem: FILE}")
+    dem = terrain.get("dem") if terrain is not None else None
+    files = [dem] if isinstance(dem, str) else dem if isinstance(dem, list) else []
+    for j, src in enumerate(files):
+        if isinstance(src, str) and src:
+            p = Path(src) if Path(src).is_absolute() else base_dir / src
+            found, why = _is_file(p)
+            if not found:
+                at = ("terrain", "dem") if isinstance(dem, str) else ("terrain", "dem", j)
+                doc.report(at, f"DEM file {shown(src)} {why} (looked at {clip(str(p), 2 * ECHO_CHARS)})",
+                           "paths in a plan are relative to the plan file; give a GeoTIFF (.tif) or SRTM .hgt")
 
 
 # ------------------------------------------------------------------------------------------------ payloads

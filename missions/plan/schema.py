@@ -75,7 +75,8 @@ AREA = {"description": "a KML or GeoJSON file (relative to the plan) or an inlin
         "anyOf": [{"type": "string", "minLength": 1}, POLYGON]}
 PAYLOAD_LIST = {"type": "array", "minItems": 1, "uniqueItems": True, "items": {"type": "string"},
                 "description": "payload names; the first one's footprint sets the lines, the others trigger alongside"}
-ALTITUDE = _num(MIN_ALTITUDE_M, MAX_ALTITUDE_M, desc="flight altitude above home, metres", hint=_ALT_HINT)
+ALTITUDE = _num(MIN_ALTITUDE_M, MAX_ALTITUDE_M, desc="flight altitude above home, metres (survey and corridor: above "
+                  "the ground below with terrain.dem)", hint=_ALT_HINT)
 GSD = _num(exclusive_min=0, maximum=1000, desc="ground sample distance of the first payload, cm/pixel",
            hint="GSD in centimetres per pixel, e.g. 3.5")
 OVERLAP = _obj({
@@ -193,6 +194,27 @@ PAYLOAD = _obj({
 }, required=("camera",), desc="a camera on board (camera ids: `wiris cdf models`)")
 
 
+# Terrain following (missions.terrain): a DEM makes survey and corridor altitudes heights above the ground.
+CLIMB_DESC = "climb rate the lines may ask for, m/s (default: 2.5 copter, 5 plane/VTOL)"
+DESCENT_DESC = "descent rate the lines may ask for, m/s (default: 1.5 copter, 5 plane/VTOL)"
+CLIMB_HINT = "a vertical speed in m/s, e.g. 2.5 (ArduCopter's WPNAV_SPEED_UP is 2.5, WPNAV_SPEED_DN 1.5)"
+_DEM_FILE = {"type": "string", "minLength": 1, "description": "GeoTIFF (any CRS) or SRTM .hgt, relative to the plan"}
+TERRAIN = _obj({
+    "dem": {"anyOf": [_DEM_FILE, {"type": "array", "minItems": 1, "maxItems": 64, "items": _DEM_FILE}],
+            "description": "DEM file or list of files (mosaicked, the first with a height wins)"},
+    "frame": {"enum": ["amsl", "terrain"], "default": "amsl",
+              "description": "amsl: line waypoints above mean sea level from the DEM; terrain: ArduPilot's "
+                             "terrain frame (MAV_FRAME_GLOBAL_TERRAIN_ALT, TERRAIN_ENABLE=1)"},
+    "tolerance_m": _num(exclusive_min=0, maximum=500, desc="how far above the target height above ground the "
+                        "lines may fly (default 10 % of the altitude)", hint="metres, e.g. tolerance_m: 5"),
+    "clearance_m": _num(0, 500, desc="least height above the DEM of every metre of the path (default 20)",
+                        hint="metres, e.g. clearance_m: 20"),
+    "vertical": {"enum": ["auto", "egm96", "ellipsoid"], "default": "auto",
+                 "description": "what the DEM's heights are above: auto (as the file says; SRTM and files that do "
+                                "not say: mean sea level), egm96, or ellipsoid (WGS84)"},
+}, required=("dem",), desc="ground model: survey and corridor altitudes become heights above the ground")
+
+
 _FRAME_NAMES = {"copter": "copter", "plane": "plane", "vtol": "VTOL"}
 _SPEEDS_TEXT = ", ".join(f"{lo:g} to {hi:g} for a {_FRAME_NAMES[f]}" for f, (lo, hi) in SPEED_RANGE_MPS.items())
 
@@ -235,10 +257,14 @@ def _build() -> dict:
                                             f"without it no step may fly above {MAX_AGL_M:g} m",
                                        hint=f"a permit's ceiling above home, {MIN_ALTITUDE_M:g} to "
                                             f"{MAX_ALTITUDE_M:g} m"),
+                "climb_mps": _num(exclusive_min=0, maximum=30, desc=CLIMB_DESC, hint=CLIMB_HINT),
+                "descent_mps": _num(exclusive_min=0, maximum=30, desc=DESCENT_DESC, hint=CLIMB_HINT),
             }, required=("firmware", "frame", "speed_mps"), desc="the aircraft") | {"allOf": _speed_ranges()},
             "home": _obj({"lat": _num(-90, 90, desc=_LAT), "lon": _num(-180, 180, desc=_LON),
                           "alt_amsl_m": _num(-500, 9000, desc="home altitude above mean sea level")},
-                         required=("lat", "lon", "alt_amsl_m"), desc="the take-off point"),
+                         required=("lat", "lon"),
+                         desc="the take-off point, alt_amsl_m its elevation (from terrain.dem when left out)"),
+            "terrain": TERRAIN,
             "payloads": {"type": "object", "minProperties": 1,
                          "propertyNames": {"pattern": "^[A-Za-z_][A-Za-z0-9_-]{0,31}$"},
                          "additionalProperties": PAYLOAD,

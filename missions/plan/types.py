@@ -19,13 +19,27 @@ class Vehicle:
     max_mission_items: int | None = None
     max_speed_mps: float | None = None
     max_altitude_m: float | None = None     # a permit's ceiling above home; None: MAX_AGL_M (120 m) holds
+    climb_mps: float | None = None       # None: the frame's default (missions.terrain.settings)
+    descent_mps: float | None = None
 
 
 @dataclass(frozen=True)
 class Home:
     lat: float
     lon: float
-    alt_amsl_m: float
+    alt_amsl_m: float | None             # None: from the DEM (only with terrain.dem; the loader checks)
+
+
+@dataclass(frozen=True)
+class TerrainSettings:
+    """The plan's `terrain:` block as written; defaults are applied where the altitude is known
+    (missions.terrain.settings)."""
+
+    dem: tuple[str, ...]                 # file paths as written (relative to the plan)
+    frame: str = "amsl"                  # "amsl" | "terrain"
+    tolerance_m: float | None = None     # None: 10 % of each step's altitude
+    clearance_m: float = 20.0
+    vertical: str = "auto"               # "auto" | "egm96" | "ellipsoid"
 
 
 @dataclass(frozen=True)
@@ -157,6 +171,7 @@ class Plan:
     timing: Timing = Timing()            # `when` and `when_wind_mps` of the whole plan
     fence_margin_m: float | None = None  # `fence: {margin_m}`: an inclusion fence this far around the flight
     corridor_scan: bool = False          # `qgc: {corridor_scan: true}`: corridors as QGC CorridorScan items
+    terrain: TerrainSettings | None = None
     locations: Mapping[tuple, str] = field(default_factory=lambda: MappingProxyType({}), compare=False, repr=False)
 
     def payload(self, name: str) -> Payload:
