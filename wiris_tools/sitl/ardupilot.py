@@ -1,8 +1,9 @@
 """ArduPilot SITL (arducopter / arduplane from a folder with `run-sitl`, see ../shared/sitl/README.md).
 
 Ports of instance N: serial0 TCP 5760+10N is the monitor link this harness holds (SITL's clock starts when
-it connects); serial2 TCP 5763+10N is `gcs_url`, for ground-station tools; serial1 is a MAVLink 2 UDP client
-to the camera port when one is given. A MAVLink reboot makes SITL restart itself in the same process with
+it connects); the camera's serial port (SERIAL2 = TELEM2 by default, as NAME.params assumes, or SERIAL1) is a
+MAVLink 2 UDP client to the camera port when one is given; the other of serial1 (TCP 5762+10N) and serial2
+(TCP 5763+10N) is `gcs_url`, for ground-station tools. A MAVLink reboot makes SITL restart itself in the same process with
 its arguments minus `-w`, so stored parameters (eeprom.bin) survive it and the monitor reconnects.
 """
 
@@ -100,7 +101,10 @@ class ArduPilotSitl:
         self._statustext: list[str] = []
         self._lock = _InstanceLock()
         self.instance = self._lock.instance
-        monitor, _serial1, tools = _ports(self.instance)
+        if options.camera_serial not in (1, 2):
+            raise LinkError(f"camera on SERIAL{options.camera_serial}", hint="SITL's camera link is SERIAL1 or SERIAL2")
+        monitor, serial1, serial2 = _ports(self.instance)
+        tools = serial1 if options.camera_serial == 2 and options.camera_port is not None else serial2
         self.gcs_url = f"tcp:127.0.0.1:{tools}"
         self._monitor_url = f"tcp:127.0.0.1:{monitor}"
         self._link: Link | None = None
@@ -121,8 +125,10 @@ class ArduPilotSitl:
                "-w", str(self.workdir), "-H", ",".join(f"{v:g}" for v in o.home)]
         if o.wipe:
             cmd.append("-l")
-        if o.camera_port is not None:
+        if o.camera_port is not None and o.camera_serial == 1:
             cmd += ["-c", str(o.camera_port)]
+        elif o.camera_port is not None:
+            cmd += ["--", f"--serial{o.camera_serial}", f"udpclient:127.0.0.1:{o.camera_port}"]
         out = open(self.workdir / "sitl.out", "ab")
         try:
             # its own process group: close() ends run-sitl and the firmware together, nothing is left behind
@@ -206,12 +212,14 @@ class ArduPilotSitl:
                 return float(msg.param_value)
         return None
 
-    def set_params(self, params: Mapping[str, float], *, reboot: bool = False) -> None:
+    def set_params(self, params: Mapping[str, float], *, reboot: bool = False, skip_unknown: bool = False) -> list[str]:
         """PARAM_SET each and wait for its PARAM_VALUE; then reboot when asked (CAMn_TYPE, SCR_ENABLE need it).
-        A name the firmware does not have is an error (it never answers)."""
+        A name the firmware does not have never answers: an error, or with `skip_unknown` (as a ground station
+        loading a parameter file does) skipped and returned."""
         link = self.link
+        skipped: list[str] = []
         for name, value in params.items():
-            for _ in range(5):
+            for _ in range(3 if skip_unknown else 5):
                 with link.inbox(types="PARAM_VALUE", src_system=self.target_system,
                                 predicate=lambda m, n=name: m.param_id == n) as box:
                     link.send(link.mav.param_set_encode(self.target_system, 1, name.encode(), float(value),
@@ -220,11 +228,15 @@ class ArduPilotSitl:
                 if msg is not None:
                     break
             else:
+                if skip_unknown:
+                    skipped.append(name)
+                    continue
                 raise LinkError(f"parameter {name} was never confirmed", where=str(self.workdir),
                                 hint="ArduPilot ignores PARAM_SET of a name it does not have: check the name "
                                      "for this firmware version")
         if reboot:
             self.reboot()
+        return skipped
 
     def reboot(self, timeout: float = 60.0) -> None:
         link = self.link
