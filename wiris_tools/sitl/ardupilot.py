@@ -302,12 +302,16 @@ class ArduPilotSitl:
         return bool(hb and hb.base_mode & mavlink2.MAV_MODE_FLAG_SAFETY_ARMED)
 
     def wait_mission_end(self, timeout: float = 300.0) -> None:
-        """Until the vehicle disarms (copter: after landing; plane: after landing or on a disarm)."""
+        """Until the vehicle disarms (after landing), or a plane's mission hands it to RTL mode (an RTL item: it
+        then circles home for ever)."""
         deadline = time.monotonic() + timeout
+        rtl = self._mode("RTL")
         with self.link.inbox(types="HEARTBEAT", src_system=self.target_system, src_component=1) as box:
             while time.monotonic() < deadline:
                 hb = box.get(timeout=1.0)
                 if hb is not None and not hb.base_mode & mavlink2.MAV_MODE_FLAG_SAFETY_ARMED:
+                    return
+                if hb is not None and self.vehicle == "plane" and hb.custom_mode == rtl:
                     return
                 if not self._alive():
                     break
