@@ -468,6 +468,13 @@ def test_autopilot_serial_names_the_port_and_its_channel(tmp_path):
     assert "SERIAL2_PROTOCOL" not in params
 
 
+def test_autopilot_serial_names_the_px4_telem_port(tmp_path):
+    def ch(doc):
+        doc["payloads"]["thermal"]["autopilot_serial"] = 3
+    params = {n: v for n, v, _ in build(tmp_path, ch, firmware="px4").params}
+    assert params["MAV_1_CONFIG"] == 103 and params["SER_TEL3_BAUD"] == 57600 and "SER_TEL2_BAUD" not in params
+
+
 def test_a_wiris_no_ardupilot_camera_instance_looks_for_is_refused(tmp_path):
     # MAVLinkCamV2 looks for CAMn at component 100 + n - 1 only, and ArduPilot has CAM1 and CAM2: a WIRIS at
     # 102 would never be found and take no photo, silently
