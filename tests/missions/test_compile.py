@@ -207,6 +207,9 @@ def test_waypoint_capture_target_per_firmware(tmp_path, fw, target):
     assert cap.param1 == target and cap.param3 == 1
     k = c.items.index(cap)
     assert c.items[k - 1].param1 == 3
+    # the report re-flies that capture as the firmware aims it: CAM2 is the WIRIS at 101, not "the 2nd camera"
+    from missions.measure.flight import simulate
+    assert [p.payloads for p in simulate(c).photos if p.cause == k] == [("thermal",)]
 
 
 def with_rededge(doc, comp=None):
