@@ -167,6 +167,9 @@ PAYLOAD = _obj({
     "lens_mm": _num(exclusive_min=0, maximum=1000, desc="focal length of the fitted lens, mm"),
     "component_id": {"type": "integer", "enum": list(COMPONENT_IDS),
                      "description": "MAVLink component id 100..105 (RedEdge is fixed at 100)"},
+    "autopilot_serial": _num(1, 9, integer=True,
+                             desc="the autopilot serial port the camera is wired to: ArduPilot SERIALn, PX4 "
+                                  "TELEM n (default 2: TELEM2)"),
     "orientation": {"enum": ["landscape", "portrait"], "default": "landscape",
                     "description": "landscape: the long image side across the flight line"},
     "settings": SETTINGS,
@@ -210,6 +213,10 @@ def _build() -> dict:
                 "max_speed_mps": _num(desc="the fastest the vehicle may fly, m/s (caps speed_mps: auto)"),
                 "max_mission_items": _num(10, 65535, integer=True,
                                           desc="item limit of the vehicle (default per firmware)"),
+                "firmware_version": {"type": ["string", "number"], "pattern": r"^[0-9]+\.[0-9]+(\.[0-9]+)?$",
+                                     "description": "firmware release, e.g. \"4.6\" (ArduPilot) or \"1.15\" (PX4): "
+                                                    "NAME.params names parameters as that release does (default: "
+                                                    "every name each supported release uses)"},
             }, required=("firmware", "frame", "speed_mps"), desc="the aircraft") | {"allOf": _speed_ranges()},
             "home": _obj({"lat": _num(-90, 90, desc=_LAT), "lon": _num(-180, 180, desc=_LON),
                           "alt_amsl_m": _num(-500, 9000, desc="home altitude above mean sea level")},
