@@ -1,0 +1,98 @@
+"""Fly a compiled plan in PX4 SITL with the WIRIS emulator on the payload link, as a pilot would: NAME.params
+given to PX4 at boot (its `param set` lines; names this build lacks are reported), NAME.plan uploaded with
+read-back, AUTO.MISSION, arm, fly to landing, and keep what the camera took and what reached it.
+
+    with fly_compiled_px4(px4_dir, out_dir, "solar-park") as flight:
+        flight.photos              # the emulator's Captured list, in order
+        flight.commands            # (command, target_system, target_component) of each camera command it heard
+        flight.sitl.ulogs()        # the flight's ULog (kept in the working directory)
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Iterator, Mapping
+
+from wiris_tools.sitl import SitlOptions, start_sitl
+from wiris_tools.sitl.flight import read_params_file
+
+
+@dataclass(frozen=True)
+class HeardCommand:
+    command: int
+    target_system: int
+    target_component: int
+    confirmation: int
+    src_component: int
+
+
+@dataclass
+class Px4Flight:
+    sitl: object
+    emulator: object
+    unknown_params: list[str]
+    upload: dict
+    photos: list = field(default_factory=list)
+    commands: list[HeardCommand] = field(default_factory=list)
+
+
+class _CommandLog:
+    """Every COMMAND_LONG the camera's link carries from the autopilot, in order (subscribed before PX4 starts)."""
+
+    def __init__(self, emulator) -> None:
+        self.lock = threading.Lock()
+        self.heard: list[HeardCommand] = []
+        emulator.link.subscribe(self._on, types="COMMAND_LONG")
+
+    def _on(self, m) -> None:
+        with self.lock:
+            self.heard.append(HeardCommand(m.command, m.target_system, m.target_component, m.confirmation,
+                                           m.get_srcComponent()))
+
+
+@contextmanager
+def fly_compiled_px4(px4_dir: Path | None, out_dir: Path, name: str, *, model: str = "wiris-pro",
+                     component: int = 100, speedup: float = 10.0, vehicle: str = "copter",
+                     home: tuple[float, float, float] = (50.08, 14.42, 262.0), fly: bool = True,
+                     extra_params: Mapping[str, float] | None = None, workdir: Path | None = None,
+                     timeout: float = 600.0) -> Iterator[Px4Flight]:
+    """Start PX4 SITL with `out_dir/name.params` (plus `extra_params`) at boot and the emulator on its payload
+    link, upload `name.plan` with read-back and (with `fly`) fly it in AUTO.MISSION to landing."""
+    from wiris_tools.emulate.runner import start_emulator
+    from wiris_tools.link import Link
+    from wiris_tools.transfer import upload_file
+
+    out_dir = Path(out_dir)
+    params = read_params_file(out_dir / f"{name}.params")
+    params.update(extra_params or {})
+    sitl = emu = None
+    try:
+        sitl = start_sitl("px4", px4_dir, SitlOptions(vehicle=vehicle, speedup=speedup, workdir=workdir,
+                                                      home=(*home, 0.0), params=params))
+        # PX4 sends the payload link to a fixed port per instance: the camera binds it, with PX4's system id
+        emu = start_emulator(model, f"udpin:127.0.0.1:{sitl.camera_port}", component=component,
+                             system=sitl.target_system)
+        heard = _CommandLog(emu)
+        sitl.wait_ready()
+        unknown = [n for n in params if sitl.get_param(n, timeout=1.5) is None]
+        with Link(sitl.gcs_url) as link:
+            summary = upload_file(link, str(out_dir / f"{name}.plan"), verify=True, timeout=20)
+        flight = Px4Flight(sitl, emu, unknown, summary)
+        if fly:
+            sitl.arm_and_start_mission()
+            sitl.wait_mission_end(timeout=timeout)
+            time.sleep(1.0)   # the last CAMERA_IMAGE_CAPTURED
+            with emu.lock:
+                flight.photos = list(emu.state.history)
+            with heard.lock:
+                flight.commands = list(heard.heard)
+        yield flight
+    finally:
+        if sitl is not None:
+            sitl.close()
+        if emu is not None:
+            emu.close()
