@@ -135,13 +135,25 @@ def _px4(payloads: list[Any], cameras: Mapping[str, Any], triggers: set[str]) ->
     if {"distance", "interval"} <= triggers:
         raise PlanError("PX4 has one TRIG_MODE: this plan mixes distance and interval triggering",
                         hint="use the same trigger for every survey and corridor")
-    mode = 1 if "interval" in triggers else 4
-    out: list[Param] = [
-        ("TRIG_INTERFACE", 3, "camera_trigger sends MAVLink (IMAGE_START_CAPTURE + DO_DIGICAM_CONTROL to "
-                              "components 100..105; reference §3.2)"),
-        ("TRIG_MODE", mode, "time based, on command (DO_SET_CAM_TRIGG_INTERVAL)" if mode == 1 else
-                            "distance based, on command (DO_SET_CAM_TRIGG_DIST in the mission)"),
-    ]
+    if not {"distance", "interval"} & triggers:
+        # measured in PX4 1.16 SITL: with camera_trigger running (TRIG_MODE > 0) a mission's single capture
+        # (DIGICAM_CONTROL, IMAGE_START_CAPTURE of one image) is also a camera_trigger shot, which its
+        # CAMERA_TRIGGER stream sends on as IMAGE_START_CAPTURE and DO_DIGICAM_CONTROL: 10 photos for 3 captures
+        out: list[Param] = [
+            ("TRIG_MODE", 0, "camera_trigger off: this plan triggers no survey, and each capture item then reaches "
+                             "the camera as one command, so one photo (with camera_trigger on, each also becomes a "
+                             "trigger shot sent as two more commands)"),
+        ]
+    else:
+        mode = 1 if "interval" in triggers else 4
+        out = [
+            ("TRIG_INTERFACE", 3, "camera_trigger sends MAVLink: its CAMERA_TRIGGER stream sends every shot to "
+                                  "components 100..105 as IMAGE_START_CAPTURE and as DO_DIGICAM_CONTROL "
+                                  "(CAMERA_TRIGGER.hpp; reference §3.2). A WIRIS answers both: two images per "
+                                  "trigger position, and PX4 1.16 has no parameter that sends only one"),
+            ("TRIG_MODE", mode, "time based, on command (DO_SET_CAM_TRIGG_INTERVAL)" if mode == 1 else
+                                "distance based, on command (DO_SET_CAM_TRIGG_DIST in the mission)"),
+        ]
     ports = iter(PX4_PORTS)
     has_v1 = False
     for p in payloads:

@@ -679,3 +679,12 @@ def test_an_area_of_more_polygons_than_a_survey_plans_names_the_limit(tmp_path, 
         build(tmp_path, lambda d: survey(d).update(area="crowns.geojson"))
     assert "crowns.geojson" in ei.value.where
     assert "merge or simplify" in ei.value.hint
+
+
+def test_px4_params_turn_camera_trigger_off_without_a_triggered_survey(tmp_path):
+    # PX4 SITL: with TRIG_MODE 4 three waypoint captures gave the camera 10 photos (each capture is also a
+    # camera_trigger shot, sent on as IMAGE_START_CAPTURE + DO_DIGICAM_CONTROL); with TRIG_MODE 0, 3
+    c = build(tmp_path, lambda d: survey(d).update(trigger="hover"), firmware="px4")
+    params = {n: v for n, v, _ in c.params}
+    assert params["TRIG_MODE"] == 0 and "TRIG_INTERFACE" not in params
+    assert build(tmp_path, firmware="px4").params[1][:2] == ("TRIG_MODE", 4.0)

@@ -28,6 +28,7 @@ class HeardCommand:
     target_component: int
     confirmation: int
     src_component: int
+    param4: float          # camera_trigger's IMAGE_START_CAPTURE numbers its shots here (CAMERA_TRIGGER.hpp)
 
 
 @dataclass
@@ -38,6 +39,13 @@ class Px4Flight:
     upload: dict
     photos: list = field(default_factory=list)
     commands: list[HeardCommand] = field(default_factory=list)
+
+    def trigger_shots(self, component: int = 100) -> int:
+        """How many shots PX4's camera_trigger fired at `component`: the distinct sequence numbers of its
+        IMAGE_START_CAPTURE commands (a resent command keeps its number)."""
+        from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+        return len({c.param4 for c in self.commands
+                    if c.command == mavlink2.MAV_CMD_IMAGE_START_CAPTURE and c.target_component == component})
 
 
 class _CommandLog:
@@ -51,20 +59,40 @@ class _CommandLog:
     def _on(self, m) -> None:
         with self.lock:
             self.heard.append(HeardCommand(m.command, m.target_system, m.target_component, m.confirmation,
-                                           m.get_srcComponent()))
+                                           m.get_srcComponent(), float(m.param4)))
+
+
+UPLOAD_ATTEMPTS = 2
+
+
+def _upload(sitl, plan: Path) -> dict:
+    """Upload with read-back, once more after a failure (as a pilot would): PX4 times a transfer out in
+    simulated time, which a ground station on a loaded machine can miss at a high speed-up. The summary
+    says how many attempts it took."""
+    from wiris_tools.errors import LinkError
+    from wiris_tools.link import Link
+    from wiris_tools.transfer import upload_file
+
+    for attempt in range(1, UPLOAD_ATTEMPTS + 1):
+        try:
+            with Link(sitl.gcs_url) as link:
+                summary = upload_file(link, str(plan), verify=True, timeout=20)
+            return {**summary, "attempts": attempt}
+        except LinkError:
+            if attempt == UPLOAD_ATTEMPTS:
+                raise
+    raise AssertionError("unreachable")
 
 
 @contextmanager
 def fly_compiled_px4(px4_dir: Path | None, out_dir: Path, name: str, *, model: str = "wiris-pro",
-                     component: int = 100, speedup: float = 10.0, vehicle: str = "copter",
+                     component: int = 100, speedup: float = 6.0, vehicle: str = "copter",
                      home: tuple[float, float, float] = (50.08, 14.42, 262.0), fly: bool = True,
                      extra_params: Mapping[str, float] | None = None, workdir: Path | None = None,
                      timeout: float = 600.0) -> Iterator[Px4Flight]:
     """Start PX4 SITL with `out_dir/name.params` (plus `extra_params`) at boot and the emulator on its payload
     link, upload `name.plan` with read-back and (with `fly`) fly it in AUTO.MISSION to landing."""
     from wiris_tools.emulate.runner import start_emulator
-    from wiris_tools.link import Link
-    from wiris_tools.transfer import upload_file
 
     out_dir = Path(out_dir)
     params = read_params_file(out_dir / f"{name}.params")
@@ -79,8 +107,7 @@ def fly_compiled_px4(px4_dir: Path | None, out_dir: Path, name: str, *, model: s
         heard = _CommandLog(emu)
         sitl.wait_ready()
         unknown = [n for n in params if sitl.get_param(n, timeout=1.5) is None]
-        with Link(sitl.gcs_url) as link:
-            summary = upload_file(link, str(out_dir / f"{name}.plan"), verify=True, timeout=20)
+        summary = _upload(sitl, out_dir / f"{name}.plan")
         flight = Px4Flight(sitl, emu, unknown, summary)
         if fly:
             sitl.arm_and_start_mission()
