@@ -44,6 +44,8 @@ MODELS = {"copter": "sihsim_quadx", "plane": "sihsim_airplane", "vtol": "sihsim_
 # PX4 custom mode: main mode AUTO (4), sub mode MISSION (4) (px4_custom_mode.h)
 PX4_MAIN_AUTO = 4
 PX4_SUB_MISSION = 4
+PX4_SUB_LOITER = 3
+PX4_SUB_RTL = 5
 # PX4's SITL links stream at up to 100 Hz of simulated time (px4-rc.mavlink, the onboard mode's defaults): at
 # 10x that is more than a Python reader on a shared machine keeps up with, and a mission transfer that falls
 # behind PX4's time-out (in simulated time) is aborted. The harness turns off every stream it hears that is
@@ -367,6 +369,24 @@ class Px4Sitl:
                 if not self._alive():
                     break
         raise LinkError("the mission did not end (vehicle still armed)", where=str(self.workdir),
+                        hint="last messages: " + " | ".join(self._statustext[-5:]))
+
+    def wait_mission_flown(self, timeout: float = 300.0) -> None:
+        """Until the vehicle has left AUTO.MISSION for its end (AUTO.RTL, AUTO.LOITER) or disarmed: a
+        fixed-wing's RTL loiters over home for ever (RTL_TYPE 0) and never lands by itself."""
+        deadline = time.monotonic() + timeout
+        with self.link.inbox(types="HEARTBEAT", src_system=self.target_system, src_component=1) as box:
+            while time.monotonic() < deadline:
+                hb = box.get(timeout=1.0)
+                if hb is None:
+                    if not self._alive():
+                        break
+                    continue
+                main, sub = (hb.custom_mode >> 16) & 0xFF, (hb.custom_mode >> 24) & 0xFF
+                if not hb.base_mode & mavlink2.MAV_MODE_FLAG_SAFETY_ARMED or (
+                        main == PX4_MAIN_AUTO and sub in (PX4_SUB_RTL, PX4_SUB_LOITER)):
+                    return
+        raise LinkError("the mission was not flown to its end", where=str(self.workdir),
                         hint="last messages: " + " | ".join(self._statustext[-5:]))
 
     # -- results -----------------------------------------------------------------------------------

@@ -10,6 +10,7 @@ read-back, AUTO.MISSION, arm, fly to landing, and keep what the camera took and 
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from contextlib import contextmanager
@@ -63,6 +64,24 @@ class _CommandLog:
 
 
 UPLOAD_ATTEMPTS = 2
+# Images within this of the one before are one shot: PX4 sends each camera_trigger shot as two commands and
+# resends a command whose ACK is late; well under the trigger spacings of a survey (several metres)
+SAME_SHOT_M = 2.0
+
+
+def shot_positions(images: list[tuple[float, float, float]]) -> list[tuple[float, float, float]]:
+    """(lat, lon, alt) of each shot, from the camera's images in order: consecutive images within SAME_SHOT_M
+    of the one before are the same shot (the first of them is kept)."""
+    out: list[tuple[float, float, float]] = []
+    for lat, lon, alt in images:
+        if out:
+            plat, plon, _ = out[-1]
+            dy = (lat - plat) * 111_320.0
+            dx = (lon - plon) * 111_320.0 * math.cos(math.radians(lat))
+            if math.hypot(dx, dy) < SAME_SHOT_M:
+                continue
+        out.append((lat, lon, alt))
+    return out
 
 
 def _upload(sitl, plan: Path) -> dict:
@@ -106,12 +125,26 @@ def fly_compiled_px4(px4_dir: Path | None, out_dir: Path, name: str, *, model: s
                              system=sitl.target_system)
         heard = _CommandLog(emu)
         sitl.wait_ready()
-        unknown = [n for n in params if sitl.get_param(n, timeout=1.5) is None]
+        unknown, lost = [], {}
+        for n, wanted in params.items():
+            held = sitl.get_param(n, timeout=1.5)
+            if held is None:
+                unknown.append(n)
+            elif abs(held - wanted) > 1e-4 * max(1.0, abs(wanted)):
+                lost[n] = wanted
+        # a value given at boot equal to PX4's built-in default is not kept as set, so an airframe's
+        # `param set-default` (rc.fw_defaults: MIS_TKO_LAND_REQ 2) overrides it: set those over MAVLink, as a
+        # ground station loading the file after boot would
+        if lost:
+            sitl.set_params(lost)
         summary = _upload(sitl, out_dir / f"{name}.plan")
         flight = Px4Flight(sitl, emu, unknown, summary)
         if fly:
             sitl.arm_and_start_mission()
-            sitl.wait_mission_end(timeout=timeout)
+            if vehicle == "copter":
+                sitl.wait_mission_end(timeout=timeout)
+            else:   # a fixed-wing's RTL loiters over home: the mission is flown when it gets there
+                sitl.wait_mission_flown(timeout=timeout)
             time.sleep(1.0)   # the last CAMERA_IMAGE_CAPTURED
             with emu.lock:
                 flight.photos = list(emu.state.history)
