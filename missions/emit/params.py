@@ -161,6 +161,14 @@ def _px4(payloads: list[Any], cameras: Mapping[str, Any], triggers: set[str],
         cam = cameras[p.name]
         try:
             n, cfg, baud, label = next(ports)
+            telem = getattr(p, "autopilot_serial", None)
+            if telem is not None and telem > 4:
+                raise PlanError(f"{p.name}: PX4 has no TELEM {telem} to configure", hint="autopilot_serial is the "
+                                "TELEM port on PX4: 1..4")
+            if telem is not None:
+                # the plan names the TELEM port it is wired to: SER_TELn_BAUD, MAV_x_CONFIG 100 + n (101 TELEM 1 ..
+                # 104 TELEM/SERIAL 4 in PX4's serial port table)
+                cfg, baud, label = 100 + telem, f"SER_TEL{telem}_BAUD", f"TELEM {telem}"
         except StopIteration:
             raise PlanError(f"{len(payloads)} MAVLink cameras, but PX4 has three MAVLink instances (MAV_0..MAV_2) and "
                             "MAV_0 is the ground station's telemetry", hint="connect the cameras through a companion "

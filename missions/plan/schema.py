@@ -169,7 +169,7 @@ PAYLOAD = _obj({
                      "description": "MAVLink component id 100..105 (RedEdge is fixed at 100)"},
     "autopilot_serial": _num(1, 9, integer=True,
                              desc="the autopilot serial port the camera is wired to: ArduPilot SERIALn, PX4 "
-                                  "TELEM n (default 2: TELEM2)"),
+                                  "TELEM n, 1..4 (default: TELEM2, then the next free port)"),
     "orientation": {"enum": ["landscape", "portrait"], "default": "landscape",
                     "description": "landscape: the long image side across the flight line"},
     "settings": SETTINGS,

@@ -209,6 +209,9 @@ def test_waypoint_capture_target_per_firmware(tmp_path, fw, target):
     assert cap.param1 == target and cap.param3 == 1
     k = c.items.index(cap)
     assert c.items[k - 1].param1 == 3
+    # the report re-flies that capture as the firmware aims it: CAM2 is the WIRIS at 101, not "the 2nd camera"
+    from missions.measure.flight import simulate
+    assert [p.payloads for p in simulate(c).photos if p.cause == k] == [("thermal",)]
 
 
 def with_rededge(doc, comp=None):
@@ -468,6 +471,13 @@ def test_autopilot_serial_names_the_port_and_its_channel(tmp_path):
     params = {n: v for n, v, _ in build(tmp_path, ch).params}
     assert params["SERIAL1_PROTOCOL"] == 2 and params["SR1_POSITION"] == 5 and params["MAV2_POSITION"] == 5
     assert "SERIAL2_PROTOCOL" not in params
+
+
+def test_autopilot_serial_names_the_px4_telem_port(tmp_path):
+    def ch(doc):
+        doc["payloads"]["thermal"]["autopilot_serial"] = 3
+    params = {n: v for n, v, _ in build(tmp_path, ch, firmware="px4").params}
+    assert params["MAV_1_CONFIG"] == 103 and params["SER_TEL3_BAUD"] == 57600 and "SER_TEL2_BAUD" not in params
 
 
 def test_a_wiris_no_ardupilot_camera_instance_looks_for_is_refused(tmp_path):

@@ -9,7 +9,9 @@ its arguments minus `-w`, so stored parameters (eeprom.bin) survive it and the m
 
 from __future__ import annotations
 
+import contextlib
 import errno
+import io
 import fcntl
 import os
 import signal
@@ -148,7 +150,9 @@ class ArduPilotSitl:
                 raise LinkError("ArduPilot SITL exited", where=str(self.workdir / "sitl.out"),
                                 hint="read sitl.out in the working directory")
             try:
-                link = Link(self._monitor_url)
+                # pymavlink prints each refused TCP attempt on stdout, where `wiris sim` prints its URL
+                with contextlib.redirect_stdout(io.StringIO()):
+                    link = Link(self._monitor_url)
                 break
             except LinkError:
                 if time.monotonic() > deadline:
@@ -159,6 +163,11 @@ class ArduPilotSitl:
         self._link = link
         hb = link.wait_heartbeat(timeout=max(1.0, deadline - time.monotonic()), component=1)
         self.target_system = hb.get_srcSystem()
+        self._request_streams()
+
+    def _request_streams(self) -> None:
+        # a copter streams nothing on a channel until asked (its default SRn_/MAVn_ rates are 0)
+        link = self.link
         link.send(link.mav.request_data_stream_encode(self.target_system, 1, mavlink2.MAV_DATA_STREAM_ALL,
                                                       MONITOR_STREAM_HZ, 1))
 
@@ -185,14 +194,19 @@ class ArduPilotSitl:
         """Until the EKF uses GPS for an absolute position and the pre-arm checks pass (SYS_STATUS)."""
         deadline = time.monotonic() + timeout
         ekf_ok = prearm_ok = False
+        ask_again = time.monotonic() + 2.0
         with self.link.inbox(types=("EKF_STATUS_REPORT", "SYS_STATUS"), src_system=self.target_system,
                              src_component=1) as box:
             while not (ekf_ok and prearm_ok):
                 left = deadline - time.monotonic()
                 msg = box.get(timeout=min(1.0, max(left, 0.01)))
                 if left <= 0:
-                    raise LinkError("SITL not ready to arm", where=str(self.workdir),
+                    raise LinkError(f"SITL not ready to arm (EKF {'ok' if ekf_ok else 'not ready'}, pre-arm "
+                                    f"{'ok' if prearm_ok else 'failing'})", where=str(self.workdir),
                                     hint="last messages: " + " | ".join(self._statustext[-5:]))
+                if time.monotonic() > ask_again:   # a request lost at start-up would leave us waiting for ever
+                    self._request_streams()
+                    ask_again = time.monotonic() + 2.0
                 if msg is None:
                     continue
                 if msg.get_type() == "EKF_STATUS_REPORT":
@@ -288,12 +302,16 @@ class ArduPilotSitl:
         return bool(hb and hb.base_mode & mavlink2.MAV_MODE_FLAG_SAFETY_ARMED)
 
     def wait_mission_end(self, timeout: float = 300.0) -> None:
-        """Until the vehicle disarms (copter: after landing; plane: after landing or on a disarm)."""
+        """Until the vehicle disarms (after landing), or a plane's mission hands it to RTL mode (an RTL item: it
+        then circles home for ever)."""
         deadline = time.monotonic() + timeout
+        rtl = self._mode("RTL")
         with self.link.inbox(types="HEARTBEAT", src_system=self.target_system, src_component=1) as box:
             while time.monotonic() < deadline:
                 hb = box.get(timeout=1.0)
                 if hb is not None and not hb.base_mode & mavlink2.MAV_MODE_FLAG_SAFETY_ARMED:
+                    return
+                if hb is not None and self.vehicle == "plane" and hb.custom_mode == rtl:
                     return
                 if not self._alive():
                     break
