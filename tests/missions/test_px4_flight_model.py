@@ -39,7 +39,7 @@ def test_a_px4_survey_is_predicted_at_the_spacing_px4_flies(tmp_path):
     d = px4.areas[0].trigger_distance_m
     commanded = [it.param1 for it in px4.items if it.command == 206 and it.param1 > 0]
     assert commanded and all(c == pytest.approx(d - 5 * 0.05) for c in commanded)
-    assert np.median(_spacings(ap)) == pytest.approx(d, abs=1e-6)
+    assert np.median(_spacings(ap)) == pytest.approx(d, abs=5 / 50)   # ArduPilot: up to one 50 Hz step more
     assert np.median(_spacings(px4)) == pytest.approx(d - 5 * 0.025, abs=1e-6)
     assert len(simulate(px4).photos) == len(simulate(ap).photos)     # the same shots per line
     first_ap, first_px4 = simulate(ap).photos[0], simulate(px4).photos[0]
