@@ -770,12 +770,19 @@ def _lua_bridge(c: _Compile, emitted: Emitted) -> str | None:
     return render_script(c.plan.name) if emitted.needs_lua else None
 
 
+def _fixed_wing_without_landing(c: _Compile, emitted: Emitted) -> bool:
+    """A plane or VTOL mission that ends without a landing item (an RTL, a loiter)."""
+    landings = (mavlink.MAV_CMD_NAV_LAND, mavlink.MAV_CMD_NAV_VTOL_LAND, mavlink.MAV_CMD_DO_LAND_START)
+    return c.plan.vehicle.frame != "copter" and not any(it.command in landings for it in emitted.items)
+
+
 def _params(c: _Compile, emitted: Emitted) -> tuple[Param, ...]:
     try:
         return autopilot_params(c.profile, c.plan.payloads, c.payloads.cameras, c.payloads.optics,
                                 c.payloads.instances, needs_lua=emitted.needs_lua,
                                 triggers={a.trigger for a in c.state.areas},
-                                version=c.plan.vehicle.firmware_version)
+                                version=c.plan.vehicle.firmware_version,
+                                fixed_wing_without_landing=_fixed_wing_without_landing(c, emitted))
     except PlanError as e:
         raise _relocate(e, c.plan.where("mission")) from None
 

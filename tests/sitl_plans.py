@@ -11,7 +11,7 @@ HOME = (50.08, 14.42, 262.0)
 HEAD = """\
 version: 1
 name: {name}
-vehicle: {{firmware: ardupilot, frame: {frame}, speed_mps: {speed}{extra_vehicle}}}
+vehicle: {{firmware: {firmware}, frame: {frame}, speed_mps: {speed}{extra_vehicle}}}
 home: {{lat: 50.08, lon: 14.42, alt_amsl_m: 262}}
 payloads:
   thermal:
@@ -99,10 +99,12 @@ STEPS = {
 
 
 def plan_text(kind: str, *, name: str | None = None, frame: str = "copter", speed: float = 5,
-              component: int = 100, autopilot_serial: int | None = None, limit: int | None = None) -> str:
+              component: int = 100, autopilot_serial: int | None = None, limit: int | None = None,
+              firmware: str = "ardupilot") -> str:
     extra = f", max_mission_items: {limit}" if limit else ""
     serial = f"\n    autopilot_serial: {autopilot_serial}" if autopilot_serial is not None else ""
-    text = HEAD.format(name=name or kind.replace("_", "-"), frame=frame, speed=speed, extra_vehicle=extra,
+    text = HEAD.format(name=name or kind.replace("_", "-"), firmware=firmware, frame=frame, speed=speed,
+                       extra_vehicle=extra,
                        component=component, serial=serial)
     if kind == "two_payloads":
         text += SECOND

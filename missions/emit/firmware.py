@@ -144,6 +144,19 @@ PX4 = FirmwareProfile(
 
 PROFILES = {"ardupilot": ARDUPILOT, "px4": PX4}
 
+# PX4 camera_trigger checks the distance every 50 ms (CameraTrigger::Run, poll_interval_usec = 50000) and
+# measures the next shot from where it fired, so each shot comes up to one check's travel late.
+PX4_TRIGGER_CHECK_S = 0.05
+# A multicopter reaches a mission waypoint, and runs the DO items after it, within NAV_ACC_RAD (PX4 default)
+PX4_ACCEPTANCE_M = 2.0
+
+
+def px4_commanded_distance(spacing_m: float, speed_mps: float) -> float:
+    """The DO_SET_CAM_TRIGG_DIST that makes PX4 fly at most `spacing_m` between shots at `speed_mps`: one
+    check's travel shorter, so the last shot of a line (planned on its end) still comes before the trigger
+    is switched off there."""
+    return max(spacing_m - speed_mps * PX4_TRIGGER_CHECK_S, 0.5 * spacing_m)
+
 
 def profile(name: str) -> FirmwareProfile:
     try:

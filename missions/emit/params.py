@@ -131,17 +131,30 @@ PX4_PORTS = ((1, 102, "SER_TEL2_BAUD", "TELEM 2"), (2, 103, "SER_TEL3_BAUD", "TE
 
 
 
-def _px4(payloads: list[Any], cameras: Mapping[str, Any], triggers: set[str]) -> list[Param]:
+def _px4(payloads: list[Any], cameras: Mapping[str, Any], triggers: set[str],
+         fixed_wing_without_landing: bool = False) -> list[Param]:
     if {"distance", "interval"} <= triggers:
         raise PlanError("PX4 has one TRIG_MODE: this plan mixes distance and interval triggering",
                         hint="use the same trigger for every survey and corridor")
-    mode = 1 if "interval" in triggers else 4
-    out: list[Param] = [
-        ("TRIG_INTERFACE", 3, "camera_trigger sends MAVLink (IMAGE_START_CAPTURE + DO_DIGICAM_CONTROL to "
-                              "components 100..105; reference §3.2)"),
-        ("TRIG_MODE", mode, "time based, on command (DO_SET_CAM_TRIGG_INTERVAL)" if mode == 1 else
-                            "distance based, on command (DO_SET_CAM_TRIGG_DIST in the mission)"),
-    ]
+    if not {"distance", "interval"} & triggers:
+        # measured in PX4 1.16 SITL: with camera_trigger running (TRIG_MODE > 0) a mission's single capture
+        # (DIGICAM_CONTROL, IMAGE_START_CAPTURE of one image) is also a camera_trigger shot, which its
+        # CAMERA_TRIGGER stream sends on as IMAGE_START_CAPTURE and DO_DIGICAM_CONTROL: 10 photos for 3 captures
+        out: list[Param] = [
+            ("TRIG_MODE", 0, "camera_trigger off: this plan triggers no survey, and each capture item then reaches "
+                             "the camera as one command, so one photo (with camera_trigger on, each also becomes a "
+                             "trigger shot sent as two more commands)"),
+        ]
+    else:
+        mode = 1 if "interval" in triggers else 4
+        out = [
+            ("TRIG_INTERFACE", 3, "camera_trigger sends MAVLink: its CAMERA_TRIGGER stream sends every shot to "
+                                  "components 100..105 as IMAGE_START_CAPTURE and as DO_DIGICAM_CONTROL "
+                                  "(CAMERA_TRIGGER.hpp; reference §3.2). A WIRIS answers both: two images per "
+                                  "trigger position, and PX4 1.16 has no parameter that sends only one"),
+            ("TRIG_MODE", mode, "time based, on command (DO_SET_CAM_TRIGG_INTERVAL)" if mode == 1 else
+                                "distance based, on command (DO_SET_CAM_TRIGG_DIST in the mission)"),
+        ]
     ports = iter(PX4_PORTS)
     has_v1 = False
     for p in payloads:
@@ -169,6 +182,12 @@ def _px4(payloads: list[Any], cameras: Mapping[str, Any], triggers: set[str]) ->
             (baud, 57600, f"{p.name}: 57600 baud"),
         ]
         has_v1 = has_v1 or cam.mavlink_version == 1
+    if fixed_wing_without_landing:
+        # measured in PX4 1.16 SITL (sihsim_airplane): the mission ending in RTL was rejected ("Landing
+        # waypoint/pattern required") and arming refused, until MIS_TKO_LAND_REQ was 0
+        out.append(("MIS_TKO_LAND_REQ", 0, "the mission ends without a landing (RTL): PX4's fixed-wing default (2) "
+                                           "requires one and rejects the mission, so arming is refused; RTL then "
+                                           "loiters over home (RTL_TYPE 0) until you land"))
     if has_v1:
         out.append(("MAV_PROTO_VER", 0, "start every link in MAVLink 1 and upgrade only links that speak 2: the "
                                         "RedEdge speaks only MAVLink 1"))
@@ -177,14 +196,15 @@ def _px4(payloads: list[Any], cameras: Mapping[str, Any], triggers: set[str]) ->
 
 def autopilot_params(prof: Any, payloads: Iterable[Any], cameras: Mapping[str, Any], infos: Mapping[str, Any],
                      instances: Mapping[str, int], needs_lua: bool = False,
-                     triggers: Iterable[str] = (), version: str | None = None) -> tuple[Param, ...]:
+                     triggers: Iterable[str] = (), version: str | None = None,
+                     fixed_wing_without_landing: bool = False) -> tuple[Param, ...]:
     """(name, value, why) for the firmware `prof` (missions.emit.firmware.FirmwareProfile); `version` is the
     plan's vehicle.firmware_version (None: names every supported release understands)."""
     payloads = list(payloads)
     if prof.name == "ardupilot":
         rows = _ardupilot(payloads, cameras, infos, instances, needs_lua, version)
     else:
-        rows = _px4(payloads, cameras, set(triggers))
+        rows = _px4(payloads, cameras, set(triggers), fixed_wing_without_landing)
     return tuple((n, float(v), why) for n, v, why in rows)
 
 

@@ -695,3 +695,25 @@ def test_an_area_of_more_polygons_than_a_survey_plans_names_the_limit(tmp_path, 
         build(tmp_path, lambda d: survey(d).update(area="crowns.geojson"))
     assert "crowns.geojson" in ei.value.where
     assert "merge or simplify" in ei.value.hint
+
+
+def test_px4_params_turn_camera_trigger_off_without_a_triggered_survey(tmp_path):
+    # PX4 SITL: with TRIG_MODE 4 three waypoint captures gave the camera 10 photos (each capture is also a
+    # camera_trigger shot, sent on as IMAGE_START_CAPTURE + DO_DIGICAM_CONTROL); with TRIG_MODE 0, 3
+    c = build(tmp_path, lambda d: survey(d).update(trigger="hover"), firmware="px4")
+    params = {n: v for n, v, _ in c.params}
+    assert params["TRIG_MODE"] == 0 and "TRIG_INTERFACE" not in params
+    assert build(tmp_path, firmware="px4").params[1][:2] == ("TRIG_MODE", 4.0)
+
+
+def test_px4_plane_ending_in_rtl_does_not_require_a_landing(tmp_path):
+    # PX4 SITL (sihsim_airplane): a fixed-wing mission without a landing is rejected ("Landing waypoint/pattern
+    # required", MIS_TKO_LAND_REQ 2 from rc.fw_defaults) and arming is refused
+    import sitl_plans
+    plane = sitl_plans.write_plan(tmp_path, "survey", name="plane", frame="plane", speed=12, firmware="px4")
+    plane.write_text(plane.read_text().replace("altitude_m: 40", "altitude_m: 120")
+                     .replace("front: 75", "front: 60"))
+    params = {n: v for n, v, _ in compile_plan(plane).params}
+    assert params["MIS_TKO_LAND_REQ"] == 0
+    copter = compile_plan(sitl_plans.write_plan(tmp_path, "survey", name="copter", firmware="px4"))
+    assert "MIS_TKO_LAND_REQ" not in {n for n, _, _ in copter.params}

@@ -13,7 +13,7 @@
 A backend starts the firmware's process in its own process group and working directory, on an instance
 nobody else on this machine holds (a lock file per instance plus a bind test of its ports), keeps one
 monitoring link of its own (which writes the tlog), and stops every process it started on close(), also when
-the test using it fails. PX4 slots in as a second entry of BACKENDS with the same methods.
+the test using it fails. PX4 (wiris_tools.sitl.px4) is the second backend, with the same methods.
 """
 
 from __future__ import annotations
@@ -27,13 +27,15 @@ from wiris_tools.errors import LinkError
 
 # The variable that names a SITL folder (ArduPilot's: bin/arducopter, bin/arduplane, run-sitl).
 SITL_DIR_VARIABLE = "WIRIS_SITL_DIR"
+# The same for PX4's (bin/px4, etc/, run-px4).
+PX4_DIR_VARIABLE = "WIRIS_PX4_SITL_DIR"
 
 
 @dataclass(frozen=True)
 class SitlOptions:
     """How to start one simulated vehicle."""
 
-    vehicle: str = "copter"                 # copter | plane
+    vehicle: str = "copter"                 # copter | plane (| vtol on PX4)
     speedup: float = 20.0                   # simulated seconds per wall-clock second
     camera_port: int | None = None          # a UDP port on 127.0.0.1 where a camera listens (the camera link)
     camera_serial: int = 2                  # the autopilot serial port the camera is on (1 or 2; TELEM2 stock)
@@ -84,11 +86,37 @@ def missing_sitl_reason() -> str:
             "bin/arducopter (see ../shared/sitl/README.md for how to build one)")
 
 
+def find_px4_dir(explicit: str | os.PathLike | None = None, *, near: Path | None = None) -> Path | None:
+    """PX4's SITL folder: `explicit`, else $WIRIS_PX4_SITL_DIR, else ../shared/px4-sitl beside the checkout
+    `near`; None when none of them holds bin/px4 and etc/."""
+    candidates: list[Path] = []
+    if explicit:
+        candidates.append(Path(explicit))
+    elif os.environ.get(PX4_DIR_VARIABLE):
+        candidates.append(Path(os.environ[PX4_DIR_VARIABLE]))
+    elif near is not None:
+        candidates += [p / "shared" / "px4-sitl" for p in (near, *near.parents)][:4]
+    for c in candidates:
+        if (c / "bin" / "px4").is_file() and (c / "etc").is_dir():
+            return c.resolve()
+    return None
+
+
+def missing_px4_reason() -> str:
+    return (f"PX4 SITL not found: set {PX4_DIR_VARIABLE} to a folder holding bin/px4 and etc/ "
+            "(see ../shared/px4-sitl/README.md for how to build one)")
+
+
 def start_sitl(firmware: str, sitl_dir: Path | None, options: SitlOptions = SitlOptions()) -> Sitl:
     """Start the `firmware` SITL found in `sitl_dir`; LinkError with a hint when it cannot."""
+    if sitl_dir is None and firmware == "px4":
+        raise LinkError(missing_px4_reason(), hint=f"pass --sitl-dir DIR or set {PX4_DIR_VARIABLE}")
     if sitl_dir is None:
         raise LinkError(missing_sitl_reason(), hint=f"pass --sitl-dir DIR or set {SITL_DIR_VARIABLE}")
+    if firmware == "px4":
+        from wiris_tools.sitl.px4 import Px4Sitl
+        return Px4Sitl(sitl_dir, options)
     if firmware == "ardupilot":
         from wiris_tools.sitl.ardupilot import ArduPilotSitl
         return ArduPilotSitl(sitl_dir, options)
-    raise LinkError(f"no SITL backend for firmware {firmware!r}", hint="use ardupilot")
+    raise LinkError(f"no SITL backend for firmware {firmware!r}", hint="use ardupilot or px4")

@@ -22,12 +22,15 @@ from wiris_tools.sitl import SitlOptions, start_sitl
 
 
 def read_params_file(path: Path) -> dict[str, float]:
-    """`NAME,VALUE` lines of an ArduPilot parameter file (Mission Planner's format), `#` comments skipped."""
+    """`NAME,VALUE` lines of an ArduPilot parameter file (Mission Planner's format), or the `param set NAME VALUE`
+    lines NAME.params holds for PX4 (its shell's syntax); `#` comments skipped."""
     out: dict[str, float] = {}
     for number, line in enumerate(Path(path).read_text(encoding="utf-8").splitlines(), 1):
         line = line.strip()
         if not line or line.startswith("#"):
             continue
+        if line.startswith("param set "):
+            line = ",".join(line[len("param set "):].split(None, 1))
         name, sep, value = line.replace("\t", ",").partition(",")
         try:
             out[name.strip()] = float(value)
