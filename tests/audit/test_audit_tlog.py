@@ -54,3 +54,64 @@ def test_rtl_cut_short_is_said_and_leaves_a_gap(survey, tmp_path):
     assert any("RTL before the mission's end" in s for s in audit.flight.left_plan)
     assert audit.steps[0].coverage < 0.9 and audit.steps[0].gaps
     assert not audit.complete
+
+
+def _union_coverage(compiled, audit, refly_compiled) -> float:
+    """Coverage of the original area by the captured footprints and the refly's predicted ones."""
+    import numpy as np
+    import shapely
+
+    from missions.geometry.footprint import Footprint
+    from missions.measure.coverage import footprint_polygons
+    from missions.measure.flight import simulate
+    from missions.measure.report import area_geometry
+
+    proj = simulate(compiled).projection
+    sim = simulate(refly_compiled)
+    geom = area_geometry(compiled.areas[0].area, proj)
+    info = compiled.payload("thermal")
+    lat, lon = sim.projection.to_latlon(np.array([p.x for p in sim.photos]), np.array([p.y for p in sim.photos]))
+    x, y = proj.to_xy(lat, lon)
+    refly = footprint_polygons(np.column_stack([x, y]), np.radians([p.heading_deg for p in sim.photos]),
+                               Footprint(*info.footprint_m(refly_compiled.areas[0].altitude_m)))
+    union = shapely.union_all([audit.steps[0].footprints.polygons, *refly])
+    return float(shapely.intersection(geom, union).area / geom.area)
+
+
+def test_cli_audit_writes_the_gap_map_and_a_refly_that_closes_the_gaps(survey, tmp_path):
+    import json
+
+    from click.testing import CliRunner
+
+    from wiris_tools.cli import cli
+
+    path, compiled = survey
+    write_tlog(tmp_path / "f.tlog", compiled, faults=Faults(stop_after=25))
+    res = CliRunner().invoke(cli, ["mission", "audit", str(path), str(tmp_path / "f.tlog"), "-o",
+                                   str(tmp_path / "out"), "--json"])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.output)
+    assert out["complete"] is False and out["steps"][0]["gaps"] >= 1
+    gaps = json.loads((tmp_path / "out" / "survey.gaps.geojson").read_text())
+    assert gaps["features"] and all(f["properties"]["kind"] == "gap" for f in gaps["features"])
+    assert (tmp_path / "out" / "survey.audit.png").read_bytes()[:4] == b"\x89PNG"
+    refly = tmp_path / "out" / "survey-refly.yaml"
+    assert (tmp_path / "out" / "survey-refly" / "survey-refly.plan").exists()
+    refly_compiled = compile_plan(refly)
+    assert refly_compiled.areas[0].altitude_m == compiled.areas[0].altitude_m
+    assert refly_compiled.areas[0].front_overlap == compiled.areas[0].front_overlap
+    audit = audit_flight(compiled, read_log(tmp_path / "f.tlog"), str(path))
+    assert _union_coverage(compiled, audit, refly_compiled) >= 0.995
+
+
+def test_a_complete_flight_writes_no_refly(survey, tmp_path):
+    from click.testing import CliRunner
+
+    from wiris_tools.cli import cli
+
+    path, compiled = survey
+    write_tlog(tmp_path / "f.tlog", compiled)
+    res = CliRunner().invoke(cli, ["mission", "audit", str(path), str(tmp_path / "f.tlog"), "-o", str(tmp_path / "o")])
+    assert res.exit_code == 0, res.output
+    assert "complete" in res.output and "INCOMPLETE" not in res.output
+    assert not (tmp_path / "o" / "survey-refly.yaml").exists()

@@ -106,6 +106,38 @@ def preview_cmd(plan: str, out: str, firmware: str | None) -> None:
     with _located(plan):
         click.echo(f"wrote {write_preview(compiled, out)}")
 
+@mission.command("audit")
+@click.argument("plan", type=click.Path(dir_okay=False))
+@click.argument("log", type=click.Path(dir_okay=False))
+@click.option("-o", "--output", "out_dir", type=click.Path(file_okay=False),
+              help="directory for NAME.audit.json, NAME.gaps.geojson, NAME.audit.png and the refly plan "
+                   "NAME-refly.yaml with its mission in NAME-refly/")
+@click.option("--json", "as_json", is_flag=True, help="print the audit as JSON")
+@click.option("--firmware", type=click.Choice(["ardupilot", "px4"]), help="override the plan's vehicle.firmware")
+def audit_cmd(plan: str, log: str, out_dir: str | None, as_json: bool, firmware: str | None) -> None:
+    """Audit a flight: what LOG (.tlog, DataFlash .BIN or PX4 .ulg) says was captured against PLAN.yaml --
+    coverage from the captured footprints, overlaps, missing photos, gaps, where the flight left the plan."""
+    from wiris_tools.audit.logs import read_log
+    from wiris_tools.audit.measure import audit_flight, format_audit
+    from wiris_tools.cli.jsonout import echo_json
+
+    compiled = _compile(plan, firmware)
+    with _located(plan):
+        result = audit_flight(compiled, read_log(log), plan)
+        paths = []
+        if out_dir:
+            from wiris_tools.audit.outputs import write_audit
+            paths = write_audit(out_dir, compiled, result, plan)
+    if as_json:
+        echo_json({**result.to_json(), "written": [str(p) for p in paths]}, indent=1)
+        return
+    click.echo(format_audit(result))
+    if paths:
+        click.echo("wrote:")
+        for p in paths:
+            click.echo(f"  {p}")
+
+
 # --- end of the compiler's commands ----------------------------------------------------------------------------
 
 
