@@ -200,6 +200,13 @@ def _read_tlog(path: Path) -> FlightLog:
 
 # --------------------------------------------------------------------------------------------- DataFlash (.BIN)
 
+def _field(m: Any, *names: str) -> float | None:
+    for n in names:
+        if n in m.get_fieldnames():
+            return float(getattr(m, n))
+    return None
+
+
 def _read_dataflash(path: Path) -> FlightLog:
     from pymavlink import DFReader
 
@@ -211,13 +218,14 @@ def _read_dataflash(path: Path) -> FlightLog:
     att = _Attitudes()
     triggers: list[Shot] = []
     track: list[Pose] = []
-    modes: list[ModeChange] = []
+    events: list[tuple[float, str | None, bool | None]] = []     # (time, mode, armed) as logged
     seqs: list[tuple[float, int]] = []
     times: list[float] = []
-    armed = False
+    dumped: set[int] = set()
+    total = None
     while True:
         try:
-            m = log.recv_match(type=["CAM", "TRIG", "POS", "ATT", "MODE", "CMD", "ARM", "EV"])
+            m = log.recv_match(type=["CAM", "TRIG", "POS", "ATT", "MODE", "CMD", "ARM"])
         except Exception:   # a truncated last block
             break
         if m is None:
@@ -230,21 +238,47 @@ def _read_dataflash(path: Path) -> FlightLog:
         elif kind == "POS":
             track.append(Pose(t, m.Lat, m.Lng, getattr(m, "RelHomeAlt", None)))
         elif kind in ("CAM", "TRIG"):
-            triggers.append(Shot(Pose(t, m.Lat, m.Lng, float(m.RelAlt), m.Yaw % 360.0, m.Pitch, m.Roll),
-                                 int(m.Img), kind))
+            # 4.x logs the attitude as R, P, Y; older releases as Roll, Pitch, Yaw
+            yaw, pitch, roll = (_field(m, "Y", "Yaw"), _field(m, "P", "Pitch"), _field(m, "R", "Roll"))
+            triggers.append(Shot(Pose(t, m.Lat, m.Lng, float(m.RelAlt), None if yaw is None else yaw % 360.0,
+                                      pitch, roll), int(m.Img), kind))
         elif kind == "MODE":
             name = log.flightmode if isinstance(getattr(log, "flightmode", None), str) else str(m.Mode)
-            modes.append(ModeChange(t, name, armed))
+            events.append((t, name, None))
         elif kind == "ARM":
-            armed = bool(m.ArmState)
-            modes.append(ModeChange(t, modes[-1].mode if modes else "?", armed))
+            events.append((t, None, bool(m.ArmState)))
         elif kind == "CMD":
-            seqs.append((t, int(m.CNum)))
+            # the logger writes the whole stored mission when the log starts (CNum 0..CTot-1): that is the
+            # plan, not progress; a CMD after it is an item the vehicle started
+            if total is None or len(dumped) < total:
+                total = int(m.CTot)
+                dumped.add(int(m.CNum))
+            else:
+                seqs.append((t, int(m.CNum)))
+    modes = _df_modes(events)
     notes = _clock_notes(times, "DataFlash log")
     notes.append("a DataFlash log records the autopilot's triggers, not the camera's captures: give the tlog "
                  "or the images to count what the camera took")
+    if not seqs:
+        notes.append("the DataFlash log records no mission progress (CMD after the mission's dump): how far "
+                     "the mission went is unknown")
     return FlightLog(str(path), "dataflash", (), tuple(_dedupe(triggers)), tuple(track), tuple(modes),
                      tuple(seqs), tuple(notes))
+
+
+def _df_modes(events: list[tuple[float, str | None, bool | None]]) -> list[ModeChange]:
+    """Mode changes with the armed state. ArduPilot starts a log at arming by default, so a log whose first ARM
+    record is a disarm was armed from its start."""
+    first_arm = next((a for _, _, a in events if a is not None), None)
+    armed = first_arm is False
+    mode = "?"
+    out: list[ModeChange] = []
+    for t, name, arm in events:
+        mode = name if name is not None else mode
+        armed = arm if arm is not None else armed
+        if not out or (out[-1].mode, out[-1].armed) != (mode, armed):
+            out.append(ModeChange(t, mode, armed))
+    return out
 
 
 # --------------------------------------------------------------------------------------------- PX4 ULog

@@ -192,7 +192,7 @@ def _tilted_centres(xy: np.ndarray, alt: np.ndarray, heading: np.ndarray, pitch:
 
 
 def _footprints(shots: Sequence[Shot], proj: Any, info: PayloadInfo, fallback_alt_m: float,
-                fallback_heading: np.ndarray) -> tuple[Any, np.ndarray, list[PhotoPoint], dict[float, list[int]]]:
+                fallback_heading: np.ndarray, mount: str) -> tuple[Any, np.ndarray, list[PhotoPoint], dict[float, list[int]]]:
     """Footprint polygons of the shots, their centres, PhotoPoints and the altitude groups (metres above home,
     to 0.1 m) for the overlap measures."""
     import shapely
@@ -203,8 +203,10 @@ def _footprints(shots: Sequence[Shot], proj: Any, info: PayloadInfo, fallback_al
     alt = np.array([s.pose.alt_rel_m if s.pose.alt_rel_m is not None else fallback_alt_m for s in shots], float)
     heading = np.array([s.pose.heading_deg if s.pose.heading_deg is not None else fallback_heading[k]
                         for k, s in enumerate(shots)], float)
-    pitch = np.array([s.pose.pitch_deg or 0.0 for s in shots], float)
-    roll = np.array([s.pose.roll_deg or 0.0 for s in shots], float)
+    # a gimbal holds the camera at nadir whatever the airframe does; a fixed mount tilts with it
+    tilt = mount == "fixed"
+    pitch = np.array([(s.pose.pitch_deg or 0.0) if tilt else 0.0 for s in shots], float)
+    roll = np.array([(s.pose.roll_deg or 0.0) if tilt else 0.0 for s in shots], float)
     centres = _tilted_centres(xy, alt, heading, pitch, roll)
     line = _lines(heading)
     polys, groups = [], {}
@@ -243,7 +245,7 @@ def _predicted_heading(sim_xy: np.ndarray, sim_heading: np.ndarray, xy: np.ndarr
 
 
 def _audit_step(area: AreaInfo, name: str, info: PayloadInfo, shots: Sequence[Shot], sim: Any,
-                planned_cov: float) -> StepAudit:
+                planned_cov: float, mount: str) -> StepAudit:
     import shapely
     proj = sim.projection
     geom = area_geometry(area.area, proj)
@@ -261,7 +263,7 @@ def _audit_step(area: AreaInfo, name: str, info: PayloadInfo, shots: Sequence[Sh
     mine = [shots[k] for k in near]
     fallback = _predicted_heading(np.array([(p.x, p.y) for p in all_pred], float).reshape(-1, 2),
                                   np.array([p.heading_deg for p in all_pred], float), raw_xy[near])
-    covered, centres, points, groups = _footprints(mine, proj, info, area.altitude_m, fallback)
+    covered, centres, points, groups = _footprints(mine, proj, info, area.altitude_m, fallback, mount)
     cov = float(shapely.intersection(geom, covered).area / geom.area) if mine and geom.area > 0 else 0.0
     fronts, sides = [], []
     for a, ks in groups.items():
@@ -330,9 +332,13 @@ def _check_same_flight(compiled: Compiled, log: FlightLog, shots: Sequence[Shot]
                         "flight", where=log.path, hint="give the log of the flight of this plan")
 
 
-def audit_flight(compiled: Compiled, log: FlightLog, plan_path: str = "") -> Audit:
+MOUNTS = ("gimbal", "fixed")
+
+
+def audit_flight(compiled: Compiled, log: FlightLog, plan_path: str = "", mount: str = "gimbal") -> Audit:
     """The audit of `log` against `compiled`. Raises LinkError where nothing can be said (no photo record at
-    all, another flight's log)."""
+    all, another flight's log). `mount`: "gimbal" (the camera looks at nadir, the footprint turns with the
+    heading only) or "fixed" (to the airframe: its logged pitch and roll move the footprint)."""
     from missions.measure.flight import simulate
     from missions.measure.report import report
 
@@ -354,7 +360,7 @@ def audit_flight(compiled: Compiled, log: FlightLog, plan_path: str = "") -> Aud
         for name in area.payloads:
             planned_cov = next((r.coverage.get(name, float("nan")) for r in rep.areas if r.step == area.step),
                                float("nan"))
-            steps.append(_audit_step(area, name, compiled.payload(name), shots, sim, planned_cov))
+            steps.append(_audit_step(area, name, compiled.payload(name), shots, sim, planned_cov, mount))
     notes = list(log.notes)
     if source == "triggers":
         notes.append("no capture acknowledgements in the log: footprints are the autopilot's triggers, whether "
