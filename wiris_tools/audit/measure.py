@@ -120,6 +120,7 @@ class Audit:
     steps: tuple[StepAudit, ...]
     flight: FlightAudit
     notes: tuple[str, ...]
+    images: Any = None                 # wiris_tools.audit.images.ImageMatch when a folder of images was given
 
     @property
     def complete(self) -> bool:
@@ -132,7 +133,7 @@ class Audit:
                 "captured_not_triggered": list(self.captured_not_triggered),
                 "complete": self.complete, "coverage_target": COVERAGE_TARGET,
                 "steps": [s.to_json() for s in self.steps], "flight": self.flight.to_json(),
-                "notes": list(self.notes)}
+                "images": None if self.images is None else self.images.to_json(), "notes": list(self.notes)}
 
 
 def _r(v: float | None) -> float | None:
@@ -399,6 +400,11 @@ def format_audit(audit: Audit) -> str:
     lines.append(f"  flight: modes {' > '.join(f.modes) or 'unknown'}; last item "
                  f"{'unknown' if f.last_item is None else f.last_item} of {f.mission_items}")
     lines += [f"  left the plan: {s}" for s in f.left_plan]
+    if audit.images is not None:
+        im = audit.images
+        lines.append(f"  images: {im.images} in the folder, {im.matched} matched by {im.by}; "
+                     f"{len(im.without_log_entry)} without a log entry, {len(im.captured_without_image)} "
+                     "captured but not in the folder")
     lines += [f"  note: {n}" for n in audit.notes]
     lines.append("  complete" if audit.complete else "  INCOMPLETE: fly the refly plan")
     return "\n".join(lines)
