@@ -304,7 +304,7 @@ def _read_ulog(path: Path) -> FlightLog:
         for k in range(len(a["timestamp"])):
             ypr = _yaw_pitch_roll([a[f"q[{i}]"][k] for i in range(4)])
             if ypr:
-                att.add(a["timestamp"][k] / 1e6, *ypr)
+                att.add(float(a["timestamp"][k]) / 1e6, *ypr)
     home_alt = None
     if "home_position" in topics and len(topics["home_position"]["alt"]):
         home_alt = float(topics["home_position"]["alt"][0])
@@ -313,13 +313,13 @@ def _read_ulog(path: Path) -> FlightLog:
         g = topics["vehicle_global_position"]
         for k in range(len(g["timestamp"])):
             alt = None if home_alt is None else float(g["alt"][k]) - home_alt
-            track.append(Pose(g["timestamp"][k] / 1e6, float(g["lat"][k]), float(g["lon"][k]), alt))
+            track.append(Pose(float(g["timestamp"][k]) / 1e6, float(g["lat"][k]), float(g["lon"][k]), alt))
     captures: list[Shot] = []
     if "camera_capture" in topics:
         c = topics["camera_capture"]
         for k in range(len(c["timestamp"])):
             ypr = _yaw_pitch_roll([c[f"q[{i}]"][k] for i in range(4)])
-            pose = Pose(c["timestamp"][k] / 1e6, float(c["lat"][k]), float(c["lon"][k]),
+            pose = Pose(float(c["timestamp"][k]) / 1e6, float(c["lat"][k]), float(c["lon"][k]),
                         float(c["ground_distance"][k]) if np.isfinite(c["ground_distance"][k]) else None,
                         *(ypr or (None, None, None)))
             captures.append(Shot(_with_attitude(pose, att), int(c["seq"][k]), "camera_capture",
@@ -328,7 +328,7 @@ def _read_ulog(path: Path) -> FlightLog:
     if "camera_trigger" in topics:
         c = topics["camera_trigger"]
         for k in range(len(c["timestamp"])):
-            t = c["timestamp"][k] / 1e6
+            t = float(c["timestamp"][k]) / 1e6
             p = _pose_at(track, t)
             if p is not None:
                 triggers.append(Shot(_with_attitude(p, att), int(c["seq"][k]), "camera_trigger"))
@@ -339,13 +339,13 @@ def _read_ulog(path: Path) -> FlightLog:
             name = _PX4_NAV_STATES.get(int(s["nav_state"][k]), f"nav_state {int(s['nav_state'][k])}")
             armed = int(s["arming_state"][k]) == 2
             if not modes or (modes[-1].mode, modes[-1].armed) != (name, armed):
-                modes.append(ModeChange(s["timestamp"][k] / 1e6, name, armed))
+                modes.append(ModeChange(float(s["timestamp"][k]) / 1e6, name, armed))
     seqs: list[tuple[float, int]] = []
     if "mission_result" in topics:
         r = topics["mission_result"]
         for k in range(len(r["timestamp"])):
             if not seqs or seqs[-1][1] != int(r["seq_current"][k]):
-                seqs.append((r["timestamp"][k] / 1e6, int(r["seq_current"][k])))
+                seqs.append((float(r["timestamp"][k]) / 1e6, int(r["seq_current"][k])))
     notes = []
     if home_alt is None:
         notes.append("the ULog has no home position: track heights above home are unknown")
