@@ -115,3 +115,20 @@ def test_a_complete_flight_writes_no_refly(survey, tmp_path):
     assert res.exit_code == 0, res.output
     assert "complete" in res.output and "INCOMPLETE" not in res.output
     assert not (tmp_path / "o" / "survey-refly.yaml").exists()
+
+
+def test_photos_in_an_exclusion_zone_are_counted(survey, tmp_path):
+    # the same field with an exclusion in its middle; the flight flew the plan without it, camera on throughout
+    path, compiled = survey
+    text = path.read_text(encoding="utf-8").replace(
+        "      payloads: [thermal]\n",
+        "      exclude: [[[50.0812, 14.4214], [50.0812, 14.4220], [50.0815, 14.4220], [50.0815, 14.4214]]]\n"
+        "      payloads: [thermal]\n", 1)
+    zoned = tmp_path / "zoned.yaml"
+    zoned.write_text(text, encoding="utf-8")
+    zoned_compiled = compile_plan(zoned)
+    write_tlog(tmp_path / "f.tlog", compiled)
+    audit = audit_flight(zoned_compiled, read_log(tmp_path / "f.tlog"), str(zoned))
+    assert audit.steps[0].photos_in_zones > 0
+    write_tlog(tmp_path / "g.tlog", zoned_compiled)      # flown as planned: the camera is off over the zone
+    assert audit_flight(zoned_compiled, read_log(tmp_path / "g.tlog"), str(zoned)).steps[0].photos_in_zones == 0

@@ -135,7 +135,7 @@ def _dedupe(shots: list[Shot]) -> list[Shot]:
 
 # --------------------------------------------------------------------------------------------- MAVLink (tlog)
 
-def _mode_name(mav: Any, hb: Any) -> str:
+def _mode_name(hb: Any) -> str:
     from pymavlink import mavutil
     try:
         return mavutil.mode_string_v10(hb)
@@ -182,7 +182,7 @@ def _read_tlog(path: Path) -> FlightLog:
             elif kind == "HEARTBEAT" and m.get_srcComponent() == mavlink2.MAV_COMP_ID_AUTOPILOT1 \
                     and m.type != mavlink2.MAV_TYPE_GCS:
                 armed = bool(m.base_mode & mavlink2.MAV_MODE_FLAG_SAFETY_ARMED)
-                name = _mode_name(conn, m)
+                name = _mode_name(m)
                 if not modes or (modes[-1].mode, modes[-1].armed) != (name, armed):
                     modes.append(ModeChange(t, name, armed))
             elif kind == "MISSION_CURRENT" and m.get_srcComponent() == mavlink2.MAV_COMP_ID_AUTOPILOT1:

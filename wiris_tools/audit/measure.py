@@ -324,7 +324,7 @@ def _flight(compiled: Compiled, log: FlightLog) -> FlightAudit:
 def _check_same_flight(compiled: Compiled, log: FlightLog, shots: Sequence[Shot]) -> None:
     from missions.geometry.geo import great_circle_m
     lat, lon, _ = compiled.home
-    poses = list(shots) and [s.pose for s in shots] or list(log.track)
+    poses = [s.pose for s in shots] if shots else list(log.track)
     if not poses:
         return
     near = min(great_circle_m(lat, lon, p.lat, p.lon) for p in poses)
