@@ -50,7 +50,8 @@ def test_dropped_and_stopped_captures_are_found_and_the_refly_closes_them(sitl_d
     _row("drop every 5th, stop at 45", flown, audit)
     assert audit.captured == flown.taken
     assert audit.triggered == flown.requests
-    assert len(audit.triggered_not_captured) == len(flown.dropped)
+    # the trigger numbers (CAMERA_FEEDBACK.img_idx, from 1) of exactly the requests the camera missed
+    assert audit.triggered_not_captured == flown.dropped
     assert audit.captured_not_triggered == ()
     step = audit.steps[0]
     assert step.gaps and step.coverage < 0.9
@@ -61,7 +62,7 @@ def test_dropped_and_stopped_captures_are_found_and_the_refly_closes_them(sitl_d
     _row("same flight, DataFlash .BIN", flown, df_audit)
     assert df_audit.photos_source == "triggers"
     # the refly plan, flown without faults, closes the gaps
-    refly = tmp_path / "refly.yaml"
+    refly = tmp_path / "survey-refly.yaml"   # the file name is the compiled outputs' NAME
     refly.write_text(refly_yaml(path, audit), encoding="utf-8")
     again = fly(sitl_dir, tmp_path / "r", refly)
     refly_audit = audit_flight(compiled, read_log(again.tlog), str(path))
