@@ -145,31 +145,24 @@ TIME_PAIR_S = 1.5
 
 
 def _pair(triggers: Sequence[Shot], captures: Sequence[Shot]) -> tuple[tuple[int, ...], tuple[int, ...]]:
-    """Triggers with no capture, captures with no trigger (their logged numbers, or places): each capture pairs
-    with the latest unpaired trigger before it (or within a small clock skew after it) at most TIME_PAIR_S
-    earlier. One to one: the capture after a dropped one belongs to its own trigger, not to the dropped one's."""
-    order = sorted(range(len(triggers)), key=lambda k: triggers[k].pose.time_s)
+    """Triggers with no capture, captures with no trigger (their logged numbers, or places), one to one. A
+    capture pairs with the unpaired trigger nearest to it in position among those logged within TIME_PAIR_S of
+    it: the two messages travel different links and arrive in either order, but the vehicle stood where the
+    camera says it took the photo (a dropped photo's trigger lies a trigger distance away)."""
+    from missions.geometry.geo import great_circle_m
     used = [False] * len(triggers)
     lone_captures = []
     for c, cap in sorted(enumerate(captures), key=lambda kc: kc[1].pose.time_s):
         t = cap.pose.time_s
-        best = None
-        for k in order:
-            tt = triggers[k].pose.time_s
-            if tt > t + CLOCK_SKEW_S:
-                break
-            if not used[k] and t - tt <= TIME_PAIR_S:
-                best = k
-        if best is None:
+        near = [k for k, tr in enumerate(triggers) if not used[k] and abs(tr.pose.time_s - t) <= TIME_PAIR_S]
+        if not near:
             lone_captures.append(cap.seq if cap.seq is not None else c)
-        else:
-            used[best] = True
-    lone_triggers = [triggers[k].seq if triggers[k].seq is not None else k for k in order if not used[k]]
+            continue
+        best = min(near, key=lambda k: great_circle_m(cap.pose.lat, cap.pose.lon, triggers[k].pose.lat,
+                                                      triggers[k].pose.lon))
+        used[best] = True
+    lone_triggers = [tr.seq if tr.seq is not None else k for k, tr in enumerate(triggers) if not used[k]]
     return tuple(lone_triggers), tuple(lone_captures)
-
-
-# A capture's time stamp may precede its trigger's by this much (s): two clocks, one message each.
-CLOCK_SKEW_S = 0.2
 
 
 def _lines(headings: np.ndarray) -> np.ndarray:
