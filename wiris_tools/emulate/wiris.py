@@ -87,6 +87,20 @@ class WirisConfig:
     lens_index: int = 0                    # index into the thermal imager's lenses (CAMERA_INFORMATION.lens_id)
 
 
+@dataclass(frozen=True)
+class CaptureFaults:
+    """Faults of the field to inject (tests, `wiris mission audit`'s SITL flights): the camera misses every
+    `drop_every`-th capture request (0: none) and takes nothing from request `stop_after` on (counting from 1;
+    None: never). A missed request sends nothing, as a camera that did not see the trigger."""
+
+    drop_every: int = 0
+    stop_after: int | None = None
+
+    def drops(self, request: int) -> bool:
+        return bool((self.drop_every and request % self.drop_every == 0)
+                    or (self.stop_after is not None and request >= self.stop_after))
+
+
 @dataclass
 class Position:
     lat: int = 0
@@ -153,6 +167,8 @@ class WirisState:
         self.capture = _Capture()
         self.image_count = 0
         self.history: list[Captured] = []
+        self.capture_faults = CaptureFaults()
+        self.capture_requests = 0         # every image asked for, taken or not (CaptureFaults counts these)
         self.used_mib = [0.0 for _ in self.config.storage_capacity_mib]
         self.video_recording = False
         self.video_started = 0.0
@@ -559,6 +575,9 @@ class WirisState:
         return max(0.0, self.config.storage_capacity_mib[storage] - self.used_mib[storage])
 
     def _take_image(self, now: float) -> list[Message]:
+        self.capture_requests += 1
+        if self.capture_faults.drops(self.capture_requests):
+            return []
         storage = self._storage_index(float("nan"))
         size = self.config.image_size_mib * self._formats()
         utc_us = int((now + self.utc_offset_s) * 1e6)

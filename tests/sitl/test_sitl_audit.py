@@ -1,0 +1,86 @@
+"""`wiris mission audit` on real logs: ArduPilot SITL flies a compiled survey with the WIRIS emulator on the
+camera link, faults injected as in the field; the audit of the tlog and the DataFlash log finds exactly those
+faults, and flying its refly plan closes the gaps (union coverage >= 99.5 %)."""
+
+from __future__ import annotations
+
+import shapely
+import pytest
+
+import sitl_plans
+from sitl_audit_flights import fly
+from missions.compile import compile_plan
+from wiris_tools.audit.logs import read_log
+from wiris_tools.audit.measure import audit_flight
+from wiris_tools.audit.refly import refly_yaml
+from wiris_tools.emulate.wiris import CaptureFaults
+
+pytestmark = [pytest.mark.sitl, pytest.mark.slow]
+
+
+@pytest.fixture(scope="module")
+def plan(tmp_path_factory):
+    path = sitl_plans.write_plan(tmp_path_factory.mktemp("plan"), "survey")
+    return path, compile_plan(path)
+
+
+def _row(label: str, flown, audit) -> str:
+    """One row of the audit table (printed: `pytest -s` shows it)."""
+    s = audit.steps[0]
+    row = (f"AUDIT {label:<28} planned {s.planned:3d}  triggered {audit.triggered}  captured {audit.captured}  "
+           f"(emulator asked {flown.requests}, took {flown.taken})  coverage {100 * s.coverage:5.1f} %  "
+           f"gaps {len(s.gaps)} ({s.gap_m2:.0f} m2)  missing {s.missing_planned}  "
+           f"not captured {len(audit.triggered_not_captured)}  left plan: {'; '.join(audit.flight.left_plan) or '-'}")
+    print(row)
+    return row
+
+
+def _union(compiled, *audits) -> float:
+    from missions.measure.flight import simulate
+    from missions.measure.report import area_geometry
+    geom = area_geometry(compiled.areas[0].area, simulate(compiled).projection)
+    union = shapely.union_all([a.steps[0].footprints.polygons for a in audits])
+    return float(shapely.intersection(geom, union).area / geom.area)
+
+
+def test_dropped_and_stopped_captures_are_found_and_the_refly_closes_them(sitl_dir, plan, tmp_path):
+    path, compiled = plan
+    flown = fly(sitl_dir, tmp_path / "a", path, CaptureFaults(drop_every=5, stop_after=45))
+    audit = audit_flight(compiled, read_log(flown.tlog), str(path))
+    _row("drop every 5th, stop at 45", flown, audit)
+    assert audit.captured == flown.taken
+    assert audit.triggered == flown.requests
+    # the trigger numbers (CAMERA_FEEDBACK.img_idx, from 1) of exactly the requests the camera missed
+    assert audit.triggered_not_captured == flown.dropped
+    assert audit.captured_not_triggered == ()
+    step = audit.steps[0]
+    assert step.gaps and step.coverage < 0.9
+    # the DataFlash log holds the triggers: as many as the camera was asked for
+    df = read_log(flown.bins[-1])
+    assert len(df.triggers) == flown.requests
+    df_audit = audit_flight(compiled, df, str(path))
+    _row("same flight, DataFlash .BIN", flown, df_audit)
+    assert df_audit.photos_source == "triggers"
+    # the refly plan, flown without faults, closes the gaps
+    refly = tmp_path / "survey-refly.yaml"   # the file name is the compiled outputs' NAME
+    refly.write_text(refly_yaml(path, audit), encoding="utf-8")
+    again = fly(sitl_dir, tmp_path / "r", refly)
+    refly_audit = audit_flight(compiled, read_log(again.tlog), str(path))
+    union = _union(compiled, audit, refly_audit)
+    _row("refly of its gaps", again, refly_audit)
+    print(f"AUDIT union coverage after the refly: {100 * union:.2f} %  (refly plan: {compile_plan(refly).areas and len(compile_plan(refly).areas)} area(s), {again.requests} photos)")
+    assert union >= 0.995
+
+
+def test_an_rtl_cut_short_is_found(sitl_dir, plan, tmp_path):
+    path, compiled = plan
+    flown = fly(sitl_dir, tmp_path / "b", path, rtl_after=30)
+    audit = audit_flight(compiled, read_log(flown.tlog), str(path))
+    _row("RTL after 30 photos", flown, audit)
+    assert audit.captured == flown.taken and audit.triggered_not_captured == ()
+    assert any("RTL before the mission's end" in s for s in audit.flight.left_plan), audit.flight
+    assert audit.steps[0].gaps and not audit.complete
+    # the camera keeps distance-triggering on the way home: photos after the switch are no planned photos, the
+    # 30 before it are
+    step = audit.steps[0]
+    assert step.planned - flown.taken <= step.missing_planned <= step.planned - 30
