@@ -26,7 +26,7 @@ from typing import Any, Callable, NamedTuple
 from cdf.catalogue import catalogue
 from missions.compiled import AreaInfo, Compiled, PayloadInfo, PlanWarning, SetupStep
 from missions.emit.emitter import Emitted, Emitter, Track, TrackPoint, HOVER_HOLD_S
-from missions.emit.firmware import FirmwareProfile, check_items, profile, split_parts
+from missions.emit.firmware import FirmwareProfile, check_items, profile
 from missions.emit.items import MissionItem
 from missions.emit.lua import render_script
 from missions.emit.params import Param, autopilot_params
@@ -40,6 +40,7 @@ from missions.geometry.geo import MAX_EXTENT_M
 from missions.geometry.survey import SurveyPlan, plan_survey
 from missions.plan.load import (CameraStep, CorridorStep, LandStep, Plan, RtlStep, SurveyStep, TakeoffStep,
                                 WaypointStep, input_files, load_plan, raise_problems)
+from missions.sorties import in_sorties
 from missions.plan.schema import MAX_AGL_M, MAX_ALTITUDE_M, MIN_ALTITUDE_M, SPEED_RANGE_MPS
 from missions.thermal.assess import assess
 from missions.thermal.speed import SpeedLimit, check_sharp, choose_speed, line_limits
@@ -130,11 +131,6 @@ class _Lines(NamedTuple):
 
     route: SurveyPlan | CorridorPlan
     area: Area
-
-
-class _Parts(NamedTuple):
-    limit: int                               # items per part
-    parts: tuple[tuple[MissionItem, ...], ...]
 
 
 # ----------------------------------------------------------------------------------------------- helpers
@@ -412,22 +408,6 @@ _STEPS: dict[type, Callable[[_Compile, Any], None]] = {
 
 # --------------------------------------------------------------------------------------- after the steps
 
-def _split_into_parts(c: _Compile, items: tuple[MissionItem, ...]) -> _Parts:
-    """The items as missions within the vehicle's item limit, each part checked against the firmware."""
-    prof = c.profile
-    limit = c.plan.vehicle.max_mission_items or prof.default_item_limit
-    parts = split_parts(items, limit, prof)
-    for k, part in enumerate(parts):
-        check_items(part, prof, where=f"part {k + 1}")
-    if len(parts) > 1:
-        c.warn("mission_split", f"{len(items)} items exceed {prof.title}'s limit of {limit} "
-               f"({prof.item_limit_why if not c.plan.vehicle.max_mission_items else 'vehicle.max_mission_items'})"
-               f"; split into {len(parts)} parts: each part ends holding position (NAV_LOITER_UNLIM), upload "
-               "the next and switch to AUTO again; it resumes at that position with speed and camera trigger "
-               "restored")
-    return _Parts(limit, parts)
-
-
 def _warn_about_altitudes(c: _Compile) -> None:
     for alt, where in c.state.altitudes:
         if alt > MAX_AGL_M:
@@ -546,7 +526,6 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     emitted = c.emitter.result()
     state.warnings.extend(emitted.warnings)
     check_items(emitted.items, prof)
-    parts = _split_into_parts(c, emitted.items)
     _warn_about_altitudes(c)
     setup = _setup(c)
     lua = _lua_bridge(c, emitted)
@@ -555,12 +534,12 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     compiled = Compiled(
         name=plan.name, firmware=prof.name, frame=plan.vehicle.frame,
         home=(plan.home.lat, plan.home.lon, plan.home.alt_amsl_m), speed_mps=c.speed_mps, items=emitted.items,
-        parts=parts.parts, item_limit=parts.limit,
+        parts=(emitted.items,), item_limit=c.plan.vehicle.max_mission_items or prof.default_item_limit,
         # PayloadInfo only for payloads whose optics are known: the report measures coverage with them
         payloads=tuple(payloads.optics[p.name] for p in plan.payloads if p.name in payloads.optics),
         areas=tuple(state.areas), setup=setup, lua=lua, params=params,
         warnings=tuple(dict.fromkeys(state.warnings)), intent=tuple(state.intent), inputs=input_files(plan))
-    return _with_the_sun(plan, compiled)
+    return _with_the_sun(plan, in_sorties(plan, compiled))
 
 
 def _with_the_sun(plan: Plan, compiled: Compiled) -> Compiled:

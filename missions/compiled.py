@@ -124,6 +124,10 @@ class Compiled:
     intent: tuple[Any, ...] = field(default=(), compare=False)   # planner geometry, for previews only
     inputs: tuple[str, ...] = field(default=(), compare=False)   # the files the plan was read from (never written)
     sun: tuple[Any, ...] = ()                   # missions.thermal.assess.StepSun per timed step (plans with `when`)
+    # missions.sorties.Sortie per sortie when the mission is longer than a battery or the item limit (then
+    # `parts` are their items); () when it is flown as one mission
+    sorties: tuple[Any, ...] = field(default=(), compare=False)
+    endurance: Any = field(default=None, compare=False)   # missions.sorties.Endurance the split used
 
     def payload(self, name: str) -> PayloadInfo:
         return next(p for p in self.payloads if p.name == name)

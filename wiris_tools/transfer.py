@@ -814,8 +814,8 @@ def _require_mission(p, mission_type: int, what: str) -> None:
 
 
 def _capture_plan_part(p, part: int | None, firmware: str | None) -> LoadedList:
-    """The mission of capture plan `p` compiled for `firmware` (None: the plan's), its part `part` (1..N) when
-    it is split at the vehicle's item limit."""
+    """The mission of capture plan `p` compiled for `firmware` (None: the plan's), its sortie `part` (1..N) when
+    it is flown in sorties (missions.sorties)."""
     compiled = _compiled_without_errors(p, firmware)
     parts = list(compiled.parts) if compiled.parts else [compiled.items]
     return LoadedList(list(parts[_part_index(p, part, len(parts), compiled.item_limit)]), compiled.home)
@@ -836,14 +836,14 @@ def _compiled_without_errors(p, firmware: str | None):
 
 
 def _part_index(p, part: int | None, count: int, item_limit: int) -> int:
-    """The index into the `count` parts of --part `part` (None: the only one); PlanError when it names none."""
+    """The index into the `count` sorties of --sortie `part` (None: the only one); PlanError when it names none."""
     if count > 1 and part is None:
-        raise PlanError(f"the mission is split into {count} parts to fit the vehicle's {item_limit} items",
-                        where=str(p), hint="choose one with --part 1..N")
+        raise PlanError(f"the mission is flown in {count} sorties (one battery or {item_limit} items each)",
+                        where=str(p), hint=f"choose one with --sortie 1..{count}")
     if part is not None and not 1 <= part <= count:
-        raise PlanError(f"--part {part}: the mission has {count} part(s)", where=str(p),
-                        hint="leave out --part: the mission fits the vehicle in one upload" if count == 1
-                        else f"give --part 1..{count}: each part is a complete mission, flown in turn")
+        raise PlanError(f"--sortie {part}: the mission has {count} sortie(s)", where=str(p),
+                        hint="leave out --sortie: the mission is flown in one" if count == 1
+                        else f"give --sortie 1..{count}: each sortie is a complete mission, flown in turn")
     return (part or 1) - 1
 
 

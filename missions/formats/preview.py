@@ -332,7 +332,7 @@ def _legend_rows(compiled: Compiled, rep: MissionReport) -> list[tuple[str, str]
     """The report's key figures, as (key, value) text."""
     rows: list[tuple[str, str]] = [
         ("firmware", f"{rep.firmware} {compiled.frame}"),
-        ("mission items", f"{rep.mission_items} (limit {rep.item_limit}, {rep.parts} part"
+        ("mission items", f"{rep.mission_items} (limit {rep.item_limit}, {rep.parts} sortie"
                           f"{'s' if rep.parts != 1 else ''})"),
         ("path", f"{rep.path_length_m / 1000:.2f} km"),
         ("flight time", f"{_fmt_time(rep.flight_time_s)} (QGC: {_fmt_time(rep.flight_time_qgc_s or 0)})"),

@@ -41,6 +41,7 @@ from missions.geometry.triggers import PhotoPoint
 from missions.measure.coverage import (coverage_fraction, footprint_polygons, min_front_overlap, min_side_overlap,
                                        outside_length_m)
 from missions.measure.flight import Photo, Simulation, simulate
+from missions.measure.seams import measure_sorties, table_lines
 from missions.plan.schema import MAX_AGL_M
 
 # Coverage below this is worth a warning: the examples and the tests hold the compiler to it.
@@ -188,6 +189,8 @@ class MissionReport:
     errors: tuple[Finding, ...]
     speed_mps: float = 0.0                    # the survey speed flown (the plan's, or the one `auto` chose)
     sun: tuple[Any, ...] = ()                 # missions.thermal.assess.StepSun per timed step (a plan with `when`)
+    sorties: Any = None                       # missions.measure.seams.SortieTable (a mission flown in sorties)
+    endurance: Any = None                     # missions.sorties.Endurance the compile judged the flight by
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -214,6 +217,11 @@ class MissionReport:
             "errors": [e.to_json() for e in self.errors],
             "speed_mps": self.speed_mps,
             "sun": [s.to_json() for s in self.sun],
+            "endurance": None if self.endurance is None else self.endurance.to_json(),
+            "sorties": [] if self.sorties is None else list(self.sorties.rows),
+            "sorties_union": None if self.sorties is None else
+            {"coverage": dict(self.sorties.coverage),
+             "overlap": {n: o.to_json() for n, o in self.sorties.overlap.items()}},
         }
 
 
@@ -504,6 +512,8 @@ def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | N
         errors=tuple(_errors(compiled)),
         speed_mps=compiled.speed_mps,
         sun=tuple(compiled.sun),
+        sorties=measure_sorties(compiled),
+        endurance=compiled.endurance,
     )
 
 
@@ -692,7 +702,7 @@ def summary_lines(rep: MissionReport) -> list[str]:
     """A few lines for `wiris mission compile`."""
     mins, secs = divmod(int(round(rep.flight_time_s or 0)), 60)
     lines = [f"{rep.name}: {rep.firmware} {rep.frame}, {rep.mission_items} items "
-             f"(limit {rep.item_limit}, {rep.parts} part{'s' if rep.parts != 1 else ''}), "
+             f"(limit {rep.item_limit}, {rep.parts} {'sorties' if rep.parts != 1 else 'sortie'}), "
              f"{rep.path_length_m / 1000:.2f} km, ~{mins} min {secs:02d} s"]
     for name, n in rep.photos.items():
         extra = ""
@@ -700,6 +710,8 @@ def summary_lines(rep: MissionReport) -> list[str]:
             f, s = _overlap_text(rep.overlap[name])
             extra = f", coverage {100 * rep.coverage[name]:.2f} %, min overlap front {f} side {s}"
         lines.append(f"  {name}: {n} photos{extra}")
+    if rep.sorties is not None:
+        lines += ["  " + t for t in table_lines(rep.sorties)]
     return lines + _findings_lines(rep)
 
 
@@ -714,7 +726,7 @@ def _gsd_text(g: GsdRange | None) -> str:
 def format_report(rep: MissionReport) -> str:
     """The human-readable report of `wiris mission check`."""
     parts = ("fits in one upload)" if rep.parts == 1 else
-             f"{rep.parts} parts of {', '.join(str(n) for n in rep.part_items)} items)")
+             f"{rep.parts} sorties of {', '.join(str(n) for n in rep.part_items)} items)")
     rows = [("plan", rep.plan), ("firmware", f"{rep.firmware} {rep.frame}"),
             ("mission items", f"{rep.mission_items} (limit {rep.item_limit}; " + parts),
             ("path length", f"{rep.path_length_m:.0f} m (climb {rep.climb_m:.0f} m)"),
@@ -734,7 +746,10 @@ def format_report(rep: MissionReport) -> str:
     rows.append(("speed", f"{rep.speed_mps:g} m/s"))
     rows += [(f"sun step {s.step}", _sun_text(s)) for s in rep.sun]
     width = max(len(k) for k, _ in rows)
-    out = [f"{k.ljust(width)}  {v}" for k, v in rows] + _findings_lines(rep)
+    out = [f"{k.ljust(width)}  {v}" for k, v in rows]
+    if rep.sorties is not None:
+        out += table_lines(rep.sorties)
+    out += _findings_lines(rep)
     if not rep.warnings and not rep.errors:
         out.append("no warnings")
     return "\n".join(out)

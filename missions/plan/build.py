@@ -36,7 +36,9 @@ def build_plan(data: dict, resolved: Resolved, path: str, base_dir: Path, locati
     return Plan(
         version=int(data["version"]), name=data.get("name") or _default_name(path),
         vehicle=Vehicle(v["firmware"], v["frame"], None if v["speed_mps"] == "auto" else float(v["speed_mps"]),
-                        v.get("max_mission_items"), _float_or_none(v, "max_speed_mps")),
+                        v.get("max_mission_items"), _float_or_none(v, "max_speed_mps"),
+                        _float_or_none(v, "endurance_min"), float(v.get("reserve_pct", 20.0)),
+                        _float_or_none(v, "turn_radius_m"), float(v.get("max_bank_deg", 30.0))),
         home=Home(float(h["lat"]), float(h["lon"]), float(h["alt_amsl_m"])),
         payloads=payloads, mission=tuple(steps), path=path, base_dir=str(base_dir), notes=tuple(resolved.notes),
         timing=_timing(data), locations=locations)

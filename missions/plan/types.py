@@ -18,6 +18,10 @@ class Vehicle:
     speed_mps: float | None         # None: `auto`, the fastest the cameras allow (missions.thermal.speed)
     max_mission_items: int | None = None
     max_speed_mps: float | None = None
+    endurance_min: float | None = None          # None: the frame's conservative default (missions.sorties)
+    reserve_pct: float = 20.0
+    turn_radius_m: float | None = None          # planes and VTOLs; None: from speed and max_bank_deg
+    max_bank_deg: float = 30.0
 
 
 @dataclass(frozen=True)
