@@ -11,6 +11,8 @@ home, flat ground assumed as in the report). Every feature has a `kind` property
   home        the home position
   photo       each re-derived photo position: index, payloads, altitude, heading, mission item, time
   footprint   each photo's ground footprint per payload (nadir rectangle at the photo's altitude)
+  sortie      a mission flown in sorties: each sortie's own re-flown path (home to home) as a LineString;
+              properties: sortie (1..N), file, flight_time_s, photos, items, first_line, last_line
 
 `kml_out` renders the same collection, so the two files can never disagree.
 """
@@ -88,12 +90,23 @@ def feature_collection(compiled: Compiled, sim: Simulation, rep: MissionReport) 
                       "geometry": {"type": "Point", "coordinates": [_r7(p.lon), _r7(p.lat), round(home_amsl + p.alt_m, 2)]}})
     if write_fp:
         feats.extend(_footprints(compiled, sim))
+    feats.extend(_sortie_features(rep, home_amsl))
     props: dict[str, Any] = {"plan": compiled.name, "firmware": compiled.firmware,
                              "generator": "wiris-tools", "altitudes": "metres AMSL (home AMSL + height above home)"}
     if not write_fp:
         props["footprints_omitted"] = (f"{n_fp} footprints exceed {MAX_FOOTPRINT_FEATURES}; "
                                        "photo points are complete")
     return {"type": "FeatureCollection", "properties": props, "features": feats}
+
+
+def _sortie_features(rep: MissionReport, home_amsl: float) -> list[dict]:
+    table = rep.sorties
+    if table is None:
+        return []
+    return [{"type": "Feature", "properties": {"kind": "sortie", "sortie": k, **row},
+             "geometry": {"type": "LineString",
+                          "coordinates": [[_r7(lon), _r7(lat), round(home_amsl + alt, 2)] for lat, lon, alt in path]}}
+            for k, (row, path) in enumerate(zip(table.rows, table.paths), start=1)]
 
 
 def _footprints(compiled: Compiled, sim: Simulation) -> list[dict]:

@@ -155,7 +155,8 @@ def build_picture(compiled: Compiled, sim: Any = None, rep: MissionReport | None
     content = _map_content(compiled, sim)
     frame = _Frame.fitting(content.points())
     shapes = [*_footprint_shapes(content.footprints, frame), *_area_shapes(content.areas, frame),
-              *_path_shapes(content.path, frame), *_photo_shapes(compiled, content.photos, frame),
+              *_path_shapes(content.path, frame), *_sortie_shapes(rep, sim.projection, frame),
+              *_photo_shapes(compiled, content.photos, frame),
               *_waypoint_shapes(compiled, sim, frame), *_home_shapes(compiled, sim.projection, frame),
               *_scale_bar_shapes(frame.scale), *_north_arrow_shapes()]
     rows, legend = _legend(compiled, rep, content.fp_stride)
@@ -203,6 +204,23 @@ def _path_shapes(path: Sequence[XY], f: _Frame) -> list[Shape]:
         return []
     return [Shape("polyline", f.ring(path), stroke=COLOURS["path"], stroke_width=2, layer="path"),
             *_arrows(list(f.ring(path)))]
+
+
+# a mission flown in sorties: each sortie's path in its own colour (cycled), over the whole path's blue
+SORTIE_COLOURS = ("#e63030", "#ff9f1e", "#00b000", "#a01eb0", "#00a0a0", "#c06000")
+SORTIE_COLOUR_NAMES = ("red", "orange", "green", "purple", "teal", "brown")
+
+
+def _sortie_shapes(rep: MissionReport, proj: Any, f: _Frame) -> list[Shape]:
+    table = rep.sorties
+    if table is None:
+        return []
+    out = []
+    for k, path in enumerate(table.paths):
+        x, y = proj.to_xy([p[0] for p in path], [p[1] for p in path])
+        out.append(Shape("polyline", f.ring(tuple(zip(x.tolist(), y.tolist()))),
+                         stroke=SORTIE_COLOURS[k % len(SORTIE_COLOURS)], stroke_width=2, layer="sorties"))
+    return out
 
 
 def _photo_shapes(compiled: Compiled, photos: Sequence[Any], f: _Frame) -> list[Shape]:
@@ -348,6 +366,11 @@ def _legend_rows(compiled: Compiled, rep: MissionReport) -> list[tuple[str, str]
         ov = rep.overlap[name]
         rows.append((f"coverage {name}", _pct(c)))
         rows.append((f"overlap {name}", f"front {_pct(ov.front_min)}, side {_pct(ov.side_min)} (min)"))
+    if rep.sorties is not None:
+        for k, r in enumerate(rep.sorties.rows):
+            lines = "" if r["first_line"] is None else f", lines {r['first_line']}..{r['last_line']}"
+            rows.append((f"sortie {k + 1} ({SORTIE_COLOUR_NAMES[k % len(SORTIE_COLOURS)]})",
+                         f"{_fmt_time(r['flight_time_s'])}, {r['photos']} photos{lines}"))
     rows.append(("warnings / errors", f"{len(rep.warnings)} / {len(rep.errors)}"))
     return rows
 

@@ -26,6 +26,8 @@ class SortieTable:
     coverage: Mapping[str, float]
     overlap: Mapping[str, Any]              # report.OverlapMin (rounded)
     endurance: dict | None
+    # each sortie's re-flown path as (lat, lon, metres above home), for the maps (GeoJSON/KML, preview)
+    paths: tuple[tuple[tuple[float, float, float], ...], ...] = ()
 
     def to_json(self) -> dict:
         return {"rows": list(self.rows), "coverage": dict(self.coverage),
@@ -52,7 +54,8 @@ def measure_sorties(compiled: Compiled) -> SortieTable | None:
     rows = tuple(s.to_json(sortie_file(compiled.name, s.number)) | {"flight_time_s": round(sim.flight_time_s, 1)}
                  for s, sim in zip(compiled.sorties, sims))
     endurance = compiled.endurance.to_json() if compiled.endurance is not None else None
-    return SortieTable(rows, rp._mission_coverage(steps), rp._mission_overlap(steps), endurance)
+    paths = tuple(tuple((lat, lon, v.alt_m) for (lat, lon), v in zip(sim.latlon, sim.vertices)) for sim in sims)
+    return SortieTable(rows, rp._mission_coverage(steps), rp._mission_overlap(steps), endurance, paths)
 
 
 def table_lines(table: SortieTable) -> list[str]:

@@ -190,3 +190,22 @@ def test_a_bad_battery_is_refused_at_its_key(tmp_path, key, value):
     with pytest.raises(PlanError) as ei:
         load_plan(plan)
     assert "sp.yaml:13:" in ei.value.where and key in ei.value.message and ei.value.hint
+
+
+def test_the_maps_tell_the_sorties_apart(solar_25):
+    from missions.formats import geojson, kml, preview
+
+    _single, split, _rep1, rep = solar_25
+    sim = simulate(split)
+    fc = geojson.feature_collection(split, sim, rep)
+    feats = [f for f in fc["features"] if f["properties"]["kind"] == "sortie"]
+    assert [f["properties"]["sortie"] for f in feats] == [1, 2, 3]
+    for f, s in zip(feats, split.sorties):
+        line = f["geometry"]["coordinates"]
+        home = [round(split.home[1], 7), round(split.home[0], 7)]
+        assert line[0][:2] == home and line[-1][:2] == home            # each from home back home
+        assert f["properties"]["file"] == f"solar-park.sortie{s.number}.plan"
+    text = kml.render_kml(fc)
+    assert "<name>Sorties</name>" in text and "#sortie0" in text and "#sortie2" in text
+    svg = preview.render_svg(preview.build_picture(split, sim, rep))
+    assert all(c in svg for c in preview.SORTIE_COLOURS[:3]) and "sortie 3 (green)" in svg
