@@ -59,7 +59,9 @@ and field. ArduPilot replaces mission item 0 with its home position, so for an A
 from __future__ import annotations
 
 import contextlib
+import glob
 import math
+import re
 import struct
 import threading
 import time
@@ -74,8 +76,8 @@ from cdf.float32 import FLOAT32_MAX
 from missions.compile import compile_plan
 from missions.emit.items import FRAME_GLOBAL, MISSION_TYPE_MISSION, MissionItem, deg_to_e7
 from missions.errors import PlanError
-from missions.formats.planfile import atomic_write, check_writable, load_plan, write_plan
-from missions.formats.wpl import load_wpl, write_wpl
+from missions.formats.planfile import atomic_write, check_writable, load_plan_file, write_plan
+from missions.formats.wpl import LIST_NAMES, load_wpl_file, write_wpl
 from missions.measure.report import report
 from wiris_tools.errors import LinkError
 from wiris_tools.link import Link, command_name
@@ -168,6 +170,14 @@ class TransferResult:
 
 class UploadUnconfirmed(LinkError):
     """Every item was requested and sent, but no ACCEPTED ack arrived: only a read-back can tell."""
+
+
+class VehicleRefused(LinkError):
+    """The vehicle ended an upload with a MISSION_ACK error (`result`, a MAV_MISSION_RESULT)."""
+
+    def __init__(self, message: str, *, result: int, where: str | None = None, hint: str | None = None) -> None:
+        super().__init__(message, where=where, hint=hint)
+        self.result = result
 
 
 class ListUnsupported(LinkError):
@@ -560,10 +570,10 @@ class _Upload:
         if self.fatal_nack is not None and (now - self.fatal_at >= t.nack_grace_s
                                             or (waited_out and self.tries >= t.retries)):
             result, seq = self.fatal_nack
-            raise LinkError(f"the vehicle answered {mission_result_name(result)}"
-                            + (f" to item {seq} ({_describe(self.items[seq])})" if seq >= 0 else
-                               f" to MISSION_COUNT ({self.count} items)"), where=self.where,
-                            hint=_NACK_HINTS.get(result, "check the item the error names"))
+            raise VehicleRefused(f"the vehicle answered {mission_result_name(result)}"
+                                 + (f" to item {seq} ({_describe(self.items[seq])})" if seq >= 0 else
+                                    f" to MISSION_COUNT ({self.count} items)"), result=result, where=self.where,
+                                 hint=_NACK_HINTS.get(result, "check the item the error names"))
         if now - self.last_progress > self.stall_s:
             if (self.count - 1) in self.sent_at:
                 raise self.unconfirmed(f"no MISSION_ACK came within {self.stall_s:g} s")
@@ -770,44 +780,68 @@ Home = tuple[float, float, float]
 
 
 class LoadedList(NamedTuple):
-    """What load_for_upload read: the items of one list, without a home row, and the file's home."""
+    """What load_for_upload read: the items of one list, without a home row, and the file's home; the
+    MAV_AUTOPILOT the file was made for (None: it does not say) and what the reader repaired or skipped."""
     items: list[MissionItem]
     home: Home | None
+    firmware: int | None = None
+    notes: tuple[str, ...] = ()
+
+
+# The firmwares whose files differ (ArduPilot's item 0 is home, commands and frames each accepts): a file made
+# for one of them is checked against the vehicle's HEARTBEAT; a generic one (firmwareType 0) is not.
+CHECKED_FIRMWARES = {mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA: "ardupilot", mavlink2.MAV_AUTOPILOT_PX4: "px4"}
+FIRMWARE_LABELS = {"ardupilot": "ArduPilot", "px4": "PX4"}
 
 
 def load_for_upload(path: str, mission_type: int = MISSION_TYPE_MISSION, *, part: int | None = None,
                     firmware: str | None = None) -> LoadedList:
-    """The items of `mission_type` in a .plan, a WPL 110 file or a capture plan (compiled on the fly),
-    without a home row, and the file's home. PlanError/LinkError for anything unusable."""
+    """The items of `mission_type` in a .plan, a WPL 110 file (a mission, or a fence or rally list as
+    Mission Planner saves one) or a capture plan (compiled on the fly), without a home row, and the file's
+    home. PlanError/LinkError for anything unusable."""
     p = Path(path)
     suffix = p.suffix.lower()
     if suffix in PLAN_SUFFIXES:
-        chosen, home = _list_of_plan_file(p, mission_type)
+        loaded = _list_of_plan_file(p, mission_type)
     elif suffix in WPL_SUFFIXES:
-        _require_mission(p, mission_type, "a WPL 110 file holds a mission")
-        chosen, home = load_wpl(p)
+        loaded = _list_of_wpl_file(p, mission_type)
     elif suffix in CAPTURE_SUFFIXES:
         _require_mission(p, mission_type, "a capture plan compiles to a mission")
-        chosen, home = _capture_plan_part(p, part, firmware)
+        loaded = _capture_plan_part(p, part, firmware)
     else:
         raise PlanError(f"unknown file type {suffix or '(no suffix)'!r}", where=str(p),
                         hint="upload a .plan, a .waypoints (QGC WPL 110) or a capture plan .yaml")
-    chosen = [it.with_(mission_type=mission_type) for it in chosen]
+    chosen = [it.with_(mission_type=mission_type) for it in loaded.items]
     if not chosen:
         raise PlanError(f"the file holds no {TYPE_NAMES.get(mission_type, str(mission_type))} items", where=str(p),
                         hint="check --type (mission, fence or rally); to clear a list, use the ground station")
-    return LoadedList(chosen, home)
+    return loaded._replace(items=chosen)
 
 
 def _list_of_plan_file(p, mission_type: int) -> LoadedList:
-    items, fence, rally, home = load_plan(p)
-    chosen = {MISSION_TYPE_MISSION: items, mavlink2.MAV_MISSION_TYPE_FENCE: fence,
-              mavlink2.MAV_MISSION_TYPE_RALLY: rally}[mission_type]
-    return LoadedList(chosen, home)
+    read = load_plan_file(p)
+    chosen = {MISSION_TYPE_MISSION: read.items, mavlink2.MAV_MISSION_TYPE_FENCE: read.fence,
+              mavlink2.MAV_MISSION_TYPE_RALLY: read.rally}[mission_type]
+    firmware = read.firmware if read.firmware in CHECKED_FIRMWARES else None
+    return LoadedList(chosen, read.home, firmware, tuple(map(str, read.notes)))
+
+
+def _list_of_wpl_file(p, mission_type: int) -> LoadedList:
+    """A WPL 110 file's list, which must be the one asked for: a Mission Planner fence file is no mission."""
+    read = load_wpl_file(p)
+    if read.mission_type != mission_type:
+        held, asked = LIST_NAMES[read.mission_type], TYPE_NAMES.get(mission_type, str(mission_type))
+        if read.mission_type == MISSION_TYPE_MISSION:
+            hint = f"upload a {asked} from a .plan file or from a WPL file of {asked} rows"
+        else:
+            hint = f"to send it to the vehicle's {held} list, give --type {held}"
+        raise PlanError(f"the file holds a {held} list ({len(read.items)} rows), not a {asked}", where=str(p),
+                        hint=hint)
+    return LoadedList(read.items, read.home, None, tuple(map(str, read.notes)))
 
 
 def _require_mission(p, mission_type: int, what: str) -> None:
-    """PlanError unless a mission is asked for: only a .plan file holds fence and rally lists."""
+    """PlanError unless a mission is asked for: a capture plan compiles to a mission only."""
     if mission_type != MISSION_TYPE_MISSION:
         raise PlanError(f"{what}, not a {TYPE_NAMES.get(mission_type, str(mission_type))} list", where=str(p),
                         hint="upload fence and rally from a .plan file")
@@ -818,7 +852,8 @@ def _capture_plan_part(p, part: int | None, firmware: str | None) -> LoadedList:
     it is flown in sorties (missions.sorties)."""
     compiled = _compiled_without_errors(p, firmware)
     parts = list(compiled.parts) if compiled.parts else [compiled.items]
-    return LoadedList(list(parts[_part_index(p, part, len(parts), compiled.item_limit)]), compiled.home)
+    made_for = next((code for code, name in CHECKED_FIRMWARES.items() if name == compiled.firmware), None)
+    return LoadedList(list(parts[_part_index(p, part, len(parts), compiled.item_limit)]), compiled.home, made_for)
 
 
 def _compiled_without_errors(p, firmware: str | None):
@@ -878,25 +913,101 @@ def find_autopilot(link: Link, target_system: int | None, timeout: float):
 def upload_file(link: Link, path: str, *, mission_type: int = MISSION_TYPE_MISSION, verify: bool = False,
                 target_system: int | None = None, target_component: int = 1, part: int | None = None,
                 firmware: str | None = None, timeout: float = 10.0, progress: Progress | None = None,
-                loaded: LoadedList | None = None) -> dict:
-    """Load `path` (or take `loaded`, from load_for_upload), upload it (ArduPilot: home as item 0),
-    optionally verify; a summary dict."""
-    items, home = loaded if loaded is not None else load_for_upload(path, mission_type, part=part,
-                                                                     firmware=firmware)
+                loaded: LoadedList | None = None, force: bool = False) -> dict:
+    """Load `path` (or take `loaded`, from load_for_upload), check it was made for the vehicle's firmware
+    (`force`: upload anyway), upload it (ArduPilot: home as item 0), optionally verify; a summary dict.
+    A capture plan is compiled for the vehicle's firmware unless `firmware` names one."""
+    loaded = loaded if loaded is not None else load_for_upload(path, mission_type, part=part, firmware=firmware)
     hb = find_autopilot(link, target_system, timeout)
+    notes: list[str] = []
+    if Path(path).suffix.lower() in CAPTURE_SUFFIXES and firmware is None:
+        loaded, note = _compiled_for_the_vehicle(path, loaded, hb.autopilot, part)
+        notes += [note] if note else []
+    elif not force:
+        check_firmware(path, loaded.firmware, hb)
+    elif loaded.firmware is not None and loaded.firmware != hb.autopilot:
+        notes.append(f"uploaded with --force: {firmware_mismatch(path, loaded.firmware, hb).message}")
+    items, home = loaded.items, loaded.home
     system = hb.get_srcSystem()
     ardupilot = hb.autopilot == mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA
     if ardupilot and mission_type == MISSION_TYPE_MISSION:
         items = [home_item(home)] + items
     client = MissionClient(link, system, target_component)
-    result = (client.upload_verified if verify else client.upload)(items, mission_type=mission_type,
-                                                                    progress=progress)
+    try:
+        result = (client.upload_verified if verify else client.upload)(items, mission_type=mission_type,
+                                                                        progress=progress)
+    except VehicleRefused as err:
+        if err.result == mavlink2.MAV_MISSION_NO_SPACE:
+            err.hint = too_big_hint(path, len(items), mission_type)
+        raise
     return {"file": str(path), "type": TYPE_NAMES[mission_type], "target_system": system,
             "autopilot": "ardupilot" if ardupilot else "px4" if hb.autopilot == mavlink2.MAV_AUTOPILOT_PX4
             else str(hb.autopilot), "items": len(items), "home_row": ardupilot and mission_type == MISSION_TYPE_MISSION,
             "seconds": round(result.seconds, 3), "verified": result.verified,
             "opaque_id": result.opaque_id, "resent": result.resent, "nacks_tolerated": result.nacks_tolerated,
-            "notes": list(result.notes)}
+            "warnings": list(loaded.notes), "notes": notes + list(result.notes)}
+
+
+def firmware_mismatch(path, made_for: int, hb) -> LinkError:
+    """The error for a file made for firmware `made_for` (a MAV_AUTOPILOT) and a vehicle whose HEARTBEAT says
+    otherwise."""
+    want = FIRMWARE_LABELS[CHECKED_FIRMWARES[made_for]]
+    has = FIRMWARE_LABELS.get(CHECKED_FIRMWARES.get(hb.autopilot, ""), f"MAV_AUTOPILOT {hb.autopilot}")
+    return LinkError(f"the file was made for {want} but system {hb.get_srcSystem()} reports {has} in its HEARTBEAT: "
+                     f"{has} reads {want}'s mission differently (ArduPilot keeps home as item 0; each accepts "
+                     "its own commands, frames and params)", where=str(path),
+                     hint=f"compile or save the mission for {has} (a capture plan compiles for the vehicle when "
+                          "--firmware is left out), or give --force to upload this file anyway")
+
+
+def check_firmware(path, made_for: int | None, hb) -> None:
+    """LinkError when the file was made for ArduPilot or PX4 and the vehicle's HEARTBEAT reports another
+    autopilot. A file that names no firmware (WPL, a generic .plan) is not judged."""
+    if made_for is not None and hb.autopilot != made_for:
+        raise firmware_mismatch(path, made_for, hb)
+
+
+def _compiled_for_the_vehicle(path, loaded: LoadedList, autopilot: int, part: int | None) -> tuple[LoadedList, str]:
+    """The capture plan compiled for the vehicle's firmware (a note says so) when it was compiled for another.
+    A vehicle that is neither ArduPilot nor PX4 gets the plan's own firmware, and a note."""
+    if loaded.firmware == autopilot:
+        return loaded, ""
+    name = CHECKED_FIRMWARES.get(autopilot)
+    if name is None:
+        return loaded, (f"the vehicle reports MAV_AUTOPILOT {autopilot}, neither ArduPilot nor PX4: the plan was "
+                        "compiled for its own vehicle.firmware")
+    return (_capture_plan_part(Path(path), part, name),
+            f"compiled for {FIRMWARE_LABELS[name]}, the firmware the vehicle reports (the plan names another)")
+
+
+def split_files_beside(path) -> list[Path]:
+    """The part and sortie files the compiler wrote beside `path`: NAME.partK.SUFFIX / NAME.sortieK.SUFFIX
+    with `path`'s suffix (a capture plan's: .plan), NAME being `path`'s stem without a .partK / .sortieK of its
+    own; in order of kind and K."""
+    p = Path(path)
+    stem = re.sub(r"\.(part|sortie)\d+$", "", p.stem)
+    suffix = p.suffix if p.suffix.lower() in PLAN_SUFFIXES + WPL_SUFFIXES else ".plan"
+    split = re.compile(rf"{re.escape(stem)}\.(part|sortie)(\d+){re.escape(suffix)}")
+    found = [(m.group(1), int(m.group(2)), f) for f in p.parent.glob(f"{glob.escape(stem)}.*{suffix}")
+             if (m := split.fullmatch(f.name)) and f != p]
+    return [f for _kind, _k, f in sorted(found)]
+
+
+def too_big_hint(path, count: int, mission_type: int) -> str:
+    """What to upload instead of `path`'s `count` items, which the vehicle has no room for."""
+    kind = TYPE_NAMES.get(mission_type, "mission")
+    split = split_files_beside(path)
+    already_split = re.search(r"\.(part|sortie)\d+$", Path(path).stem) is not None
+    if split and mission_type == MISSION_TYPE_MISSION and not already_split:
+        names = ", ".join(f.name for f in split)
+        return (f"the vehicle has no room for {count} items; the compiler split this mission into {names} beside "
+                "it: upload them one at a time, each after the last is flown")
+    if Path(path).suffix.lower() in CAPTURE_SUFFIXES:
+        return (f"the vehicle has no room for {count} items: set vehicle.max_mission_items in the plan to the "
+                "vehicle's limit (PX4: 500 by default) and upload with --sortie 1..N")
+    return (f"the vehicle has no room for {count} {kind} items (PX4 holds 500 by default, ArduPilot about 700 on "
+            "common boards): compile the capture plan with vehicle.max_mission_items set to the vehicle's limit to "
+            "get NAME.sortieK files, or use fewer items")
 
 
 def download_file(link: Link, out: str, *, target_system: int | None = None, target_component: int = 1,
@@ -933,12 +1044,12 @@ def _output_suffix(p) -> str:
     return suffix
 
 
-def _split_home(items: list[MissionItem], ardupilot: bool) -> LoadedList:
+def _split_home(items: list[MissionItem], ardupilot: bool) -> tuple[list[MissionItem], Home | None]:
     """The mission without ArduPilot's item 0, and that item's position as the file's home."""
     if not ardupilot or not items:
-        return LoadedList(items, None)
+        return items, None
     h = items[0]
-    return LoadedList(items[1:], (h.x / 1e7, h.y / 1e7, h.z))
+    return items[1:], (h.x / 1e7, h.y / 1e7, h.z)
 
 
 class _OtherList(NamedTuple):

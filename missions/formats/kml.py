@@ -14,12 +14,13 @@ STYLES = {
     "gap": ("7f4b4be6", "ff4b4be6", 2),         # red
     "path": ("00000000", "ffd86b1e", 3),        # blue line
     "footprint": ("1400a5ff", "6000a5ff", 1),   # faint orange
+    "fence": ("200000ff", "ff0000ff", 2),       # red line, faint fill (`wiris mission convert`)
 }
 # one line colour per sortie (cycled), so that neighbouring sorties tell apart
 SORTIE_COLOURS = ("ff3030e6", "ff1ea0ff", "ff00b000", "ffb01ea0", "ffa0a000", "ff0060c0")
 FOLDERS = (("area", "Areas"), ("gap", "Holes and exclusions"), ("path", "Flight path"), ("sortie", "Sorties"),
-           ("home", "Home"),
-           ("waypoint", "Waypoints"), ("photo", "Photos"), ("footprint", "Footprints"))
+           ("home", "Home"), ("waypoint", "Waypoints"), ("photo", "Photos"), ("footprint", "Footprints"),
+           ("fence", "Fence"), ("fence_return", "Fence return point"), ("rally", "Rally points"))
 
 
 def _coords(points) -> str:
@@ -63,6 +64,10 @@ def _name(p: dict) -> str:
         return f"footprint {p['photo']} {p['payload']}"
     if kind == "sortie":
         return f"sortie {p['sortie']} ({p['file']})"
+    if kind == "fence":
+        return f"fence {'inclusion' if p['inclusion'] else 'exclusion'}"
+    if kind == "rally":
+        return f"rally point {p['index']}"
     return kind
 
 

@@ -21,8 +21,13 @@ hoverSpeed, globalPlanAltitudeMode, plannedHomePosition and SimpleItems (NaN par
 the geoFence and rallyPoints sections are always written (MAVSDK's importer fails silently without
 them). Keys sorted and four-space indents, like Qt's QJsonDocument.
 
-Reading is strict about what QGC is strict about (versions, required sections and keys) and
-tolerant of QGC's complex items: a Survey or CorridorScan ComplexItem contributes the
+Reading is strict about what QGC is strict about (versions, required sections and keys), reads
+what QGC reads, and tolerant of QGC's complex items. QGroundControl 3.x saves load as QGC loads them
+(PlanMasterController::loadFromFile -> GeoFenceController/RallyPointController::load): a geoFence of
+version 1 or without a version and a rallyPoints of version 1 are skipped, each with a ReadNote
+(`read_plan_file(...).notes`); a rallyPoints without a version is refused, as QGC refuses it. A 3.x
+SimpleItem keeps params 5-7 in "coordinate" (MissionItem::_convertJsonV2ToV3); it reads as 7 params.
+Also: a Survey or CorridorScan ComplexItem contributes the
 `TransectStyleComplexItem.Items` QGC stored in the file (QGC itself flies those verbatim until the
 pattern is edited). A StructureScan stores no items, so it is refused with a hint. Errors are
 PlanError with a location: `NAME:LINE:COL` for JSON syntax, `NAME: mission.items[3].params` for
@@ -39,11 +44,12 @@ import stat
 import tempfile
 from decimal import ROUND_HALF_UP, Decimal
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any, Iterator, NamedTuple
 
 from cdf.float32 import FLOAT32_MAX  # params 1-4 and z travel as float32
 from cdf.userfile import UserFile, read_user_file
 from missions.errors import PlanError
+from missions.formats.readnote import ReadNote
 from missions.formats.itemcheck import GLOBAL_FRAMES, check_items, command_label, home_problem, item_problem
 from missions.emit.items import (FRAME_GLOBAL, FRAME_GLOBAL_RELATIVE_ALT, FRAME_GLOBAL_TERRAIN_ALT, MISSION_TYPE_FENCE,
                             MISSION_TYPE_MISSION, MISSION_TYPE_RALLY, MissionItem, mavlink)
@@ -362,9 +368,25 @@ def atomic_write(path: Path, text: str) -> None:
 
 # -- reading ---------------------------------------------------------------------------------------
 
+class PlanFile(NamedTuple):
+    """What read_plan_file read from a .plan."""
+
+    items: list[MissionItem]
+    fence: list[MissionItem]
+    rally: list[MissionItem]
+    home: Home | None
+    firmware: int          # mission.firmwareType: a MAV_AUTOPILOT (0, generic, when the file names none)
+    vehicle: int           # mission.vehicleType: a MAV_TYPE
+    notes: tuple[ReadNote, ...]
+
+
 class _Reader:
     def __init__(self, name: str) -> None:
         self.name = name
+        self.notes: list[ReadNote] = []
+
+    def note(self, path: str, message: str) -> None:
+        self.notes.append(ReadNote(f"{self.name}: {path}" if path else self.name, message))
 
     def err(self, path: str, message: str, hint: str) -> PlanError:
         return PlanError(message, where=f"{self.name}: {path}" if path else self.name, hint=hint)
@@ -483,13 +505,29 @@ def _parse_json(text: str | bytes, name: str) -> Any:
                         hint="a .plan saved by QGroundControl nests about 8 levels: is this the right file?") from None
 
 
+def _params_of(r: _Reader, it: dict[str, Any], path: str) -> Any:
+    """An item's 7 params; a QGC 3.x item's 4 params and its "coordinate" [lat, lon, alt] joined into them, as
+    QGC's MissionItem::_convertJsonV2ToV3 joins them."""
+    params = r.key(it, "params", path)
+    if "coordinate" not in it:
+        return params
+    coordinate = it["coordinate"]
+    if not isinstance(coordinate, list) or len(coordinate) != 3:
+        raise r.err(f"{path}.coordinate", f"expected [lat, lon, altitude], found {_kind(coordinate)}",
+                    "a QGroundControl 3.x item keeps its position as [latitude, longitude, altitude]")
+    if not isinstance(params, list) or len(params) != 4:
+        raise r.err(f"{path}.params", "an item with a \"coordinate\" has 4 params (QGroundControl 3.x)",
+                    "write params as [p1, p2, p3, p4] beside the coordinate, or 7 params without it")
+    return params + coordinate
+
+
 def _simple(r: _Reader, raw: Any, path: str, mission_type: int) -> MissionItem:
     it = r.obj(raw, path)
     command = r.integer(r.key(it, "command", path), f"{path}.command", 0, 65535,
                         "write the MAV_CMD number without quotes, e.g. 16 (NAV_WAYPOINT)")
     frame = r.integer(r.key(it, "frame", path), f"{path}.frame", 0, 255,
                       "write the MAV_FRAME number without quotes, e.g. 3 (GLOBAL_RELATIVE_ALT)")
-    params = r.key(it, "params", path)
+    params = _params_of(r, it, path)
     if not isinstance(params, list) or len(params) != 7:
         raise r.err(f"{path}.params", f"expected an array of 7 numbers (null for NaN), found {_kind(params)}"
                     + (f" of {len(params)}" if isinstance(params, list) else ""),
@@ -585,7 +623,24 @@ def _mission(r: _Reader, mission: dict[str, Any]) -> tuple[list[MissionItem], Ho
     return items, home
 
 
+def _skipped_as_qgc_skips(r: _Reader, section: dict[str, Any], path: str, *, unversioned: bool) -> bool:
+    """True when QGroundControl skips this geoFence/rallyPoints section of a 3.x save: version 1 (and, for
+    geoFence, no version). The skip gets a note: the vehicle would keep whatever fence or rally it holds."""
+    v = section.get("version")
+    if v is None and unversioned:
+        r.note(path, "no version: an early QGroundControl 3.x section, skipped as QGroundControl skips it "
+                     "(nothing of it is read)")
+        return True
+    if not isinstance(v, bool) and isinstance(v, (int, Decimal)) and v == 1:
+        r.note(path, "version 1 (QGroundControl 3.x), skipped as QGroundControl skips it (nothing of it is "
+                     "read)")
+        return True
+    return False
+
+
 def _fence(r: _Reader, fence: dict[str, Any]) -> list[MissionItem]:
+    if _skipped_as_qgc_skips(r, fence, "geoFence", unversioned=True):
+        return []
     r.version(fence, "geoFence", (2,), "geoFence")
     out: list[MissionItem] = []
     polygons = fence.get("polygons", [])
@@ -632,6 +687,9 @@ def _fence(r: _Reader, fence: dict[str, Any]) -> list[MissionItem]:
 
 
 def _rally(r: _Reader, rally: dict[str, Any]) -> list[MissionItem]:
+    # RallyPointController::load skips version 1 only; without a version its key check fails.
+    if _skipped_as_qgc_skips(r, rally, "rallyPoints", unversioned=False):
+        return []
     r.version(rally, "rallyPoints", (2,), "rallyPoints")
     points = rally.get("points", [])
     if not isinstance(points, list):
@@ -654,6 +712,12 @@ def _rally(r: _Reader, rally: dict[str, Any]) -> list[MissionItem]:
 def read_plan(text: str | bytes, name: str = "<plan>") -> tuple[list[MissionItem], list[MissionItem],
                                                                   list[MissionItem], Home | None]:
     """(mission items, fence items, rally items, home) from .plan text; PlanError with a location."""
+    read = read_plan_file(text, name)
+    return read.items, read.fence, read.rally, read.home
+
+
+def read_plan_file(text: str | bytes, name: str = "<plan>") -> PlanFile:
+    """Everything read_plan reads, and the plan's firmware and vehicle types and the notes of what was skipped."""
     doc = _parse_json(text, name)
     r = _Reader(name)
     top = r.obj(doc, "")
@@ -669,12 +733,28 @@ def read_plan(text: str | bytes, name: str = "<plan>") -> tuple[list[MissionItem
                             "geoFence"))
     rally = _rally(r, r.obj(r.key(top, "rallyPoints", "", "QGroundControl always writes a rallyPoints section"),
                             "rallyPoints"))
-    return items, fence, rally, home
+    firmware = _type_code(r, mission, "firmwareType", FIRMWARE_TYPES["generic"])
+    vehicle = _type_code(r, mission, "vehicleType", VEHICLE_TYPES["generic"])
+    return PlanFile(items, fence, rally, home, firmware, vehicle, tuple(r.notes))
+
+
+def _type_code(r: _Reader, mission: dict[str, Any], key: str, default: int) -> int:
+    """mission.firmwareType / vehicleType (a MAV_AUTOPILOT / MAV_TYPE number), `default` when absent."""
+    if key not in mission:
+        return default
+    return r.integer(mission[key], f"mission.{key}", 0, 255,
+                     "write the MAV_AUTOPILOT (firmwareType: 3 ArduPilot, 12 PX4) or MAV_TYPE number, as QGC does")
 
 
 def load_plan(path: str | Path) -> tuple[list[MissionItem], list[MissionItem], list[MissionItem], Home | None]:
     """read_plan on a file, reading at most the size limit of it."""
+    read = load_plan_file(path)
+    return read.items, read.fence, read.rally, read.home
+
+
+def load_plan_file(path: str | Path) -> PlanFile:
+    """read_plan_file on a file, reading at most the size limit of it."""
     data = read_user_file(path, UserFile(".plan file", MAX_PLAN_BYTES, PlanError, READ_HINT, SIZE_HINT))
     from missions.formats.outputs import check_output   # not at the top: outputs imports this module
     check_output(path)       # a compiled NAME.plan: only the last complete compile's
-    return read_plan(data, str(path))
+    return read_plan_file(data, str(path))

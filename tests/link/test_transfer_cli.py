@@ -41,7 +41,9 @@ def plan_file(tmp_path):
 
 
 @pytest.mark.parametrize("flavour", ["px4", "ardupilot"])
-def test_upload_plan_verified_json(plan_file, flavour):
+def test_upload_plan_verified_json(tmp_path, flavour):
+    plan_file = tmp_path / "m.plan"     # made for the vehicle's firmware: another is refused (test_firmware_check)
+    plan_file.write_text(write_plan(ITEMS, HOME, firmware=flavour, vehicle="copter", fence=FENCE))
     with VehicleSim(flavour=flavour, heartbeat_s=0.2) as sim:
         r = run("mission", "upload", str(plan_file), "--connect", f"udpout:127.0.0.1:{sim.port}", "--verify",
                 "--json")
@@ -214,7 +216,7 @@ def test_signed_vehicle_needs_the_key(tmp_path, plan_file):
     key.write_text("a passphrase for the link\n")
     from wiris_tools.signing import load_signing_key
 
-    with VehicleSim(flavour="ardupilot", signing_key=load_signing_key(key), heartbeat_s=0.2) as sim:
+    with VehicleSim(flavour="px4", signing_key=load_signing_key(key), heartbeat_s=0.2) as sim:   # plan_file's
         url = f"udpout:127.0.0.1:{sim.port}"
         r = run("mission", "upload", str(plan_file), "--connect", url, "--timeout", "0.6")
         assert r.exit_code == 1 and "signs its MAVLink 2 messages" in r.output and "--signing-key" in r.output

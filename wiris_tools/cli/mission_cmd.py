@@ -114,3 +114,31 @@ from wiris_tools.cli.transfer_cmd import download as _download_cmd, upload as _u
 
 mission.add_command(_upload_cmd)
 mission.add_command(_download_cmd)
+
+
+# --- convert (missions/formats/convert.py) -----------------------------------------------------------------------
+
+@mission.command("convert")
+@click.argument("src", metavar="IN", type=click.Path(dir_okay=False))
+@click.option("-o", "--output", "out", required=True, type=click.Path(dir_okay=False),
+              help="OUT.plan, OUT.waypoints (.wpl, .txt), OUT.geojson or OUT.kml, written atomically")
+@click.option("--type", "only", type=click.Choice(["mission", "fence", "rally"]), default=None,
+              help="convert this list only (a .waypoints holds one list: needed when IN holds several)")
+@click.option("--firmware", type=click.Choice(["ardupilot", "px4"]), default=None,
+              help="for a .plan output: the firmwareType to write (default: IN's, or generic)")
+@click.option("--json", "as_json", is_flag=True, help="print the result as JSON")
+def convert_cmd(src: str, out: str, only: str | None, firmware: str | None, as_json: bool) -> None:
+    """Convert IN (.plan, or a WPL 110 .waypoints/.txt) to OUT by its suffix: .plan holds mission, fence and
+    rally; .waypoints one list; .geojson/.kml draw them all. What IN's reader repaired is printed as a warning."""
+    from missions.formats.convert import convert_file
+    from wiris_tools.cli.jsonout import echo_json
+
+    result = convert_file(src, out, only=only, firmware=firmware)
+    if as_json:
+        echo_json({"file": str(result.out), "items": result.counts, "warnings": [str(n) for n in result.notes]},
+                  indent=1)
+        return
+    for note in result.notes:
+        click.echo(f"warning: {note}", err=True)
+    counts = ", ".join(f"{n} {kind}" for kind, n in result.counts.items())
+    click.echo(f"wrote {result.out}: {counts} items")

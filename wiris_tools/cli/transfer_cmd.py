@@ -69,28 +69,37 @@ def _progress(label: str, quiet: bool):
 @click.command("upload")
 @click.argument("file", type=click.Path(exists=True, dir_okay=False))
 @click.option("--type", "kind", type=click.Choice(TYPES), default="mission", show_default=True,
-              help="which list to upload (fence and rally come from a .plan file)")
+              help="which list to upload (fence and rally from a .plan, or a fence/rally WPL file as Mission "
+                   "Planner saves one)")
 @click.option("--verify", is_flag=True,
               help="download again after the upload and compare each item as the vehicle's firmware keeps it")
 @click.option("--sortie", "--part", "part", type=click.IntRange(1), default=None,
               help="for a capture plan flown in sorties (longer than a battery or the item limit): the sortie "
                    "to upload (a compiled NAME.sortieN.plan uploads as it is)")
 @click.option("--firmware", type=click.Choice(["ardupilot", "px4"]), default=None,
-              help="for a capture plan: compile for this firmware instead of the plan's")
+              help="for a capture plan: compile for this firmware instead of the vehicle's")
+@click.option("--force", is_flag=True,
+              help="upload even when the file was made for another firmware than the vehicle reports")
 @_connect_options
-def upload(file: str, kind: str, verify: bool, part: int | None, firmware: str | None, url: str,
+def upload(file: str, kind: str, verify: bool, part: int | None, firmware: str | None, force: bool, url: str,
            signing_key: str | None, target_system: int | None, target_component: int, timeout: float,
            as_json: bool) -> None:
     """Upload FILE (.plan, .waypoints, a sortie's NAME.sortieN.plan or a capture plan .yaml) to the vehicle at
-    --connect."""
+    --connect.
+
+    A .plan made for ArduPilot or PX4 (its firmwareType) is refused by a vehicle whose HEARTBEAT reports the
+    other (--force uploads it anyway); a capture plan is compiled for the vehicle's firmware."""
     from missions.emit.items import MISSION_TYPES
     from wiris_tools.transfer import load_for_upload, upload_file
 
     loaded = load_for_upload(file, MISSION_TYPES[kind], part=part, firmware=firmware)  # fails before connecting
+    if not as_json:
+        for note in loaded.notes:
+            click.echo(f"warning: {note}", err=True)
     with _link(url, signing_key) as link, _progress(f"upload {kind}", as_json) as progress:
         summary = upload_file(link, file, mission_type=MISSION_TYPES[kind], verify=verify,
                               target_system=target_system, target_component=target_component, timeout=timeout,
-                              progress=progress, loaded=loaded)
+                              progress=progress, loaded=loaded, force=force, firmware=firmware)
     if as_json:
         echo_json(summary, indent=1)
         return
