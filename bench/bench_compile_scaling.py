@@ -35,7 +35,7 @@ HOME = (50.0000, 14.5000)
 PLAN = """\
 version: 1
 name: bench-{tag}
-vehicle: {{firmware: ardupilot, frame: copter, speed_mps: 8, max_mission_items: 65535}}
+vehicle: {{firmware: ardupilot, frame: copter, speed_mps: 7, max_mission_items: 65535}}
 home: {{lat: {lat}, lon: {lon}, alt_amsl_m: 300}}
 payloads:
   thermal: {{camera: wiris-pro, imager: thermal, lens_mm: 13, component_id: 100}}

@@ -105,6 +105,19 @@ class SetupStep:
         return out
 
 
+class FlightCache:
+    """The re-flight of a Compiled, kept by `missions.measure.flight.simulate` so that the compile's own checks
+    (battery, sun), the report and the outputs fly a mission once: a 100 km² survey's re-flight places ~660,000
+    photos. It holds the values it was flown from and answers only while they are the very same objects, so a
+    `dataclasses.replace` with other items (or home, payloads, setup, areas) flies again."""
+
+    __slots__ = ("key", "sim")
+
+    def __init__(self) -> None:
+        self.key: tuple = ()
+        self.sim: Any = None
+
+
 @dataclass(frozen=True)
 class Compiled:
     name: str
@@ -128,6 +141,7 @@ class Compiled:
     # `parts` are their items); () when it is flown as one mission
     sorties: tuple[Any, ...] = field(default=(), compare=False)
     endurance: Any = field(default=None, compare=False)   # missions.sorties.Endurance the split used
+    flight_cache: FlightCache = field(default_factory=FlightCache, compare=False, repr=False)
 
     def payload(self, name: str) -> PayloadInfo:
         return next(p for p in self.payloads if p.name == name)

@@ -21,13 +21,14 @@ re-flown and moved one cut earlier until it fits.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+import bisect
+from dataclasses import dataclass, field, replace
 import math
 from typing import NamedTuple, Sequence
 
 import numpy as np
 
-from missions.compiled import Compiled, PlanWarning
+from missions.compiled import Compiled, FlightCache, PlanWarning
 from missions.emit.items import FRAME_MISSION, MissionItem, deg_to_e7, mavlink
 from missions.errors import PlanError
 from missions.geometry.geo import great_circle_m
@@ -86,6 +87,7 @@ class Sortie:
     photos: int
     first_line: int | None                   # the whole mission's lines (camera-on stretches), 1-based
     last_line: int | None
+    flight: Simulation | None = field(default=None, compare=False, repr=False)   # its own re-flight
 
     def to_json(self, file: str) -> dict:
         return {"file": file, "flight_time_s": round(self.flight_time_s, 1), "photos": self.photos,
@@ -243,7 +245,9 @@ class _Timeline(NamedTuple):
 
     sim: Simulation
     nav_time: dict[int, float]              # arrival time at each positional NAV item's vertex (first visit)
-    photo_times: np.ndarray                 # of sim.photos, which are in flying order
+    order: np.ndarray                       # sim.photos' indices by the time they are taken
+    photo_times: np.ndarray                 # their times, in that order
+    photo_lines: np.ndarray                 # their lines (`_line_numbers`), in that order
 
 
 def _timeline(sim: Simulation) -> _Timeline:
@@ -251,7 +255,11 @@ def _timeline(sim: Simulation) -> _Timeline:
     for v, ts in zip(sim.vertices, sim.vertex_times_s):
         if v.item >= 0 and v.item not in t:
             t[v.item] = ts
-    return _Timeline(sim, t, np.array([p.time_s for p in sim.photos]))
+    times = np.array([p.time_s for p in sim.photos], dtype=float)
+    order = np.argsort(times, kind="stable")
+    line_of = _line_numbers(sim)
+    lines = np.array([line_of[p.span] for p in sim.photos], dtype=int)
+    return _Timeline(sim, t, order, times[order], lines[order] if len(lines) else lines)
 
 
 def _transit_s(distance_m: float, alt_m: float, speed_mps: float, copter: bool) -> float:
@@ -301,10 +309,10 @@ def _cuts(m: _Mission, states: list[_State], tl: _Timeline) -> list[_Cut]:
 
 def _photo_cuts(m: _Mission, tl: _Timeline, after: float, before: float) -> list[_Cut]:
     """Cuts at photo positions taken between `after` and `before` (s), inside the leg flying towards their item."""
-    times = tl.photo_times
-    lo, hi = np.searchsorted(times, after, "right"), np.searchsorted(times, before, "left")
+    lo, hi = np.searchsorted(tl.photo_times, [after, before], side="right")
     out = []
-    for p in tl.sim.photos[lo:hi]:
+    for k in tl.order[lo:hi].tolist():
+        p = tl.sim.photos[k]
         if 0 <= p.item < m.end and _positional(m.items[p.item]):
             out.append(_Cut(p.item, (p.lat, p.lon, p.alt_m), p.time_s))
     return out
@@ -352,12 +360,17 @@ class Budget(NamedTuple):
     items: int
 
 
+def as_sortie(compiled: Compiled, items: tuple[MissionItem, ...]) -> Compiled:
+    """`compiled` flying only `items` (a sortie), with a re-flight cache of its own."""
+    return replace(compiled, items=items, parts=(items,), sorties=(), flight_cache=FlightCache())
+
+
 def _fits(built: _Built, compiled: Compiled, budget: Budget) -> tuple[bool, Simulation | None]:
     if len(built.items) > budget.items:
         return False, None
     if budget.flight_s is None:
         return True, None
-    sim = simulate(replace(compiled, items=built.items, parts=(built.items,), sorties=()))
+    sim = simulate(as_sortie(compiled, built.items))
     return sim.flight_time_s <= budget.flight_s, sim
 
 
@@ -373,47 +386,60 @@ def split_sorties(compiled: Compiled, budget: Budget, where: str, whole: Simulat
     est = _Estimator((compiled.home[0], compiled.home[1]), compiled.speed_mps, compiled.frame == "copter",
                      max((it.z for it in compiled.items if _positional(it)), default=m.takeoff.z))
     cuts = _cuts(m, states, tl)
-    line_of = _line_numbers(whole)
+    cut_index = [c.index for c in cuts]
     begin = _Cut(m.start, None, 0.0)
     out: list[Sortie] = []
     while True:
-        built, sim, end = _next_sortie(compiled, m, states, tl, est, cuts, begin, budget, where)
+        built, sim, end = _next_sortie(compiled, m, states, tl, est, cuts, cut_index, begin, budget, where)
         last = end.index >= m.end
-        sim = sim or simulate(replace(compiled, items=built.items, parts=(built.items,), sorties=()))
-        first_line, last_line = _lines_flown(tl, line_of, begin, end, m)
+        sim = sim or simulate(as_sortie(compiled, built.items))
+        first_line, last_line = _lines_flown(tl, begin, end, m)
         out.append(Sortie(len(out) + 1, built.items, built.origin, sim.flight_time_s, len(sim.photos),
-                          first_line, last_line))
+                          first_line, last_line, sim))
         if last:
             return tuple(out)
         begin = end
 
 
-def _next_sortie(compiled: Compiled, m: _Mission, states: list[_State], tl: _Timeline, est: _Estimator,
-                 cuts: list[_Cut], begin: _Cut, budget: Budget, where: str) -> tuple[_Built, Simulation | None, _Cut]:
-    """The longest sortie from `begin` that fits: the last cut whose estimate fits (camera-off cuts first), then
-    earlier ones until the re-flight fits; inside a line when no waypoint cut does."""
-    after = [c for c in cuts if c.index > begin.index or (begin.point is not None and c.index >= begin.index)]
-    limit = budget.flight_s * (1.0 - ESTIMATE_MARGIN) if budget.flight_s is not None else math.inf
-    for prefer_off in (True, False):
-        pool = [c for c in after if not prefer_off or c.index >= m.end or not _camera_on(states[c.index].triggers)]
-        # a sortie that takes no photo (it ends before its line's first) is no progress: cut inside the line
-        ok = [c for c in pool if _estimate_s(m, states, tl, est, begin, c) <= limit
-              and (c.index >= m.end or _photos_flown(tl, begin, c, m))]
-        for c in reversed(ok):
-            built = _build(m, states, begin, c, c.index >= m.end)
-            fits, sim = _fits(built, compiled, budget)
-            if fits:
-                return built, sim, c
-    # not one waypoint cut fits: a line longer than a battery, cut at a photo position inside it (a sortie flies
-    # less than its budget of the whole mission's time, so only the photos within it are candidates)
-    t0 = _start_time(m, states, tl, begin)[0] if begin.index > m.start or begin.point else 0.0
-    horizon = t0 + (budget.flight_s or tl.sim.flight_time_s)
-    for c in reversed([c for c in _photo_cuts(m, tl, t0 + 1e-6, horizon)
-                       if _estimate_s(m, states, tl, est, begin, c) <= limit]):
-        built = _build(m, states, begin, c, False)
+def _latest_fitting(compiled: Compiled, m: _Mission, states: list[_State], tl: _Timeline, est: _Estimator,
+                    begin: _Cut, budget: Budget, limit: float, cuts: list[_Cut]
+                    ) -> tuple[_Built, Simulation | None, _Cut] | None:
+    """The last of `cuts` whose estimate fits and whose sortie, re-flown, fits."""
+    for c in reversed([c for c in cuts if _estimate_s(m, states, tl, est, begin, c) <= limit]):
+        built = _build(m, states, begin, c, c.index >= m.end and c.point is None)
         fits, sim = _fits(built, compiled, budget)
         if fits:
             return built, sim, c
+    return None
+
+
+def _next_sortie(compiled: Compiled, m: _Mission, states: list[_State], tl: _Timeline, est: _Estimator,
+                 cuts: list[_Cut], cut_index: list[int], begin: _Cut, budget: Budget, where: str) -> tuple[_Built, Simulation | None, _Cut]:
+    """The longest sortie from `begin` that fits: the last cut whose estimate fits (camera-off cuts first), then
+    earlier ones until the re-flight fits; inside a line when no waypoint cut does."""
+    # a sortie flies at most its budget of the whole mission's time and of its items: only cuts within both
+    first = bisect.bisect_left(cut_index, begin.index + (0 if begin.point is not None else 1))
+    last = bisect.bisect_right(cut_index, begin.index + budget.items)
+    span_s = budget.flight_s if budget.flight_s is not None else math.inf
+    after = [c for c in cuts[first:last] if c.time_s <= begin.time_s + span_s or c.index >= m.end]
+    limit = budget.flight_s * (1.0 - ESTIMATE_MARGIN) if budget.flight_s is not None else math.inf
+    # a line's end first; a sortie that takes no photo (it ends before its line's first) is no progress
+    off = [c for c in after if c.index >= m.end or not _camera_on(states[c.index].triggers)]
+    found = _latest_fitting(compiled, m, states, tl, est, begin, budget, limit,
+                            [c for c in off if c.index >= m.end or _has_photos(tl, begin, c, m)])
+    if found is not None:
+        return found
+    # else inside a line (a line longer than a battery): at a waypoint on it (a corridor's bend) or a photo
+    # position, whichever goes farther (a sortie flies less than its budget of the whole mission's time, so only
+    # the photos within it are candidates)
+    t0 = begin.time_s
+    horizon = t0 + (budget.flight_s or tl.sim.flight_time_s)
+    inside = sorted([c for c in after if c not in off] + _photo_cuts(m, tl, t0 + 1e-6, horizon),
+                    key=lambda c: c.time_s)
+    found = _latest_fitting(compiled, m, states, tl, est, begin, budget, limit,
+                            [c for c in inside if c.time_s > t0 + 1e-6])
+    if found is not None:
+        return found
     raise PlanError(f"no sortie from item {begin.index} fits one battery of {budget.flight_s or 0:.0f} s "
                     f"and {budget.items} items", where=where,
                     hint="the transit to the area and back alone is longer than a battery: raise "
@@ -431,20 +457,28 @@ def _line_numbers(sim: Simulation) -> dict[int, int]:
     return out
 
 
-def _photos_flown(tl: _Timeline, begin: _Cut, end: _Cut, m: _Mission) -> list:
-    """The whole mission's photos a sortie from `begin` to `end` takes."""
-    t0 = begin.time_s if begin.point is not None else -math.inf
-    t1 = end.time_s if end.point is not None else math.inf
-    lo = -1 if begin.index <= m.start else begin.index
-    hi = len(m.items) + 1 if end.index >= m.end else end.index
-    return [p for p in tl.sim.photos
-            if (lo <= p.item < hi or (end.point is not None and p.item == end.index)) and t0 <= p.time_s <= t1]
+def _photo_slice(tl: _Timeline, begin: _Cut, end: _Cut, m: _Mission) -> tuple[int, int]:
+    """The whole mission's photos (positions in `tl.order`) a sortie from `begin` to `end` takes: those after the
+    time at `begin` up to the time at `end` (both the whole mission's). A photo at a cut inside a line is the
+    last of one sortie and, shot again on resuming, the first of the next."""
+    times = tl.photo_times
+    lo = 0 if begin.index <= m.start and begin.point is None else int(
+        np.searchsorted(times, begin.time_s, side="left" if begin.point is not None else "right"))
+    hi = len(times) if end.index >= m.end else int(np.searchsorted(times, end.time_s, side="right"))
+    return lo, max(lo, hi)
 
 
-def _lines_flown(tl: _Timeline, line_of: dict[int, int], begin: _Cut, end: _Cut, m: _Mission
-                 ) -> tuple[int | None, int | None]:
-    lines = [line_of[p.span] for p in _photos_flown(tl, begin, end, m)]
-    return (min(lines), max(lines)) if lines else (None, None)
+def _has_photos(tl: _Timeline, begin: _Cut, end: _Cut, m: _Mission) -> bool:
+    lo, hi = _photo_slice(tl, begin, end, m)
+    return hi > lo
+
+
+def _lines_flown(tl: _Timeline, begin: _Cut, end: _Cut, m: _Mission) -> tuple[int | None, int | None]:
+    lo, hi = _photo_slice(tl, begin, end, m)
+    if hi <= lo:
+        return None, None
+    lines = tl.photo_lines[lo:hi]
+    return int(lines.min()), int(lines.max())
 
 
 # ------------------------------------------------------------------------------------------ the union

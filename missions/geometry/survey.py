@@ -67,11 +67,11 @@ from missions.geometry.triggers import PhotoPoint, TriggerSpan, simulate_distanc
 
 # ArduCopter accepts a waypoint within WPNAV_RADIUS (200 cm default) — before the vehicle is on it.
 DEFAULT_EXIT_MARGIN_M = 2.0
-# The photos of one plan's survey and corridor steps together: at the WIRIS's 1 s minimum interval this is
-# 28 h of shooting, beyond any one vehicle's mission, while planning and measuring it stays within seconds
-# and a few hundred MB (both grow with the photo count). Checked per step from an estimate, before anything
-# is generated.
-MAX_PHOTOS = 100_000
+# The photos of one plan's survey and corridor steps together, flown in as many sorties as it takes: 100 km² at
+# 60 m with a WIRIS is ~660,000 (bench/bench_compile_scaling.py plans and measures it within 2 GB); three times
+# that is no survey anyone flies from one plan but a typo (an area in the wrong units), refused from an estimate
+# before anything is generated.
+MAX_PHOTOS = 2_000_000
 # Separate polygons one survey plans. The planner's cost grows about linearly with them (20,000 small triangles
 # compile in ~25 s of one core: bench/bench_survey_scaling.py), and an area of more is better merged or split
 # over several plans. Checked before any swaths are generated.
@@ -86,8 +86,9 @@ EXHAUSTIVE_ANGLE_PARTS = 100
 FULL_RANK_PARTS = 4000
 
 
-def check_photo_budget(estimate: float, what: str, left: int = MAX_PHOTOS) -> None:
-    """PlanError when a step's estimated photos exceed what the plan has `left` of MAX_PHOTOS."""
+def check_photo_budget(estimate: float, what: str, left: int | None = None) -> None:
+    """PlanError when a step's estimated photos exceed what the plan has `left` of MAX_PHOTOS (None: all)."""
+    left = MAX_PHOTOS if left is None else left
     if estimate > left:
         earlier = f" after {MAX_PHOTOS - left:,} in earlier steps" if left < MAX_PHOTOS else ""
         raise PlanError(f"this {what} would take about {estimate:,.0f} photos{earlier}, more than the "

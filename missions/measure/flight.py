@@ -557,8 +557,25 @@ _HANDLERS: dict[int, Callable[[_Flight, int, MissionItem], int | None]] = {
 }
 
 
+def _flown_from(compiled: Compiled) -> tuple:
+    return (compiled.items, compiled.home, compiled.frame, compiled.firmware, compiled.payloads, compiled.setup,
+            compiled.areas, compiled.speed_mps)
+
+
 def simulate(compiled: Compiled) -> Simulation:
-    """Fly `compiled.items` in the model above; return path, photos and times."""
+    """Fly `compiled.items` in the model above; return path, photos and times. Flown once per Compiled value
+    (`FlightCache`): asked again for the same items, it answers with the same Simulation."""
+    cache = getattr(compiled, "flight_cache", None)
+    key = _flown_from(compiled)
+    if cache is not None and len(cache.key) == len(key) and all(a is b for a, b in zip(cache.key, key)):
+        return cache.sim
+    sim = _simulate(compiled)
+    if cache is not None:
+        cache.key, cache.sim = key, sim
+    return sim
+
+
+def _simulate(compiled: Compiled) -> Simulation:
     flight = _Flight(compiled)
     flight.fly()
     proj = flight.proj

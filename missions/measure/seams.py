@@ -6,12 +6,12 @@ of their photos measured against the plan's areas, so that a gap or a thin overl
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any, Mapping
 
 from missions.compiled import Compiled
 from missions.measure.flight import simulate
-from missions.sorties import union_photos
+from missions.sorties import as_sortie, union_photos
 
 
 def sortie_file(name: str, number: int) -> str:
@@ -39,7 +39,7 @@ def measure_sorties(compiled: Compiled) -> SortieTable | None:
 
     if not compiled.sorties:
         return None
-    sims = [simulate(replace(compiled, items=s.items, parts=(s.items,), sorties=())) for s in compiled.sorties]
+    sims = [s.flight if s.flight is not None else simulate(as_sortie(compiled, s.items)) for s in compiled.sorties]
     photos = union_photos(compiled, compiled.sorties, sims)
     projection = sims[0].projection
     steps = []
