@@ -41,6 +41,7 @@ from missions.geometry.survey import SurveyPlan, plan_survey
 from missions.plan.load import (CameraStep, CorridorStep, LandStep, Plan, RtlStep, SurveyStep, TakeoffStep,
                                 WaypointStep, input_files, load_plan, raise_problems)
 from missions.sorties import in_sorties
+from missions.plan_turns import default_turnaround_m, turn_radius_of, turn_warnings
 from missions.plan.schema import MAX_AGL_M, MAX_ALTITUDE_M, MIN_ALTITUDE_M, SPEED_RANGE_MPS
 from missions.thermal.assess import assess
 from missions.thermal.speed import SpeedLimit, check_sharp, choose_speed, line_limits
@@ -111,6 +112,7 @@ class _Compile:
     emitter: Emitter
     state: _State
     speed_mps: float                         # the plan's, or the one `auto` chose (`_mission_speed`)
+    turn_radius_m: float | None = None       # a plane's or VTOL's (`missions.plan_turns.turn_radius_of`)
 
     def warn(self, code: str, message: str) -> None:
         self.state.warnings.append(PlanWarning(code, message))
@@ -272,6 +274,8 @@ def _lines_step(c: _Compile, step: SurveyStep | CorridorStep, kind: str,
     c.emitter.track(_track(c, step, lines.route, alt, lead), where=c.plan.step_where(step, "trigger"))
     for w in lines.route.warnings:
         c.warn(w.code, f"{kind} at {here}: {w.message}")
+    for w in turn_warnings(lines.route, c.turn_radius_m, _line_inputs_turnaround(c, step)):
+        c.warn(w.code, f"{kind} at {here}: {w.message}")
     c.state.areas.append(AreaInfo(
         step=step.index, kind=kind, payloads=step.payloads, area=lines.area, altitude_m=alt,
         front_overlap=step.front_pct / 100.0, side_overlap=step.side_pct / 100.0, trigger=step.trigger,
@@ -352,10 +356,15 @@ def _line_inputs(c: _Compile, step: SurveyStep | CorridorStep, lead: PayloadInfo
     return _LineInputs(
         footprint=footprint,
         turnaround_m=step.turnaround_m if step.turnaround_m is not None
-        else TURNAROUND_DEFAULT_M[c.plan.vehicle.frame],
+        else default_turnaround_m(TURNAROUND_DEFAULT_M[c.plan.vehicle.frame], c.turn_radius_m),
         start_latlon=last[:2] if last else (c.plan.home.lat, c.plan.home.lon),
         photos_left=max(0, survey.MAX_PHOTOS - sum(len(g.photos) for g in c.state.intent)),
         min_interval_s=lead.min_interval_s)
+
+
+def _line_inputs_turnaround(c: _Compile, step: SurveyStep | CorridorStep) -> float | None:
+    """The step's own turnaround_m (None: the default, which a plane's turn already sizes)."""
+    return step.turnaround_m
 
 
 def _plan_survey_lines(c: _Compile, step: SurveyStep, inputs: _LineInputs) -> _Lines:
@@ -366,7 +375,7 @@ def _plan_survey_lines(c: _Compile, step: SurveyStep, inputs: _LineInputs) -> _L
                         turnaround_m=inputs.turnaround_m, speed_mps=c.speed_mps,
                         min_interval_s=inputs.min_interval_s, refly_90=step.refly_90,
                         hover=step.trigger == "hover", start_latlon=inputs.start_latlon,
-                        photos_left=inputs.photos_left)
+                        photos_left=inputs.photos_left, turn_radius_m=c.turn_radius_m)
     return _Lines(route, area)
 
 
@@ -519,7 +528,8 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     state = _State(warnings=[f"component_id_chosen: {n}" for n in plan.notes])
     payloads = _resolve_payloads(plan, prof, state)
     speed = _mission_speed(plan, payloads, state)
-    c = _Compile(plan, prof, payloads, _emitter(plan, prof, payloads, speed), state, speed)
+    radius = turn_radius_of(plan.vehicle, speed)
+    c = _Compile(plan, prof, payloads, _emitter(plan, prof, payloads, speed), state, speed, radius)
     _warn_about_the_start(c)
     for step in plan.mission:
         _STEPS[type(step)](c, step)
@@ -538,7 +548,8 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
         # PayloadInfo only for payloads whose optics are known: the report measures coverage with them
         payloads=tuple(payloads.optics[p.name] for p in plan.payloads if p.name in payloads.optics),
         areas=tuple(state.areas), setup=setup, lua=lua, params=params,
-        warnings=tuple(dict.fromkeys(state.warnings)), intent=tuple(state.intent), inputs=input_files(plan))
+        warnings=tuple(dict.fromkeys(state.warnings)), intent=tuple(state.intent), inputs=input_files(plan),
+        turn_radius_m=radius)
     return _with_the_sun(plan, in_sorties(plan, compiled))
 
 

@@ -141,6 +141,7 @@ class Compiled:
     # `parts` are their items); () when it is flown as one mission
     sorties: tuple[Any, ...] = field(default=(), compare=False)
     endurance: Any = field(default=None, compare=False)   # missions.sorties.Endurance the split used
+    turn_radius_m: float | None = None          # a plane's or VTOL's (missions.geometry.turns); None: a copter
     flight_cache: FlightCache = field(default_factory=FlightCache, compare=False, repr=False)
 
     def payload(self, name: str) -> PayloadInfo:
