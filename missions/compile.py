@@ -279,8 +279,15 @@ def _lines_step(c: _Compile, step: SurveyStep | CorridorStep, kind: str,
     c.state.areas.append(AreaInfo(
         step=step.index, kind=kind, payloads=step.payloads, area=lines.area, altitude_m=alt,
         front_overlap=step.front_pct / 100.0, side_overlap=step.side_pct / 100.0, trigger=step.trigger,
-        trigger_distance_m=lines.route.trigger_distance_m, items=(first, c.emitter.item_count)))
+        trigger_distance_m=lines.route.trigger_distance_m, items=(first, c.emitter.item_count),
+        line_items=_line_items(c.emitter.s.track_navs, lines.route)))
     c.state.intent.append(lines.route)
+
+
+def _line_items(navs: tuple[int, ...], route: SurveyPlan | CorridorPlan) -> tuple[int, ...]:
+    """The items of the points after each camera span's entry up to its exit: flying towards them is flying a line."""
+    return tuple(navs[k] for s in route.camera_spans for k in range(s.start_index + 1, s.stop_index + 1)
+                 if k < len(navs))
 
 
 def _lead_optics(plan: Plan, payloads: _Payloads, step: SurveyStep | CorridorStep, kind: str) -> PayloadInfo:

@@ -71,6 +71,10 @@ class AreaInfo:
     # The report measures the step's overlaps, photo count and path against them; None (an AreaInfo built by
     # hand, without a mission) measures every photo and the whole path near the area.
     items: tuple[int, int] | None = None
+    # The NAV items that end a leg of the step's lines (flying from a span's entry to its exit): a payload that
+    # shoots by itself (a RedEdge in overlap mode, also on turnarounds and transits) has its overlaps measured
+    # over the photos taken flying towards them. None: every photo of `items`.
+    line_items: tuple[int, ...] | None = None
 
 
 @dataclass(frozen=True)

@@ -40,7 +40,7 @@ from missions.geometry.route import ZONE_EDGE_TOL_M
 from missions.geometry.triggers import PhotoPoint
 from missions.measure.coverage import (coverage_fraction, footprint_polygons, min_front_overlap, min_side_overlap,
                                        outside_length_m)
-from missions.measure.flight import Photo, Simulation, simulate
+from missions.measure.flight import Photo, Simulation, self_triggering, simulate
 from missions.measure.seams import measure_sorties, table_lines
 from missions.plan.schema import MAX_AGL_M
 
@@ -333,6 +333,11 @@ class _PhotoArrays:
         first, end = items
         return np.array([k for k, p in enumerate(self.photos) if first <= p.item < end], dtype=int)
 
+    def on_lines(self, idx: np.ndarray, line_items: tuple[int, ...]) -> np.ndarray:
+        """Of the photos `idx`, those taken flying towards one of `line_items` (a line's leg)."""
+        wanted = set(line_items)
+        return np.array([k for k in idx.tolist() if self.photos[k].item in wanted], dtype=int)
+
     def by_altitude(self, idx: np.ndarray) -> dict[float, list[int]]:
         """The photos `idx` above the ground grouped by altitude (one Footprint per group), in mission order."""
         groups: dict[float, list[int]] = {}
@@ -377,19 +382,23 @@ def _min_overlaps(ph: _PhotoArrays, groups: dict[float, list[int]], payload: Pay
 
 
 def _measure_payload(area_info: AreaInfo, geom: Any, zones: Any, name: str, payload: PayloadInfo,
-                     photos: Sequence[Photo]) -> PayloadMeasure:
+                     photos: Sequence[Photo], self_shooting: bool = False) -> PayloadMeasure:
     """Coverage and overlaps of one payload's photos over one step's area `geom`.
 
     Coverage counts every photo whose footprint can reach the area: a neighbouring step's photo covers ground
     too. The overlaps and the photo count take the photos the step took (`area_info.items`): another step's
     photos are measured against its own area. Without a range (an AreaInfo built by hand) the photos near the
     area stand in for them. The zones are checked against every photo: an exclusion is ground not to
-    photograph, whichever step does it."""
+    photograph, whichever step does it. A payload that shoots by itself (`self_shooting`: a RedEdge in overlap
+    mode) shoots on the turnarounds and transits too; its overlaps take the photos on the step's lines
+    (`area_info.line_items`): a turnaround's photos beside a line of the crossing pass (refly_90) are no side
+    neighbour of it."""
     ph = _PhotoArrays.of(photos)
     near = ph.reaching(geom, payload)
     own = near if area_info.items is None else ph.taken_during(area_info.items)
+    on_lines = own if not self_shooting or area_info.line_items is None else ph.on_lines(own, area_info.line_items)
     return PayloadMeasure(name, _coverage(geom, ph, ph.by_altitude(near), payload),
-                          _min_overlaps(ph, ph.by_altitude(own), payload), int(len(own)), _photos_in(zones, photos))
+                          _min_overlaps(ph, ph.by_altitude(on_lines), payload), int(len(own)), _photos_in(zones, photos))
 
 
 def _measure_step(compiled: Compiled, area_info: AreaInfo, path: np.ndarray | None,
@@ -401,7 +410,8 @@ def _measure_step(compiled: Compiled, area_info: AreaInfo, path: np.ndarray | No
         return StepMeasure(area_info, (), None)
     geom = area_geometry(area_info.area, sim.projection)
     zones = _zones(area_info.area, sim.projection)
-    payloads = tuple(_measure_payload(area_info, geom, zones, n, compiled.payload(n), photos_of.get(n, []))
+    own = self_triggering(compiled)
+    payloads = tuple(_measure_payload(area_info, geom, zones, n, compiled.payload(n), photos_of.get(n, []), n in own)
                      for n in area_info.payloads)
     over_m, over_camera_m = _over_zones_m(sim, zones)
     return StepMeasure(area_info, payloads, StepPath(_outside_m(sim.xy, path, geom), over_m, over_camera_m))

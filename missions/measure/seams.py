@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from typing import Any, Mapping
 
 from missions.compiled import Compiled
-from missions.measure.flight import simulate
+from missions.measure.flight import self_triggering, simulate
 from missions.sorties import as_sortie, union_photos
 
 
@@ -42,6 +42,7 @@ def measure_sorties(compiled: Compiled) -> SortieTable | None:
     sims = [s.flight if s.flight is not None else simulate(as_sortie(compiled, s.items)) for s in compiled.sorties]
     photos = union_photos(compiled, compiled.sorties, sims)
     projection = sims[0].projection
+    own = self_triggering(compiled)
     steps = []
     for a in compiled.areas:
         if not a.payloads:
@@ -49,7 +50,7 @@ def measure_sorties(compiled: Compiled) -> SortieTable | None:
         geom = rp.area_geometry(a.area, projection)
         zones = rp._zones(a.area, projection)
         measured = tuple(rp._measure_payload(a, geom, zones, n, compiled.payload(n),
-                                             [p for p in photos if n in p.payloads]) for n in a.payloads)
+                                             [p for p in photos if n in p.payloads], n in own) for n in a.payloads)
         steps.append(rp.StepMeasure(a, measured, None))
     rows = tuple(s.to_json(sortie_file(compiled.name, s.number)) | {"flight_time_s": round(sim.flight_time_s, 1)}
                  for s, sim in zip(compiled.sorties, sims))
