@@ -119,6 +119,16 @@ class Setting:
     def option_by_key(self, key: str) -> Option | None:
         return next((o for o in self.options if o.key == key), None)
 
+    def option_named(self, text: str) -> Option | None:
+        """The option a person means by `text`: its key as a plan writes it ("manual"), or the key or the
+        label a ground station shows ("Manual"), in any case. The same names work in a plan and in
+        `wiris camera set`."""
+        return _named(self.options, text)
+
+    def choice_hint(self, text: str) -> str:
+        """The hint for a value that names no option: the likely one, then every choice."""
+        return _did_you_mean(text, self.options) + f"choose one of {', '.join(o.key for o in self.options)}"
+
     def check(self, value: Any) -> float | int:
         """The typed value of a plan/CLI value for this setting, or CdfError with the allowed values.
 
@@ -127,22 +137,23 @@ class Setting:
         """
         if self.options:
             if isinstance(value, (list, tuple)) and self.flags:
-                keys = [str(v) for v in value]
-                allowed = {o.key for o in self.enum.options} if self.enum else set()
-                bad = [k for k in keys if k not in allowed]
+                flags = self.enum.options if self.enum else ()
+                named = [_named(flags, str(v)) for v in value]
+                keys = [o.key for o in named if o is not None]
+                bad = [str(v) for v, o in zip(value, named) if o is None]
                 if bad or not keys:
                     raise CdfError(f"{self.key}: {clip(bad[0]) if bad else 'an empty list'} is not a choice",
-                                   hint=f"choose one or more of {', '.join(sorted(allowed))}")
+                                   hint=(_did_you_mean(bad[0], flags) if bad else "")
+                                   + f"choose one or more of {', '.join(sorted(o.key for o in flags))}")
                 option = self.option_by_key("+".join(o.key for o in self.enum.options if o.key in keys))
                 if option is None:
                     raise CdfError(f"{self.key}: {clip(' + '.join(keys))} cannot be combined",
                                    hint=self.enum.note or "see the camera manual")
                 return option.value
             if isinstance(value, str):
-                option = self.option_by_key(value)
+                option = self.option_named(value)
                 if option is None:
-                    raise CdfError(f"{self.key}: {shown(value)} is not a choice",
-                                   hint=f"choose one of {', '.join(o.key for o in self.options)}")
+                    raise CdfError(f"{self.key}: {shown(value)} is not a choice", hint=self.choice_hint(value))
                 return option.value
             if isinstance(value, (int, float)) and not isinstance(value, bool):
                 if any(o.value == value for o in self.options):
@@ -203,6 +214,30 @@ class Imager:
 
 
 @dataclass(frozen=True)
+class CaptureSizes:
+    """How much one photo writes to the camera's storage, by the option of the setting that chooses the files
+    (a flag set: each chosen file's size adds up), from a published source. A camera without this is of
+    unknown sizes: the compiler says so instead of guessing."""
+
+    setting: str                                # the setting's key, e.g. raw_format
+    mb: tuple[tuple[str, float], ...]           # option (or flag) key -> megabytes (10^6 bytes) per photo
+    source: str
+
+    def per_photo_mb(self, setting: Setting, value: float | int) -> float | None:
+        """Megabytes one photo writes with `setting` at wire value `value`; None when a chosen file's size is
+        not in the table."""
+        sizes = dict(self.mb)
+        if setting.flags and setting.enum is not None:
+            keys = [o.key for o in setting.enum.options if int(value) & o.value]
+        else:
+            option = next((o for o in setting.options if o.value == value), None)
+            keys = [option.key] if option is not None else []
+        if not keys or any(k not in sizes for k in keys):
+            return None
+        return sum(sizes[k] for k in keys)
+
+
+@dataclass(frozen=True)
 class Camera:
     id: str
     family: str
@@ -226,12 +261,46 @@ class Camera:
     source: str = ""
     table: str = ""
     extra: tuple[tuple[str, Any], ...] = field(default=(), compare=False)
+    capture_sizes: CaptureSizes | None = None      # None: no published image sizes
+
+    def capture_formats(self, values: Any) -> tuple[str, float | None]:
+        """The files a photo writes with the settings `values` (key -> wire value; a setting left out holds its
+        default), as "radiometric_jpeg + visible_jpeg", and their megabytes per photo (None: not known)."""
+        chooser = self.capture_sizes.setting if self.capture_sizes else next(
+            (s.key for s in self.settings if s.key == "capture"), None)
+        s = self.setting(chooser) if chooser else None
+        if s is None:
+            return "", None
+        value = dict(values).get(s.key, s.default)
+        if value is None:
+            return "", None
+        if s.flags and s.enum is not None:
+            text = " + ".join(o.key for o in s.enum.options if int(value) & o.value)
+        else:
+            text = str(self.option_key(s.key, value))
+        return text, self.capture_sizes.per_photo_mb(s, value) if self.capture_sizes else None
 
     def setting(self, key: str) -> Setting | None:
         return next((s for s in self.settings if s.key == key), None)
 
     def setting_by_param(self, param: str) -> Setting | None:
         return next((s for s in self.settings if s.param == param), None)
+
+    def setting_named(self, name: str) -> Setting | None:
+        """The setting a person means by `name`: its plan name ("range_mode") or its PARAM_EXT name as the
+        camera definition and `wiris camera settings` show it ("RANGE_MODE"), in any case."""
+        exact = self.setting(name) or self.setting_by_param(name)
+        if exact is not None:
+            return exact
+        folded = name.strip().casefold()
+        return next((s for s in self.settings if folded in (s.key.casefold(), s.param.casefold())), None)
+
+    def setting_hint(self, name: str) -> str:
+        """The hint for a name that is no setting of this camera: the likely one, then every plan name."""
+        names = {s.key: s.key for s in self.settings} | {s.param.casefold(): s.key for s in self.settings}
+        close = difflib.get_close_matches(name.strip().casefold(), list(names), n=1)
+        keys = ", ".join(s.key for s in self.settings)
+        return (f"did you mean {names[close[0]]!r}? " if close else "") + f"settings: {keys}"
 
     def option_key(self, key: str, value: Any) -> Any:
         """How a plan writes `value` of setting `key`: its option's key when the setting has one for it."""
@@ -277,6 +346,26 @@ class Catalogue:
             if cam.vendor.lower() == vendor.strip().lower() and cam.model.lower() == model.strip().lower():
                 return cam
         return None
+
+
+def _named(options: Iterable[Option], text: str) -> Option | None:
+    """The option whose key is `text`, else whose key or label is `text` in any case."""
+    options = tuple(options)
+    exact = next((o for o in options if o.key == text), None)
+    if exact is not None:
+        return exact
+    folded = text.strip().casefold()
+    return next((o for o in options if folded in (o.key.casefold(), o.name.casefold())), None)
+
+
+def _did_you_mean(text: str, options: Iterable[Option]) -> str:
+    """"did you mean 'manual'? " for a near miss of an option's key or label, else ""."""
+    names = {}
+    for o in options:
+        names.setdefault(o.key.casefold(), o.key)
+        names.setdefault(o.name.casefold(), o.key)
+    close = difflib.get_close_matches(text.strip().casefold(), list(names), n=1)
+    return f"did you mean {names[close[0]]!r}? " if close else ""
 
 
 def _fmt(v: float | None) -> str:
@@ -548,7 +637,30 @@ def _camera(m: dict, merged: dict, settings: tuple[Setting, ...], enums: dict[st
         source=merged.get("source", ""), table=table,
         extra=tuple((k, merged[k]) for k in ("heartbeat", "adopts_sender_system_id", "capabilities_note")
                     if k in merged),
+        capture_sizes=_capture_sizes(merged.get("capture_sizes"), settings, table),
     )
+
+
+def _capture_sizes(raw: Any, settings: tuple[Setting, ...], where: str) -> CaptureSizes | None:
+    """A table's `capture_sizes:`, checked: it names a setting with options, each size keyed by one of them."""
+    if raw is None:
+        return None
+    s = next((x for x in settings if x.key == raw.get("setting")), None)
+    if s is None or not (s.options or s.enum):
+        raise CdfError(f"capture_sizes: setting {raw.get('setting')!r} is no setting with options", where=where,
+                       hint=_name_hint(raw.get("setting"), [x.key for x in settings if x.options],
+                                       "`capture_sizes: setting:` names the `key:` of the setting choosing the files"))
+    keys = {o.key for o in (s.enum.options if s.flags and s.enum else s.options)}
+    mb = {str(k): float(v) for k, v in (raw.get("mb") or {}).items()}
+    bad = sorted(set(mb) - keys)
+    if bad or not mb or any(not (math.isfinite(v) and v > 0) for v in mb.values()):
+        raise CdfError(f"capture_sizes of {s.key}: {'unknown option ' + bad[0] if bad else 'a size is not positive'}",
+                       where=where, hint=f"`mb:` maps options of {s.key} ({', '.join(sorted(keys))}) to megabytes "
+                                         "per photo, e.g. {tiff: 12.5}")
+    if not str(raw.get("source") or "").strip():
+        raise CdfError(f"capture_sizes of {s.key} has no source", where=where,
+                       hint="say where the sizes are published (`source:`); without one leave the sizes out")
+    return CaptureSizes(s.key, tuple(mb.items()), str(raw["source"]))
 
 
 def load_catalogue(tables_dir: Path | None = None) -> Catalogue:

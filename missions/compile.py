@@ -24,14 +24,14 @@ from pathlib import Path
 from typing import Any, Callable, NamedTuple
 
 from cdf.catalogue import catalogue
-from missions.compiled import AreaInfo, Compiled, PayloadInfo, PlanWarning, SetupStep
+from missions.compiled import AreaInfo, CaptureSize, Compiled, PayloadInfo, PlanWarning, SetupStep, StepFacts
 from missions.emit.emitter import Emitted, Emitter, Track, TrackPoint, HOVER_HOLD_S
 from missions.emit.firmware import FirmwareProfile, check_items, profile
 from missions.emit.items import MissionItem
 from missions.emit.lua import render_script
 from missions.emit.params import Param, autopilot_params
 from missions.emit.setup import RedEdgeSurvey, setup_steps
-from missions.errors import PlanError
+from missions.errors import PlanError, Problem
 from missions.geometry import optics, survey
 from missions.geometry.area import Area, load_area
 from missions.geometry.corridor import CorridorPlan, plan_corridor
@@ -39,7 +39,8 @@ from missions.geometry.footprint import Footprint
 from missions.geometry.geo import MAX_EXTENT_M
 from missions.geometry.survey import SurveyPlan, plan_survey
 from missions.plan.load import (CameraStep, CorridorStep, LandStep, Plan, RtlStep, SurveyStep, TakeoffStep,
-                                WaypointStep, input_files, load_plan, raise_problems)
+                                WaypointStep, input_files, load_plan_partly, raise_problems)
+from missions.plan.meaning import Ceiling, ceiling_problem
 from missions.sorties import in_sorties
 from missions.plan_turns import default_turnaround_m, turn_radius_of, turn_warnings
 from missions.plan.schema import MAX_AGL_M, MAX_ALTITUDE_M, MIN_ALTITUDE_M, SPEED_RANGE_MPS
@@ -100,6 +101,9 @@ class _State:
     altitudes: list[_Altitude] = field(default_factory=list)
     rededge_flights: dict[str, list[_RedEdgeFlight]] = field(default_factory=dict)
     rededge_checks: list[_RedEdgeCheck] = field(default_factory=list)
+    # each payload's settings as the camera holds them at this point of the mission (wire values by key)
+    settings_now: dict[str, dict[str, float | int]] = field(default_factory=dict)
+    step_facts: list[StepFacts] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -229,6 +233,7 @@ def _waypoint(c: _Compile, step: WaypointStep) -> None:
 
 def _camera(c: _Compile, step: CameraStep) -> None:
     c.emitter.camera_change(step.payload, step.values, where=c.plan.step_where(step, "settings"))
+    c.state.settings_now.setdefault(step.payload, {}).update(step.values)
 
 
 def _rtl(c: _Compile, step: RtlStep) -> None:
@@ -282,6 +287,54 @@ def _lines_step(c: _Compile, step: SurveyStep | CorridorStep, kind: str,
         trigger_distance_m=lines.route.trigger_distance_m, items=(first, c.emitter.item_count),
         line_items=_line_items(c.emitter.s.track_navs, lines.route)))
     c.state.intent.append(lines.route)
+    c.state.step_facts.append(_step_facts(c, step, kind, lead, footprint, lines.route))
+
+
+def _step_facts(c: _Compile, step: SurveyStep | CorridorStep, kind: str, lead: PayloadInfo, footprint: Footprint,
+                route: SurveyPlan | CorridorPlan) -> StepFacts:
+    """The numbers a pilot reads for one step, and what they assume."""
+    survey_step = isinstance(step, SurveyStep)
+    return StepFacts(
+        step=step.index, kind=kind, where=c.plan.step_where(step), lead=lead.name,
+        angle_deg=route.angle_deg if survey_step else None,
+        angle_auto=survey_step and step.angle_deg == "auto",
+        spacing_m=route.spacing_m, lines=route.lines if survey_step else route.stats.lines,
+        trigger=step.trigger, trigger_distance_m=route.trigger_distance_m, speed_mps=c.speed_mps,
+        footprint_m=(footprint.across_m, footprint.along_m),
+        capture=tuple(_capture_size(c, name) for name in step.payloads),
+        assumptions=tuple(_assumptions(c, step)))
+
+
+def _capture_size(c: _Compile, name: str) -> CaptureSize:
+    """The files each photo of payload `name` writes with the settings it holds now, and their size."""
+    cam = c.payloads.cameras[name]
+    held = c.state.settings_now.setdefault(name, dict(c.plan.payload(name).values))
+    formats, mb = cam.capture_formats(held)
+    if mb is not None:
+        source = cam.capture_sizes.source
+    else:
+        source = f"{cam.model}: no published image sizes in the catalogue (cdf/tables/{cam.table})"
+    return CaptureSize(name, formats, mb, source)
+
+
+def _assumptions(c: _Compile, step: SurveyStep | CorridorStep) -> list[str]:
+    """Every assumption the step's numbers rest on."""
+    out = ["flat ground at home's height: altitudes, footprints and GSD are above home, not above the terrain"]
+    for name in step.payloads:
+        info = c.payloads.optics.get(name)
+        if info is None:
+            out.append(f"{name}: optics unknown, its photos are not measured")
+            continue
+        imager = c.payloads.cameras[name].imager(info.imager)
+        assumed = [a.replace("_", " ") for a in imager.assumed] if imager is not None else []
+        if assumed:
+            out.append(f"{name}: {', '.join(assumed)} of {info.camera_id}/{info.imager} assumed, not from a "
+                       f"datasheet (cdf/tables/{c.payloads.cameras[name].table})")
+    if step.trigger != "hover":
+        what = "airspeed" if c.emitter.speed_is_airspeed else "ground speed"
+        out.append(f"{c.speed_mps:g} m/s {what} held along the lines, no wind: the time between photos and the "
+                   "flight time scale with it")
+    return out
 
 
 def _line_items(navs: tuple[int, ...], route: SurveyPlan | CorridorPlan) -> tuple[int, ...]:
@@ -309,7 +362,16 @@ def _line_altitude(plan: Plan, step: SurveyStep | CorridorStep, lead: PayloadInf
         raise PlanError(f"gsd_cm {step.gsd_cm:g} needs {alt:.1f} m above ground with {lead.name}'s optics, "
                         f"outside {MIN_ALTITUDE_M:g}..{MAX_ALTITUDE_M:g} m",
                         where=plan.step_where(step, "gsd_cm"), hint="choose another GSD")
+    too_high = ceiling_problem(alt, f"gsd_cm {step.gsd_cm:g} with {lead.name}'s optics", _ceiling(plan),
+                               lower="a smaller gsd_cm (finer detail) flies lower")
+    if too_high is not None:
+        raise PlanError(too_high[0], where=plan.step_where(step, "gsd_cm"), hint=too_high[1])
     return alt
+
+
+def _ceiling(plan: Plan) -> Ceiling:
+    given = plan.vehicle.max_altitude_m
+    return Ceiling(given, True) if given is not None else Ceiling(MAX_AGL_M, False)
 
 
 def _check_triggering(c: _Compile, step: SurveyStep | CorridorStep, lead: PayloadInfo, trig: float) -> None:
@@ -425,10 +487,14 @@ _STEPS: dict[type, Callable[[_Compile, Any], None]] = {
 # --------------------------------------------------------------------------------------- after the steps
 
 def _warn_about_altitudes(c: _Compile) -> None:
-    for alt, where in c.state.altitudes:
-        if alt > MAX_AGL_M:
-            c.warn("altitude_above_120m", f"{alt:g} m above home at {where}; most rules allow {MAX_AGL_M:g} m "
-                   "above ground without a permit (ground assumed flat at home's height)")
+    """One note for a mission above MAX_AGL_M under the plan's permit (without one the loader refused it)."""
+    high = [a for a in c.state.altitudes if a.altitude_m > MAX_AGL_M]
+    if high and c.plan.vehicle.max_altitude_m is not None:
+        top = max(high, key=lambda a: a.altitude_m)
+        c.warn("altitude_above_120m", f"the mission flies up to {top.altitude_m:g} m above home (at {top.where}), "
+               f"above the {MAX_AGL_M:g} m most rules allow without a permit: flown under the permit the plan "
+               f"states (vehicle.max_altitude_m: {c.plan.vehicle.max_altitude_m:g} at "
+               f"{c.plan.where('vehicle', 'max_altitude_m')}); ground assumed flat at home's height")
 
 
 def _setup(c: _Compile) -> tuple[SetupStep, ...]:
@@ -529,17 +595,51 @@ def _mission_speed(plan: Plan, payloads: _Payloads, state: _State) -> float:
 
 # -------------------------------------------------------------------------------------------- the driver
 
+def _problems_of(err: PlanError) -> list[Problem]:
+    return list(err.problems) or [Problem(err.where or "", err.message, err.hint)]
+
+
+def _compile_steps(c: _Compile) -> list[Problem]:
+    """Every step compiled in order; a step that fails is left out and the next ones still checked, so that
+    one run reports every step's problem."""
+    problems: list[Problem] = []
+    for step in c.plan.mission:
+        try:
+            _STEPS[type(step)](c, step)
+        except PlanError as e:
+            problems.extend(_problems_of(e))
+    return problems
+
+
 def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -> Compiled:
-    plan = path_or_plan if isinstance(path_or_plan, Plan) else load_plan(path_or_plan)
+    """The compiled mission of a plan (a path or a loaded Plan), or one PlanError listing every problem of the
+    plan and of its steps, ordered by where they are written."""
+    if isinstance(path_or_plan, Plan):
+        plan, problems = path_or_plan, []
+    else:
+        part = load_plan_partly(path_or_plan)
+        plan, problems = part.plan, list(part.problems)
+        if plan is None:
+            raise_problems(problems, part.file)
     prof = profile(firmware or plan.vehicle.firmware)
     state = _State(warnings=[f"component_id_chosen: {n}" for n in plan.notes])
-    payloads = _resolve_payloads(plan, prof, state)
-    speed = _mission_speed(plan, payloads, state)
+    try:
+        payloads = _resolve_payloads(plan, prof, state)
+        speed = _mission_speed(plan, payloads, state)
+    except PlanError as e:
+        raise_problems(problems + _problems_of(e), plan.path)
     radius = turn_radius_of(plan.vehicle, speed)
     c = _Compile(plan, prof, payloads, _emitter(plan, prof, payloads, speed), state, speed, radius)
     _warn_about_the_start(c)
-    for step in plan.mission:
-        _STEPS[type(step)](c, step)
+    problems += _compile_steps(c)
+    if problems:
+        # the mission misses the failed steps: what follows (items, parts, setup) would judge a mission nobody
+        # asked for; the pre-flight setup depends on the payloads alone and is still checked
+        try:
+            _setup(c)
+        except PlanError as e:
+            problems += _problems_of(e)
+        raise_problems(problems, plan.path)
     emitted = c.emitter.result()
     state.warnings.extend(emitted.warnings)
     check_items(emitted.items, prof)
@@ -556,7 +656,7 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
         payloads=tuple(payloads.optics[p.name] for p in plan.payloads if p.name in payloads.optics),
         areas=tuple(state.areas), setup=setup, lua=lua, params=params,
         warnings=tuple(dict.fromkeys(state.warnings)), intent=tuple(state.intent), inputs=input_files(plan),
-        turn_radius_m=radius)
+        step_facts=tuple(state.step_facts), turn_radius_m=radius)
     return _with_the_sun(plan, in_sorties(plan, compiled))
 
 

@@ -78,6 +78,42 @@ class AreaInfo:
 
 
 @dataclass(frozen=True)
+class CaptureSize:
+    """What each photo of one payload writes to the camera's storage during a step."""
+
+    payload: str
+    formats: str                    # the files each photo writes, e.g. "radiometric_jpeg + visible_jpeg"
+    mb_per_photo: float | None      # megabytes (10^6 bytes); None: the catalogue knows no published size
+    source: str                     # where the size comes from
+
+
+@dataclass(frozen=True)
+class StepFacts:
+    """What the compiler chose for one survey or corridor step, as a pilot reads it; the report adds what it
+    measures (photos, GSD range, storage, flight time)."""
+
+    step: int                       # index in the plan's mission list
+    kind: str                       # "survey" | "corridor"
+    where: str                      # the step's file:line:col
+    lead: str                       # the payload whose footprint sets the lines
+    angle_deg: float | None         # line direction, degrees from north; None: a corridor follows its line
+    angle_auto: bool                # the compiler chose the angle (angle_deg: auto)
+    spacing_m: float                # between lines
+    lines: int
+    trigger: str                    # "distance" | "interval" | "hover"
+    trigger_distance_m: float
+    speed_mps: float                # planned speed along the lines
+    footprint_m: tuple[float, float]    # the lead payload's, across and along track, at the step's altitude
+    capture: tuple[CaptureSize, ...]    # per payload of the step
+    assumptions: tuple[str, ...]        # every assumption the numbers rest on
+
+    @property
+    def photo_interval_s(self) -> float | None:
+        """Seconds between photos at the planned speed (None when hovering: each photo is a stop)."""
+        return None if self.trigger == "hover" else self.trigger_distance_m / self.speed_mps
+
+
+@dataclass(frozen=True)
 class SetupStep:
     """One step of the pre-flight command sequence (NAME.setup.json)."""
 
@@ -141,6 +177,7 @@ class Compiled:
     intent: tuple[Any, ...] = field(default=(), compare=False)   # planner geometry, for previews only
     inputs: tuple[str, ...] = field(default=(), compare=False)   # the files the plan was read from (never written)
     sun: tuple[Any, ...] = ()                   # missions.thermal.assess.StepSun per timed step (plans with `when`)
+    step_facts: tuple[StepFacts, ...] = ()      # per survey or corridor step, what the compiler chose
     # missions.sorties.Sortie per sortie when the mission is longer than a battery or the item limit (then
     # `parts` are their items); () when it is flown as one mission
     sorties: tuple[Any, ...] = field(default=(), compare=False)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from cdf.errors import WirisError
 
@@ -14,6 +14,9 @@ class Problem:
     where: str
     message: str
     hint: str | None = None
+    # where in the plan's tree ("mission", 2, "survey", "altitude_m"): which item the problem belongs to, so
+    # that the later stages skip that item only; () when unknown (the whole plan)
+    path: tuple = field(default=(), compare=False)
 
     def __str__(self) -> str:
         return f"{self.where}: {self.message}" + (f" (hint: {self.hint})" if self.hint else "")

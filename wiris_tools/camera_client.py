@@ -169,6 +169,45 @@ def _stopped(err: LinkError, where: str) -> LinkError:
 _REFUSED = (mavlink2.MAV_RESULT_UNSUPPORTED, mavlink2.MAV_RESULT_DENIED)
 
 
+def resolve_param(definition: Definition, name: str, camera: Any = None) -> DefParam:
+    """The definition's parameter a person means by `name`: its PARAM_EXT name ("RANGE_MODE") in any case, or,
+    with `camera` (the catalogue's entry of this camera), the name a capture plan gives it ("range_mode"):
+    the same names a plan takes. LinkError with did-you-mean otherwise."""
+    p = definition.param(name)
+    if p is None and camera is not None:
+        s = camera.setting_named(name)
+        p = definition.param(s.param) if s is not None else None
+    if p is None:
+        folded = name.strip().casefold()
+        p = next((q for q in definition.params if q.name.casefold() == folded), None)
+    if p is not None:
+        return p
+    names = [q.name for q in definition.params]
+    if camera is not None:
+        names += [s.key for s in camera.settings if definition.param(s.param) is not None]
+    close = _closest(name, names)
+    raise LinkError(f"the camera's definition has no setting {name!r}",
+                    hint=f"did you mean {close}?" if close else "see `wiris camera settings`")
+
+
+def _closest(text: str, names: list[str]) -> str | None:
+    """The name nearest `text`: as written first (RANGE_MOD -> RANGE_MODE, range_mod -> range_mode), then
+    in any case."""
+    close = difflib.get_close_matches(text.strip(), names, n=1)
+    if close:
+        return close[0]
+    folded = {n.casefold(): n for n in reversed(names)}
+    close = difflib.get_close_matches(text.strip().casefold(), list(folded), n=1)
+    return folded[close[0]] if close else None
+
+
+def _close_option(text: str, p: DefParam, setting: Any) -> str:
+    """"did you mean 'Manual'? " for a near miss of an option label (or catalogue option name), else ""."""
+    names = [o.label for o in p.options] + ([o.key for o in setting.options] if setting is not None else [])
+    close = _closest(text, names)
+    return f"did you mean {close!r}? " if close else ""
+
+
 class CameraClient:
     """The camera side of a Link (see the module docstring)."""
 
@@ -412,17 +451,23 @@ class CameraClient:
             answered=frozenset(self.reported_types)))
 
     @staticmethod
-    def parse_value(p: DefParam, text: str) -> float | int:
-        """An option label (any case) or a number, checked against the definition."""
+    def parse_value(p: DefParam, text: str, setting: Any = None) -> float | int:
+        """An option label (any case), the catalogue's option name a plan writes (with `setting`, the camera's
+        catalogue entry: "manual", "radiometric_jpeg+visible_jpeg"), or a number, checked against the
+        definition."""
         option = next((o for o in p.options if o.label.lower() == text.strip().lower()), None)
         if option is not None:
             return option.value
+        named = setting.option_named(text) if setting is not None else None
+        if named is not None and any(o.value == named.value for o in p.options):
+            return named.value
         try:
             number = float(text)
         except ValueError:
             choices = ", ".join(f"{o.label} ({o.value})" for o in p.options)
             raise LinkError(f"{text!r} is neither an option nor a number", where=p.name,
-                            hint=f"choose one of {choices}" if choices else "give a number") from None
+                            hint=_close_option(text, p, setting)
+                            + (f"choose one of {choices}" if choices else "give a number")) from None
         value: float | int = int(number) if p.integer and number.is_integer() else number
         problem = p.check(value)
         if problem is not None:
@@ -430,15 +475,14 @@ class CameraClient:
                             hint="see `wiris camera settings` for the allowed values")
         return value
 
-    def set_setting(self, definition: Definition, name: str, text: str) -> float | int:
-        """PARAM_EXT_SET with the definition's type; waits for PARAM_EXT_ACK (retries); the value now held."""
-        p = definition.param(name)
-        if p is None:
-            close = difflib.get_close_matches(name, [q.name for q in definition.params], n=1)
-            raise LinkError(f"the camera's definition has no setting {name!r}",
-                            hint=f"did you mean {close[0]}?" if close else "see `wiris camera settings`")
-        value = self.parse_value(p, text)
-        return self.set_param_ext(name, value, p.type)
+    def set_setting(self, definition: Definition, name: str, text: str, camera: Any = None) -> float | int:
+        """PARAM_EXT_SET of setting `name` (see `resolve_param`) with the definition's type; waits for
+        PARAM_EXT_ACK (retries); the value now held. `camera`: the catalogue's entry of this camera, whose
+        plan names are taken too."""
+        p = resolve_param(definition, name, camera)
+        setting = camera.setting_by_param(p.name) if camera is not None else None
+        value = self.parse_value(p, text, setting)
+        return self.set_param_ext(p.name, value, p.type)
 
     def set_param_ext(self, name: str, value: float | int, cdf_type: str, *, where: str | None = None,
                       target: Target | None = None) -> float | int:

@@ -41,6 +41,7 @@ from missions.geometry.triggers import PhotoPoint
 from missions.measure.coverage import (coverage_fraction, footprint_polygons, min_front_overlap, min_side_overlap,
                                        outside_length_m)
 from missions.measure.flight import Photo, Simulation, self_triggering, simulate
+from missions.measure.numbers import StepNumbers, step_numbers
 from missions.measure.seams import measure_sorties, table_lines
 from missions.plan.schema import MAX_AGL_M
 
@@ -107,13 +108,14 @@ class GsdRange:
 
 @dataclass(frozen=True)
 class RequestedOverlap:
-    """The overlaps a step's plan asks for (fractions)."""
+    """The overlaps a step's plan asks for (fractions; `*_pct` in the JSON as the plan writes them)."""
 
     front: float
     side: float
 
     def to_json(self) -> dict[str, float]:
-        return {"front": self.front, "side": self.side}
+        return {"front": self.front, "side": self.side,
+                "front_pct": round(100 * self.front, 4), "side_pct": round(100 * self.side, 4)}
 
 
 @dataclass(frozen=True)
@@ -189,6 +191,7 @@ class MissionReport:
     errors: tuple[Finding, ...]
     speed_mps: float = 0.0                    # the survey speed flown (the plan's, or the one `auto` chose)
     sun: tuple[Any, ...] = ()                 # missions.thermal.assess.StepSun per timed step (a plan with `when`)
+    steps: tuple[StepNumbers, ...] = ()      # per survey or corridor step, the numbers a pilot reads
     sorties: Any = None                       # missions.measure.seams.SortieTable (a mission flown in sorties)
     endurance: Any = None                     # missions.sorties.Endurance the compile judged the flight by
 
@@ -217,6 +220,7 @@ class MissionReport:
             "errors": [e.to_json() for e in self.errors],
             "speed_mps": self.speed_mps,
             "sun": [s.to_json() for s in self.sun],
+            "steps": [s.to_json() for s in self.steps],
             "endurance": None if self.endurance is None else self.endurance.to_json(),
             "sorties": [] if self.sorties is None else list(self.sorties.rows),
             "sorties_union": None if self.sorties is None else
@@ -522,6 +526,7 @@ def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | N
         errors=tuple(_errors(compiled)),
         speed_mps=compiled.speed_mps,
         sun=tuple(compiled.sun),
+        steps=step_numbers(compiled, sim),
         sorties=measure_sorties(compiled),
         endurance=compiled.endurance,
     )
@@ -720,6 +725,10 @@ def summary_lines(rep: MissionReport) -> list[str]:
             f, s = _overlap_text(rep.overlap[name])
             extra = f", coverage {100 * rep.coverage[name]:.2f} %, min overlap front {f} side {s}"
         lines.append(f"  {name}: {n} photos{extra}")
+    lines.extend(f"  {s.summary()}" for s in rep.steps)
+    # the steps mostly share their assumptions: each is said once
+    assumed = dict.fromkeys(a for s in rep.steps for a in s.facts.assumptions)
+    lines.extend(f"  assumes {a}" for a in assumed)
     if rep.sorties is not None:
         lines += ["  " + t for t in table_lines(rep.sorties)]
     return lines + _findings_lines(rep)
@@ -752,7 +761,11 @@ def format_report(rep: MissionReport) -> str:
     for a in rep.areas:
         outside_m = a.path.outside_m if a.path is not None else 0
         rows.append((f"step {a.step} {a.kind}", f"{a.area_m2:.0f} m² at {a.altitude_m:g} m, "
-                                                f"{outside_m:.0f} m flown outside the area"))
+                                                f"{outside_m:.0f} m flown outside the area, overlap asked "
+                                                f"front {100 * a.requested.front:g} %, side "
+                                                f"{100 * a.requested.side:g} %"))
+        numbers = next((s for s in rep.steps if s.facts.step == a.step), None)
+        rows += [(f"  {k}", v) for k, v in (numbers.rows() if numbers else [])]
     rows.append(("speed", f"{rep.speed_mps:g} m/s"))
     rows += [(f"sun step {s.step}", _sun_text(s)) for s in rep.sun]
     width = max(len(k) for k, _ in rows)

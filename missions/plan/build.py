@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Collection, Mapping
 
 from cdf.catalogue import catalogue
 from missions.plan.meaning import Resolved
@@ -21,13 +21,18 @@ from missions.thermal.pv import pv_profile
 from missions.thermal.when import parse_when
 
 
-def build_plan(data: dict, resolved: Resolved, path: str, base_dir: Path, locations: Mapping) -> Plan:
+def build_plan(data: dict, resolved: Resolved, path: str, base_dir: Path, locations: Mapping, *,
+               skip_payloads: Collection[str] = (), skip_steps: Collection[int] = ()) -> Plan:
+    """The plan; without the payloads and steps named to skip (ones with problems, for the later stages to
+    check the rest). A kept step keeps its index in the mission list, so its locations stay right."""
     cat = catalogue()
-    cameras = {name: cat.get(p["camera"]) for name, p in data["payloads"].items()}
-    payloads = tuple(_payload(name, p, cameras[name], resolved.component_ids[name])
-                     for name, p in data["payloads"].items())
+    kept = {name: p for name, p in data["payloads"].items() if name not in skip_payloads}
+    cameras = {name: cat.get(p["camera"]) for name, p in kept.items()}
+    payloads = tuple(_payload(name, p, cameras[name], resolved.component_ids[name]) for name, p in kept.items())
     steps: list[Step] = []
     for i, step in enumerate(data["mission"]):
+        if i in skip_steps:
+            continue
         kind, body = next(iter(step.items()))
         build = _STEP_BUILDERS.get(kind)
         if build is not None:
@@ -36,9 +41,11 @@ def build_plan(data: dict, resolved: Resolved, path: str, base_dir: Path, locati
     return Plan(
         version=int(data["version"]), name=data.get("name") or _default_name(path),
         vehicle=Vehicle(v["firmware"], v["frame"], None if v["speed_mps"] == "auto" else float(v["speed_mps"]),
-                        v.get("max_mission_items"), _float_or_none(v, "max_speed_mps"),
-                        _float_or_none(v, "endurance_min"), float(v.get("reserve_pct", 20.0)),
-                        _float_or_none(v, "turn_radius_m"), float(v.get("max_bank_deg", 30.0))),
+                        v.get("max_mission_items"), max_speed_mps=_float_or_none(v, "max_speed_mps"),
+                        max_altitude_m=_float_or_none(v, "max_altitude_m"),
+                        endurance_min=_float_or_none(v, "endurance_min"), reserve_pct=float(v.get("reserve_pct", 20.0)),
+                        turn_radius_m=_float_or_none(v, "turn_radius_m"),
+                        max_bank_deg=float(v.get("max_bank_deg", 30.0))),
         home=Home(float(h["lat"]), float(h["lon"]), float(h["alt_amsl_m"])),
         payloads=payloads, mission=tuple(steps), path=path, base_dir=str(base_dir), notes=tuple(resolved.notes),
         timing=_timing(data), locations=locations)
@@ -60,12 +67,15 @@ def _default_name(path: str) -> str:
     return stem[:64]
 
 
-def _as_written(settings: Mapping[str, Any]) -> tuple[tuple[str, Any], ...]:
-    return tuple((k, tuple(x) if isinstance(x, list) else x) for k, x in settings.items())
+def _as_written(camera: Any, settings: Mapping[str, Any]) -> tuple[tuple[str, Any], ...]:
+    """Each setting's value as written, by its plan name (the plan may write the PARAM_EXT name)."""
+    return tuple((camera.setting_named(k).key, tuple(x) if isinstance(x, list) else x) for k, x in settings.items())
 
 
 def _wire_values(camera: Any, settings: Mapping[str, Any]) -> tuple[tuple[str, float | int], ...]:
-    return tuple((k, camera.setting(k).check(val)) for k, val in settings.items())
+    """Each setting by its plan name (a plan may write the PARAM_EXT name, any case) with its wire value."""
+    named = ((camera.setting_named(k), val) for k, val in settings.items())
+    return tuple((s.key, s.check(val)) for s, val in named)
 
 
 def _payload(name: str, p: dict, camera: Any, component_id: int) -> Payload:
@@ -74,7 +84,7 @@ def _payload(name: str, p: dict, camera: Any, component_id: int) -> Payload:
         name=name, camera=camera.id, imager=p.get("imager"), lens_mm=_float_or_none(p, "lens_mm"),
         component_id=component_id, component_given="component_id" in p,
         landscape=p.get("orientation", "landscape") == "landscape",
-        settings=_as_written(settings), values=_wire_values(camera, settings))
+        settings=_as_written(camera, settings), values=_wire_values(camera, settings))
 
 
 def _float_or_none(body: Mapping[str, Any], key: str) -> float | None:
@@ -123,7 +133,8 @@ def _waypoint(i: int, b: dict, cameras: Mapping[str, Any]) -> WaypointStep:
 
 
 def _camera(i: int, b: dict, cameras: Mapping[str, Any]) -> CameraStep:
-    return CameraStep(i, b["payload"], _as_written(b["settings"]), _wire_values(cameras[b["payload"]], b["settings"]))
+    camera = cameras[b["payload"]]
+    return CameraStep(i, b["payload"], _as_written(camera, b["settings"]), _wire_values(camera, b["settings"]))
 
 
 def _rtl(i: int, b: dict, cameras: Mapping[str, Any]) -> RtlStep:

@@ -14,11 +14,17 @@ Then `missions.plan.build` turns the checked values into a `Plan`.
 
 All problems are raised together as one PlanError; `err.problems` holds them as `Problem` values.
 Paths in a plan are relative to the plan file.
+
+The compiler checks a plan in one pass: `parse_plan_partly` returns the problems and, when they lie only in
+some payloads and steps, the plan without those (and without the steps that use a payload with a problem), so
+that the later stages still check the rest and every problem is reported at once.
 """
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
+from typing import NamedTuple
 from types import MappingProxyType
 
 from cdf.userfile import STDIN_LABEL, UserFile, names_stdin, read_user_file
@@ -32,26 +38,34 @@ from missions.plan.types import (CameraStep, CorridorStep, Home, LandStep, Paylo
                                  SurveyStep, TakeoffStep, Vehicle, WaypointStep)
 from missions.plan.yaml_reader import parse_yaml
 
-__all__ = ["MAX_PLAN_BYTES", "PLAN_FILE", "input_files", "load_plan", "parse_plan", "raise_problems",
+__all__ = ["MAX_PLAN_BYTES", "PLAN_FILE", "PartPlan", "input_files", "load_plan", "load_plan_partly", "parse_plan",
+           "parse_plan_partly", "raise_problems",
            "CameraStep", "CorridorStep", "Home", "LandStep", "Payload", "Plan", "RtlStep", "Step", "SurveyStep",
            "TakeoffStep", "Vehicle", "WaypointStep"]
 
 MAX_PLAN_BYTES = 1_000_000      # a hand-written plan is a few kB; inline areas of thousands of points still fit
 
 
+_LOCATED = re.compile(r"^(?P<file>.*?):(?P<line>\d+):(?P<col>\d+)(?:\s|$)")
+
+
+def _by_position(file: str):
+    """The sort key of problems: the plan file's by line and column, then other files' (an area file's) by
+    theirs, then the unlocated ones, each group in the order found."""
+    def key(p: Problem) -> tuple:
+        m = _LOCATED.match(p.where)
+        if m is None:
+            return (2, "", 0, 0)
+        return (0 if m["file"] == file else 1, m["file"], int(m["line"]), int(m["col"]))
+    return key
+
+
 def raise_problems(problems: list[Problem], file: str) -> None:
-    """One PlanError for all problems (sorted by position); `err.problems` keeps them."""
+    """One PlanError for all problems (sorted by position in `file`, then in other files); `err.problems`
+    keeps them."""
     if not problems:
         return
-
-    def key(p: Problem) -> tuple:
-        parts = p.where.rsplit(":", 2)
-        try:
-            return (0, int(parts[1]), int(parts[2]))
-        except (IndexError, ValueError):
-            return (1, 0, 0)
-
-    problems = sorted(problems, key=key)
+    problems = sorted(dict.fromkeys(problems), key=_by_position(file))
     if len(problems) == 1:
         p = problems[0]
         raise PlanError(p.message, where=p.where, hint=p.hint, problems=(p,))
@@ -61,28 +75,78 @@ def raise_problems(problems: list[Problem], file: str) -> None:
     raise PlanError("\n".join(lines), where=None, hint=None, problems=tuple(problems))
 
 
+class PartPlan(NamedTuple):
+    """A plan as far as it could be read: every problem found, and the plan without the parts they are in
+    (None: a problem outside payloads and steps, or in the YAML itself, leaves nothing to check further)."""
+
+    plan: Plan | None
+    problems: list[Problem]
+    file: str                       # how locations name the plan file (raise_problems sorts by it)
+
+
 def parse_plan(text: str, path: str = "<plan>", base_dir: str | Path | None = None) -> Plan:
     """Parse plan text (see module doc). `path` names it in locations; areas resolve against `base_dir`."""
+    plan, problems, _ = parse_plan_partly(text, path, base_dir)
+    raise_problems(problems, path)
+    assert plan is not None        # without a problem the whole plan is built (or the builder raised)
+    return plan
+
+
+def _affected(problems: list[Problem], data: dict) -> tuple[set[str], set[int]] | None:
+    """(payload names, step indices) the problems lie in, with the steps using such a payload; None when a
+    problem lies elsewhere (version, vehicle, home, the mission list itself, or no known place)."""
+    payloads: set[str] = set()
+    steps: set[int] = set()
+    for p in problems:
+        if len(p.path) >= 2 and p.path[0] == "payloads" and isinstance(p.path[1], str):
+            payloads.add(p.path[1])
+        elif len(p.path) >= 2 and p.path[0] == "mission" and isinstance(p.path[1], int):
+            steps.add(p.path[1])
+        else:
+            return None
+    for i, step in enumerate(data["mission"]):
+        if i not in steps and payloads & _payloads_used(step):
+            steps.add(i)
+    return payloads, steps
+
+
+def _payloads_used(step: dict) -> set[str]:
+    """The payload names a (schema-valid) mission step refers to."""
+    body = next(iter(step.values()), None) if isinstance(step, dict) else None
+    if not isinstance(body, dict):
+        return set()
+    listed = body.get("payloads") if isinstance(body.get("payloads"), list) else []
+    return {u for u in [*listed, body.get("capture"), body.get("payload")] if isinstance(u, str)}
+
+
+def parse_plan_partly(text: str, path: str = "<plan>", base_dir: str | Path | None = None) -> PartPlan:
+    """Parse plan text into what can be checked further and every problem found (see the module doc)."""
     problems: list[Problem] = []
     base = Path(base_dir) if base_dir is not None else Path(path).resolve().parent
     if len(text.encode("utf-8", "surrogatepass")) > MAX_PLAN_BYTES:
         raise PlanError(f"the plan is larger than {MAX_PLAN_BYTES} bytes", where=path,
                         hint="put large areas in KML/GeoJSON files next to the plan")
     data, doc = parse_yaml(text, path, problems)
-    if data is None:
-        raise_problems(problems, path)
+    if data is None and problems:
+        return PartPlan(None, problems, path)
     if not isinstance(data, dict):
         doc.report((), f"a plan is a mapping of keys, got {describe(data)}",
                    "start from `wiris mission schema` or examples/")
-        raise_problems(problems, path)
+        return PartPlan(None, problems, path)
     schema_problems(data, doc, problems)
     resolved = check_meaning(data, doc, base)
-    raise_problems(problems, path)
+    affected = _affected(problems, data) if problems else (set(), set())
+    if affected is None:
+        return PartPlan(None, problems, path)
     locations = {p: f"{path}:{l + 1}:{c + 1}" for p, (l, c) in doc.values.items()}
     locations[()] = path
     try:
-        return build_plan(data, resolved, path, base, MappingProxyType(locations))
-    except (KeyError, TypeError, ValueError, StopIteration) as e:   # a gap between schema and builder: a bug
+        return PartPlan(build_plan(data, resolved, path, base, MappingProxyType(locations),
+                                   skip_payloads=affected[0], skip_steps=affected[1]), problems, path)
+    except (KeyError, TypeError, ValueError, StopIteration) as e:
+        if problems:        # a part the problems left half-checked: they are what to fix
+            return PartPlan(None, problems, path)
+        # a gap between schema and builder: a bug
         raise PlanError(f"internal: the plan passed validation but could not be built ({type(e).__name__}: {e})",
                         where=path, hint="please report this with the plan") from None
 
@@ -106,6 +170,14 @@ PLAN_FILE = UserFile("plan", MAX_PLAN_BYTES, PlanError, stdin_ok=True,
 def load_plan(path: str | Path) -> Plan:
     """Read and parse a plan file (size-capped, UTF-8); "-" or /dev/stdin reads standard input, whose
     relative area paths are then relative to the current directory."""
+    part = load_plan_partly(path)
+    raise_problems(part.problems, part.file)
+    return part.plan
+
+
+def load_plan_partly(path: str | Path) -> PartPlan:
+    """`load_plan`, returning the problems with what could be built (`parse_plan_partly`) instead of raising
+    them; a file that cannot be read or decoded still raises."""
     raw = read_user_file(path, PLAN_FILE)
     stdin = names_stdin(path, PLAN_FILE)
     name = STDIN_LABEL if stdin else str(path)
@@ -114,4 +186,4 @@ def load_plan(path: str | Path) -> Plan:
     except UnicodeDecodeError as e:
         raise PlanError(f"the plan is not UTF-8 text (byte {e.start})", where=name,
                         hint="save the plan as UTF-8 (the default of every current editor)") from None
-    return parse_plan(text, name, Path.cwd() if stdin else Path(path).resolve().parent)
+    return parse_plan_partly(text, name, Path.cwd() if stdin else Path(path).resolve().parent)

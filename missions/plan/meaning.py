@@ -13,13 +13,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import difflib
+import math
 from pathlib import Path
 from typing import Any, Callable, Mapping, NamedTuple
 
 from cdf.catalogue import catalogue
 from cdf.errors import ECHO_CHARS, CdfError, clip, shown
 from cdf.userfile import not_a_file
-from missions.plan.schema import COMPONENT_IDS
+from missions.plan.schema import COMPONENT_IDS, MAX_AGL_M, MAX_ALTITUDE_M, MIN_ALTITUDE_M
 from missions.plan.settings import check_settings
 from missions.plan.thermal_keys import check_thermal_keys
 from missions.plan.yaml_reader import PositionedYaml
@@ -50,8 +51,9 @@ def check_meaning(data: dict, doc: PositionedYaml, base_dir: Path) -> Resolved:
         states[name] = {}
         check_settings(cam, payloads[name].get("settings"), ("payloads", name, "settings"), doc, states[name])
     resolved = _component_ids(payloads, cameras, doc)
-    frame = data["vehicle"].get("frame") if isinstance(data.get("vehicle"), dict) else None
-    _check_steps(data, _Written(doc, payloads, cameras, states, frame, base_dir))
+    vehicle = data["vehicle"] if isinstance(data.get("vehicle"), dict) else {}
+    _check_steps(data, _Written(doc, payloads, cameras, states, vehicle.get("frame"), base_dir,
+                                altitude_ceiling(vehicle)))
     check_thermal_keys(data, doc)
     return resolved
 
@@ -88,7 +90,9 @@ def _check_camera_fit(name: str, payload: dict, cam: Any, doc: PositionedYaml) -
         doc.report(("payloads", name, "imager"), f"{cam.id} has no imager {shown(imager)}",
                    "imagers: " + ", ".join(i.id for i in cam.imagers))
     cid = payload.get("component_id")
-    if isinstance(cid, int) and not isinstance(cid, bool) and cid not in cam.component_ids:
+    # an id outside 100..105 is the schema's finding (once, with its hint): only a camera id this camera
+    # cannot take is reported here
+    if isinstance(cid, int) and not isinstance(cid, bool) and cid in COMPONENT_IDS and cid not in cam.component_ids:
         doc.report(("payloads", name, "component_id"), f"{cam.model} cannot use component id {cid}",
                    f"allowed: {', '.join(map(str, cam.component_ids))}"
                    + (" (the RedEdge answers only on 100)" if _is_rededge(cam) else ""))
@@ -177,6 +181,50 @@ def _free_component(name: str, cam: Any, taken: Mapping[int, str], has_rededge: 
 
 # --------------------------------------------------------------------------------------------------- steps
 
+class Ceiling(NamedTuple):
+    """The highest altitude above home a plan may fly: the common rule's, or the permit the plan states."""
+
+    limit_m: float
+    waiver: bool             # True: vehicle.max_altitude_m states a permit
+
+
+def altitude_ceiling(vehicle: Mapping[str, Any]) -> Ceiling:
+    """The ceiling of a plan's `vehicle` mapping as written (a wrong type is the schema's finding)."""
+    given = vehicle.get("max_altitude_m")
+    if given is None:
+        return Ceiling(MAX_AGL_M, False)
+    # a ceiling the schema refuses is its finding; judged by none, the altitudes get no second one
+    return Ceiling(float(given), True) if _in_altitude_range(given) else Ceiling(MAX_ALTITUDE_M, True)
+
+
+def _in_altitude_range(v: Any) -> bool:
+    """A number the schema takes as an altitude (outside that range it reports the value itself)."""
+    return _num(v) and MIN_ALTITUDE_M <= v <= MAX_ALTITUDE_M
+
+
+def ceiling_problem(altitude_m: float, what: str, ceiling: Ceiling,
+                    lower: str | None = None) -> tuple[str, str] | None:
+    """(message, hint) when `altitude_m` is above the ceiling; None when it may be flown. `lower` says how to
+    fly lower when the altitude follows from another value (a GSD); without it the altitude is as written."""
+    if altitude_m <= ceiling.limit_m:
+        return None
+    alt = f"{altitude_m:.1f}".removesuffix(".0")
+    fix = lower or f"altitudes are metres ({alt} ft would be {altitude_m * 0.3048:.0f} m)"
+    if ceiling.waiver:
+        return (f"{what}: {alt} m above home is above the plan's vehicle.max_altitude_m of {ceiling.limit_m:g} m",
+                f"{fix}; or raise vehicle.max_altitude_m to what your permit allows")
+    return (f"{what}: {alt} m above home is more than the {MAX_AGL_M:g} m most rules allow without a "
+            f"permit (EU open category, FAA part 107; the ground is taken as flat at home's height)",
+            f"{fix}; with a permit for more, state its ceiling: vehicle: {{max_altitude_m: {math.ceil(altitude_m)}}}")
+
+
+def _check_ceiling(plan: _Written, at: tuple, value: Any) -> None:
+    if _in_altitude_range(value):
+        found = ceiling_problem(float(value), at[-1], plan.ceiling)
+        if found is not None:
+            plan.doc.report(at, *found)
+
+
 @dataclass(frozen=True)
 class _Written:
     """What the step checks look at: the plan as written and what the payload checks found."""
@@ -187,6 +235,7 @@ class _Written:
     states: Mapping[str, dict]       # each payload's settings so far; camera steps update them in order
     frame: str | None                # vehicle.frame as written
     base_dir: Path                   # area paths are relative to it
+    ceiling: Ceiling                 # the highest altitude above home the plan may fly
 
 
 def _check_steps(data: dict, plan: _Written) -> None:
@@ -216,6 +265,7 @@ def _check_flown_area(plan: _Written, base: tuple, body: dict) -> None:
     for j, ref in enumerate(refs):
         _check_payload_ref(plan, ref, base + ("payloads", j))
     _check_height(plan, base, body)
+    _check_ceiling(plan, base + ("altitude_m",), body.get("altitude_m"))
     _check_overlap(plan, base, body)
     if body.get("trigger") == "hover" and plan.frame in ("plane", "vtol"):
         # a VTOL flies the mission in fixed-wing flight after NAV_VTOL_TAKEOFF (the compiler emits no
@@ -239,11 +289,20 @@ def _num(v: Any) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
+def _percent_of(fraction: float) -> str:
+    """0.8 -> "80": a fraction as the percent it meant, without float noise (0.7 * 100 = 70.00000000000001)."""
+    return f"{round(fraction * 100, 6):g}"
+
+
 def _check_overlap(plan: _Written, base: tuple, body: dict) -> None:
     ov = body.get("overlap") if isinstance(body.get("overlap"), dict) else {}
     for side in ("front", "side"):
         v = ov.get(side)
-        if _num(v) and MAX_OVERLAP_PCT < v < 100:
+        if _num(v) and 0 < v < 1:
+            # 0.8 is a fraction written where percent belongs: 0.8 % overlap leaves gaps between every photo
+            plan.doc.report(base + ("overlap", side), f"{side} overlap {v:g} is below 1: overlaps are percent, "
+                            f"so this asks for {v:g} %", f"write percent: {_percent_of(v)}")
+        elif _num(v) and MAX_OVERLAP_PCT < v < 100:
             plan.doc.report(base + ("overlap", side), f"{side} overlap {v} % is above the {MAX_OVERLAP_PCT:g} % "
                             "this planner accepts", "photos would be closer than GNSS position noise; "
                             "thermal mapping usually flies 90/80")
@@ -278,6 +337,11 @@ def _is_file(p: Path) -> tuple[bool, str]:
 
 def _check_waypoint(plan: _Written, base: tuple, body: dict) -> None:
     _check_payload_ref(plan, body.get("capture"), base + ("capture",))
+    _check_ceiling(plan, base + ("alt_m",), body.get("alt_m"))
+
+
+def _check_takeoff(plan: _Written, base: tuple, body: dict) -> None:
+    _check_ceiling(plan, base + ("alt_m",), body.get("alt_m"))
 
 
 def _check_land(plan: _Written, base: tuple, body: dict) -> None:
@@ -293,8 +357,8 @@ def _check_camera(plan: _Written, base: tuple, body: dict) -> None:
         check_settings(plan.cameras[ref], body.get("settings"), base + ("settings",), plan.doc, plan.states[ref])
 
 
-# The steps with meaning to check (takeoff and rtl have none beyond the schema), by their name in the plan.
+# The steps with meaning to check (rtl has none beyond the schema), by their name in the plan.
 _STEP_CHECKS: dict[str, Callable[[_Written, tuple, dict], None]] = {
-    "survey": _check_survey, "corridor": _check_flown_area, "waypoint": _check_waypoint, "land": _check_land,
+    "takeoff": _check_takeoff, "survey": _check_survey, "corridor": _check_flown_area, "waypoint": _check_waypoint, "land": _check_land,
     "camera": _check_camera,
 }

@@ -19,12 +19,13 @@ FORMAT_VERSION = 1
 SCHEMA_ID = "https://wiris-tools.invalid/schema/capture-plan-1.json"
 
 # A copter below 2 m is in ground effect and its barometer noise (~1 m) is half the altitude; above 500 m
-# no photogrammetry of a ground target makes sense and every civil drone rulebook is far exceeded (the
-# compiler warns from 120 m, the common regulatory ceiling, see missions.compile).
+# no photogrammetry of a ground target makes sense and every civil drone rulebook is far exceeded (above
+# MAX_AGL_M, the common regulatory ceiling, a plan needs vehicle.max_altitude_m: missions.plan.meaning).
 MIN_ALTITUDE_M = 2.0
 MAX_ALTITUDE_M = 500.0
 # Most of the world's drone rules (EU 2019/947 open category, FAA part 107) cap flights at 120 m / 400 ft above
-# ground without a permit: above it the compiler and the report warn, they do not refuse.
+# ground without a permit: above it a plan is refused unless it states a permit's ceiling
+# (vehicle.max_altitude_m); 400 there is most often feet written as metres.
 MAX_AGL_M = 120.0
 # Plausible survey speeds per airframe, m/s, as (lowest, highest). A copter slower than 0.5 m/s hardly moves
 # (1e-9 m/s would be a flight of days); ArduCopter's WPNAV_SPEED and PX4's MPC_XY_VEL_MAX stop at 20 m/s
@@ -88,7 +89,9 @@ TRIGGER = {"enum": ["distance", "interval", "hover"], "default": "distance",
 TURNAROUND = _num(0, 500, desc="straight run-in/out beyond each line end, metres (default 10 copter, 30 plane)")
 
 SETTINGS = {"type": "object", "minProperties": 1,
-            "description": "camera settings by the catalogue's names (`wiris cdf models`), checked against it",
+            "description": "camera settings, checked against the camera catalogue: each by its plan name or its "
+                           "PARAM_EXT name (`wiris cdf models --settings MODEL` lists both), an option by its "
+                           "name or label",
             "additionalProperties": {"type": ["string", "number", "array"], "items": {"type": "string"}}}
 
 # Thermal-aware planning (missions.thermal): when the flight happens, the wind then, the blur budget, the
@@ -166,7 +169,9 @@ PAYLOAD = _obj({
     "imager": {"type": "string", "description": "which imager sets the footprint (default: the first with known optics)"},
     "lens_mm": _num(exclusive_min=0, maximum=1000, desc="focal length of the fitted lens, mm"),
     "component_id": {"type": "integer", "enum": list(COMPONENT_IDS),
-                     "description": "MAVLink component id 100..105 (RedEdge is fixed at 100)"},
+                     "description": "MAVLink component id 100..105 (RedEdge is fixed at 100)",
+                     "x-hint": "a camera's component id is 100 to 105 (MAV_COMP_ID_CAMERA..CAMERA6), the one set "
+                               "in the camera's menu; a RedEdge answers only on 100"},
     "orientation": {"enum": ["landscape", "portrait"], "default": "landscape",
                     "description": "landscape: the long image side across the flight line"},
     "settings": SETTINGS,
@@ -210,6 +215,11 @@ def _build() -> dict:
                 "max_speed_mps": _num(desc="the fastest the vehicle may fly, m/s (caps speed_mps: auto)"),
                 "max_mission_items": _num(10, 65535, integer=True,
                                           desc="item limit of the vehicle (default per firmware)"),
+                "max_altitude_m": _num(MIN_ALTITUDE_M, MAX_ALTITUDE_M,
+                                       desc=f"the highest altitude above home your permit allows, metres; "
+                                            f"without it no step may fly above {MAX_AGL_M:g} m",
+                                       hint=f"a permit's ceiling above home, {MIN_ALTITUDE_M:g} to "
+                                            f"{MAX_ALTITUDE_M:g} m"),
                 "endurance_min": _num(1, 1440, desc="minutes in the air on one battery at survey speed: a longer "
                                       "flight is split into sorties (missions.sorties)"),
                 "reserve_pct": _num(0, 90, desc="share of the endurance kept in reserve, % (default 20)"),

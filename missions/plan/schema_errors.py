@@ -34,6 +34,7 @@ def schema_problems(data: Any, doc: PositionedYaml, problems: list[Problem]) -> 
         for problem in _translate(err, doc):
             if problem.hint is None:
                 problem = replace(problem, hint=_fallback_hint(err))
+            problem = replace(problem, path=tuple(err.absolute_path))
             k = (problem.where, problem.message)
             if k not in seen:
                 seen.add(k)
@@ -217,7 +218,8 @@ def _wrong_type(e: _SchemaError) -> list[Problem]:
 
 def _not_an_option(e: _SchemaError) -> list[Problem]:
     options = [str(o) for o in e.err.validator_value]
-    close = difflib.get_close_matches(str(e.err.instance), options, n=1)
+    # a near miss of a name is a typo; a number near another number is not ("did you mean '105'?" for 106)
+    close = difflib.get_close_matches(e.err.instance, options, n=1) if isinstance(e.err.instance, str) else []
     return e.said(f"{e.name}: {shown(e.err.instance)} is not one of {', '.join(options)}",
                   f"did you mean {close[0]!r}?" if close else e.hint)
 

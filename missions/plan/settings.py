@@ -10,7 +10,6 @@ against what the camera will hold at that point of the mission, not against the 
 
 from __future__ import annotations
 
-import difflib
 from typing import Any
 
 from cdf.errors import CdfError, shown
@@ -33,15 +32,17 @@ def _checked_values(camera: Any, settings: dict, path: tuple, doc: PositionedYam
     """The wire value of each setting the camera has and accepts the value of, in the plan's order."""
     values: dict[str, float | int] = {}
     for key, value in settings.items():
-        s = camera.setting(key)
+        # the plan name or the PARAM_EXT name, in any case: the names `wiris camera set` takes too
+        s = camera.setting_named(key)
         if s is None:
-            keys = [x.key for x in camera.settings]
-            close = difflib.get_close_matches(key, keys, n=1)
-            doc.report(path + (key,), f"{camera.id} has no setting {shown(key)}",
-                       (f"did you mean {close[0]!r}? " if close else "") + "settings: " + ", ".join(keys), key=True)
+            doc.report(path + (key,), f"{camera.id} has no setting {shown(key)}", camera.setting_hint(key), key=True)
+            continue
+        if s.key in values:
+            doc.report(path + (key,), f"{key} is {s.key} again (a setting given twice)",
+                       f"give {s.key} once", key=True)
             continue
         try:
-            values[key] = s.check(value)
+            values[s.key] = s.check(value)
         except CdfError as e:
             doc.report(path + (key,), f"{camera.id}: {e.message}", e.hint)
     return values

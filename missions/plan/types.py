@@ -18,6 +18,7 @@ class Vehicle:
     speed_mps: float | None         # None: `auto`, the fastest the cameras allow (missions.thermal.speed)
     max_mission_items: int | None = None
     max_speed_mps: float | None = None
+    max_altitude_m: float | None = None     # a permit's ceiling above home; None: MAX_AGL_M (120 m) holds
     endurance_min: float | None = None          # None: the frame's conservative default (missions.sorties)
     reserve_pct: float = 20.0
     turn_radius_m: float | None = None          # planes and VTOLs; None: from speed and max_bank_deg

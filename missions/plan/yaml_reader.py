@@ -65,7 +65,7 @@ class PositionedYaml:
 
     def report(self, path: tuple, message: str, hint: str | None, key: bool = False) -> None:
         """A problem with the value at `path` (with its key, key=True), located where it is written."""
-        self.problems.append(Problem(self.where(path, key), message, hint))
+        self.problems.append(Problem(self.where(path, key), message, hint, path=tuple(path)))
 
     def convert(self, node: Any, path: tuple, depth: int = 0) -> Any:
         self.nodes += 1
@@ -86,12 +86,12 @@ class PositionedYaml:
             if not isinstance(knode, yaml.ScalarNode) or knode.tag == "tag:yaml.org,2002:merge":
                 what = "merge keys (<<)" if isinstance(knode, yaml.ScalarNode) else "complex keys"
                 self.problems.append(Problem(self.loc(knode.start_mark), f"{what} are not supported",
-                                             "write the keys out"))
+                                             "write the keys out", path=path))
                 continue
             key = knode.value
             if key in out:
                 self.problems.append(Problem(self.loc(knode.start_mark), f"duplicate key {shown(key)}",
-                                             "YAML keeps only the last one; remove one of them"))
+                                             "YAML keeps only the last one; remove one of them", path=path))
                 continue
             self.keys[path + (key,)] = (knode.start_mark.line, knode.start_mark.column)
             out[key] = self.convert(vnode, path + (key,), depth + 1)
@@ -117,7 +117,7 @@ class PositionedYaml:
         if tag == "tag:yaml.org,2002:timestamp":
             return text
         self.problems.append(Problem(self.loc(node.start_mark), f"YAML tag {shown(tag)} is not allowed in a plan",
-                                     "remove the tag"))
+                                     "remove the tag", path=path))
         self.reported.add(path)
         return None
 
@@ -143,7 +143,7 @@ class PositionedYaml:
         if isinstance(value, float) and not math.isfinite(value):
             self.problems.append(Problem(self.loc(node.start_mark), f"{shown(text)} is not a finite number",
                                          "YAML reads .inf and .nan (and 1e999) as numbers: give a finite one, or "
-                                         "quote the text if that is what you meant"))
+                                         "quote the text if that is what you meant", path=path))
             self.reported.add(path)
             return None
         return value

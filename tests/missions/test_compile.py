@@ -282,15 +282,21 @@ def test_too_fast_for_the_camera_names_the_speed(tmp_path):
 
 
 def test_warnings_altitude_and_assumed_optics(tmp_path):
-    c = build(tmp_path, lambda d: survey(d).update(altitude_m=150))
+    """Above 120 m only under a permit the plan states (without one the loader refuses: test_plan_checks)."""
+    def change(d):
+        survey(d).update(altitude_m=150)
+        d["vehicle"]["max_altitude_m"] = 150
+    c = build(tmp_path, change)
     codes = {w.code for w in c.warnings}
     assert {"altitude_above_120m", "assumed_optics"} <= codes
 
 
 def test_a_high_waypoint_is_warned_about_once(tmp_path):
     """The compiler warns with the plan's location; the report does not repeat it from the re-flight."""
-    c = build(tmp_path, lambda d: d["mission"].insert(-1, {"waypoint": {"lat": 50.1105, "lon": 14.5035,
-                                                                        "alt_m": 130}}))
+    def change(d):
+        d["mission"].insert(-1, {"waypoint": {"lat": 50.1105, "lon": 14.5035, "alt_m": 130}})
+        d["vehicle"]["max_altitude_m"] = 130
+    c = build(tmp_path, change)
     rep = report(c)
     high = [w for w in rep.warnings if w.code == "altitude_above_120m"]
     assert len(high) == 1 and ".yaml:" in high[0].message

@@ -30,7 +30,9 @@ def test_compile_writes_and_lists_files(tmp_path):
     out = tmp_path / "out"
     r = run("mission", "compile", plan, "-o", out)
     assert r.exit_code == 0, r.output
-    listed = [line.strip() for line in r.output.splitlines() if line.startswith("  ") and "/" in line]
+    # the files follow "wrote:" (the summary above it has indented lines too: the steps' numbers)
+    lines = r.output.splitlines()
+    listed = [line.strip() for line in lines[lines.index("wrote:") + 1:] if line.startswith("  ")]
     assert sorted(Path(p).name for p in listed) == sorted(p.name for p in out.iterdir())
     assert (out / "small.plan").exists() and "photos" in r.output
 

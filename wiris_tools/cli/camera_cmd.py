@@ -154,16 +154,23 @@ def settings(url, component, system, signing_key, mavlink1, timeout, find_s, as_
 @_link_options
 @click.option("--json", "as_json", is_flag=True, help="Print the acknowledged value as JSON.")
 def set_(name, value, url, component, system, signing_key, mavlink1, timeout, find_s, as_json) -> None:
-    """Set NAME (a definition parameter) to VALUE (an option name or a number, also a negative one such as
-    -20): PARAM_EXT_SET, waits for the ACK."""
+    """Set NAME to VALUE: PARAM_EXT_SET, waits for the ACK. NAME is the definition's parameter (RANGE_MODE) or
+    the setting's name in a capture plan (range_mode), any case; VALUE an option as the definition labels it
+    or as a plan writes it (Manual, manual), or a number, also a negative one such as -20. `wiris cdf models
+    --settings MODEL` lists both names."""
+    from cdf.catalogue import catalogue
+    from wiris_tools.camera_client import resolve_param
+
     with _camera(url, component, system, signing_key, mavlink1, timeout, find_s) as cam:
         information = cam.information()
         loaded = cam.definition(information, progress=_progress(as_json))
         if not loaded.report.valid:
             _findings(loaded.report, as_json)
-        held = cam.set_setting(loaded.definition, name, value)
-    p = loaded.definition.param(name)
-    label = p.label_of(held) if p is not None else None
+        known = catalogue().find_model(information.vendor, information.model)
+        p = resolve_param(loaded.definition, name, known)
+        held = cam.set_setting(loaded.definition, p.name, value, known)
+    name = p.name
+    label = p.label_of(held)
     if as_json:
         _echo_json({"name": name, "value": held, "option": label, "acknowledged": True})
         return

@@ -12,14 +12,57 @@ def cdf() -> None:
     """Camera catalogue and camera definition files: list, build, validate, serve."""
 
 
+def _setting_values(s) -> str:
+    """What a setting takes, as a plan writes it: its options (one or more flags), or its range."""
+    if s.flags and s.enum is not None:
+        return "one or more of " + ", ".join(o.key for o in s.enum.options)
+    if s.options:
+        return ", ".join(o.key for o in s.options)
+    return s.range_text().removeprefix("allowed: ")
+
+
+def _setting_row(s) -> dict:
+    return {"plan_name": s.key, "param": s.param, "label": s.label, "type": s.type, "unit": s.unit,
+            "default": s.default, "values": _setting_values(s),
+            "options": [{"name": o.key, "label": o.name, "value": o.value}
+                        for o in (s.enum.options if s.flags and s.enum else s.options)],
+            "min": s.min, "max": s.max, "step": s.step, "in_definition": s.in_cdf}
+
+
+def _print_settings(model: str, as_json: bool) -> None:
+    """Every setting of one catalogue camera: the name a plan gives it, its PARAM_EXT name, values, unit."""
+    import json
+
+    from cdf.catalogue import catalogue
+
+    cam = catalogue().get(model)
+    rows = [_setting_row(s) for s in cam.settings]
+    if as_json:
+        click.echo(json.dumps({"id": cam.id, "settings": rows}, indent=2))
+        return
+    takers = "a plan and `wiris camera set` take" if cam.has_cdf else "a plan takes"
+    click.echo(f"{cam.id} ({cam.vendor} {cam.model}): {len(rows)} settings; {takers} either name, in any case, "
+               "and an option's name or label")
+    width = max(len(r["plan_name"]) for r in rows)
+    pwidth = max(len(r["param"]) for r in rows)
+    for r in rows:
+        unit = f" [{r['unit']}]" if r["unit"] else ""
+        click.echo(f"  {r['plan_name']:<{width}}  {r['param']:<{pwidth}}  {r['label']}{unit}: {r['values']}")
+
+
 @cdf.command()
+@click.option("--settings", "settings_of", metavar="MODEL", default=None,
+              help="List every setting of MODEL (a catalogue id): plan name, PARAM_EXT name, values, unit.")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of a table.")
-def models(as_json: bool) -> None:
+def models(settings_of: str | None, as_json: bool) -> None:
     """List the camera catalogue: id, vendor, model, imagers, lenses, component ids."""
     import json
 
     from cdf.catalogue import catalogue
 
+    if settings_of is not None:
+        _print_settings(settings_of, as_json)
+        return
     rows = []
     for cam in catalogue().cameras:
         rows.append({
