@@ -250,15 +250,25 @@ class _Timeline(NamedTuple):
     photo_lines: np.ndarray                 # their lines (`_line_numbers`), in that order
 
 
-def _timeline(sim: Simulation) -> _Timeline:
+def _line_payload(compiled: Compiled) -> str | None:
+    """The payload whose camera-on stretches number the lines: the first the autopilot triggers (a RedEdge's own
+    stretches run through turns and transits), else the first."""
+    from missions.measure.flight import self_triggering
+
+    names = [n for a in compiled.areas for n in a.payloads] or [p.name for p in compiled.payloads]
+    own = self_triggering(compiled)
+    return next((n for n in names if n not in own), names[0] if names else None)
+
+
+def _timeline(sim: Simulation, line_payload: str | None = None) -> _Timeline:
     t: dict[int, float] = {}
     for v, ts in zip(sim.vertices, sim.vertex_times_s):
         if v.item >= 0 and v.item not in t:
             t[v.item] = ts
     times = np.array([p.time_s for p in sim.photos], dtype=float)
     order = np.argsort(times, kind="stable")
-    line_of = _line_numbers(sim)
-    lines = np.array([line_of[p.span] for p in sim.photos], dtype=int)
+    line_of = _line_numbers(sim, line_payload)
+    lines = np.array([line_of.get(p.span, 0) for p in sim.photos], dtype=int)
     return _Timeline(sim, t, order, times[order], lines[order] if len(lines) else lines)
 
 
@@ -382,7 +392,7 @@ def split_sorties(compiled: Compiled, budget: Budget, where: str, whole: Simulat
         return ()
     m = _read_mission(compiled.items, where)
     states = _states(m)
-    tl = _timeline(whole)
+    tl = _timeline(whole, _line_payload(compiled))
     est = _Estimator((compiled.home[0], compiled.home[1]), compiled.speed_mps, compiled.frame == "copter",
                      max((it.z for it in compiled.items if _positional(it)), default=m.takeoff.z))
     cuts = _cuts(m, states, tl)
@@ -448,11 +458,11 @@ def _next_sortie(compiled: Compiled, m: _Mission, states: list[_State], tl: _Tim
 
 # ------------------------------------------------------------------------------------------ lines
 
-def _line_numbers(sim: Simulation) -> dict[int, int]:
-    """The whole mission's photo spans numbered 1.. in flying order: its lines."""
+def _line_numbers(sim: Simulation, payload: str | None) -> dict[int, int]:
+    """The whole mission's photo spans of `payload` (None: any) numbered 1.. in flying order: its lines."""
     out: dict[int, int] = {}
-    for p in sim.photos:
-        if p.span not in out:
+    for p in sorted(sim.photos, key=lambda p: p.time_s):
+        if (payload is None or payload in p.payloads) and p.span not in out:
             out[p.span] = len(out) + 1
     return out
 
@@ -478,6 +488,9 @@ def _lines_flown(tl: _Timeline, begin: _Cut, end: _Cut, m: _Mission) -> tuple[in
     if hi <= lo:
         return None, None
     lines = tl.photo_lines[lo:hi]
+    lines = lines[lines > 0]              # 0: a photo of another payload only
+    if not len(lines):
+        return None, None
     return int(lines.min()), int(lines.max())
 
 

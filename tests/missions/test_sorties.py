@@ -209,3 +209,12 @@ def test_the_maps_tell_the_sorties_apart(solar_25):
     assert "<name>Sorties</name>" in text and "#sortie0" in text and "#sortie2" in text
     svg = preview.render_svg(preview.build_picture(split, sim, rep))
     assert all(c in svg for c in preview.SORTIE_COLOURS[:3]) and "sortie 3 (green)" in svg
+
+
+def test_lines_are_numbered_by_the_triggered_camera_beside_a_rededge():
+    """A RedEdge shoots by itself through turns and transits: its own stretches do not number the lines."""
+    plan = _with_vehicle(load_plan(EXAMPLES / "field-multispectral.yaml"), endurance_min=25.0)
+    c = compile_plan(plan)
+    lines = [(s.first_line, s.last_line) for s in c.sorties]
+    assert len(lines) == 2 and lines[0][0] == 1 and lines[1][0] == lines[0][1] + 1
+    assert lines[1][1] == len(c.intent[0].legs)
