@@ -32,7 +32,8 @@ from missions.compiled import Compiled, FlightCache, PlanWarning
 from missions.emit.items import FRAME_MISSION, MissionItem, deg_to_e7, mavlink
 from missions.errors import PlanError
 from missions.geometry.geo import great_circle_m
-from missions.measure.flight import _projection, ACCEL_MPS2, CLIMB_MPS, DESCENT_MPS, LAND_FINAL_M, LAND_MPS, RTL_ALT_M, Simulation, simulate
+from missions.measure.flight import (ACCEL_MPS2, CLIMB_MPS, DESCENT_MPS, LAND_FINAL_M, LAND_MPS, RTL_ALT_M, Simulation,
+                                     _projection, simulate)
 
 C = mavlink
 # Minutes in the air on one battery when the plan gives no vehicle.endurance_min: a survey quadcopter carrying
@@ -272,13 +273,11 @@ def _timeline(sim: Simulation, line_payload: str | None = None) -> _Timeline:
     return _Timeline(sim, t, order, times[order], lines[order] if len(lines) else lines)
 
 
-def _transit_s(distance_m: float, alt_m: float, speed_mps: float, copter: bool) -> float:
-    """Climb (or descend) plus a straight flight at cruise speed, from rest to rest (the flight model's numbers)."""
+def _transit_s(distance_m: float, speed_mps: float, copter: bool) -> float:
+    """A straight flight at cruise speed from rest to rest (the flight model's acceleration)."""
     a = ACCEL_MPS2 if copter else 2.0 * ACCEL_MPS2
     v = max(speed_mps, 0.1)
-    d_acc = v * v / a
-    cruise = distance_m / v + v / a if distance_m >= d_acc else 2.0 * math.sqrt(distance_m / a)
-    return cruise
+    return distance_m / v + v / a if distance_m >= v * v / a else 2.0 * math.sqrt(distance_m / a)
 
 
 def _up_s(alt_m: float) -> float:
@@ -298,8 +297,7 @@ class _Estimator(NamedTuple):
     alt_m: float
 
     def trip_s(self, lat: float, lon: float) -> float:
-        return _transit_s(great_circle_m(self.home[0], self.home[1], lat, lon), self.alt_m, self.speed_mps,
-                          self.copter)
+        return _transit_s(great_circle_m(self.home[0], self.home[1], lat, lon), self.speed_mps, self.copter)
 
 
 # ------------------------------------------------------------------------------------------ cutting
@@ -384,7 +382,8 @@ def _fits(built: _Built, compiled: Compiled, budget: Budget) -> tuple[bool, Simu
     return sim.flight_time_s <= budget.flight_s, sim
 
 
-def split_sorties(compiled: Compiled, budget: Budget, where: str, whole: Simulation | None = None) -> tuple[Sortie, ...]:
+def split_sorties(compiled: Compiled, budget: Budget, where: str,
+                  whole: Simulation | None = None) -> tuple[Sortie, ...]:
     """The mission as sorties each within `budget`; () when it fits as it is."""
     whole = whole or simulate(compiled)
     over_time = budget.flight_s is not None and whole.flight_time_s > budget.flight_s
@@ -424,7 +423,8 @@ def _latest_fitting(compiled: Compiled, m: _Mission, states: list[_State], tl: _
 
 
 def _next_sortie(compiled: Compiled, m: _Mission, states: list[_State], tl: _Timeline, est: _Estimator,
-                 cuts: list[_Cut], cut_index: list[int], begin: _Cut, budget: Budget, where: str) -> tuple[_Built, Simulation | None, _Cut]:
+                 cuts: list[_Cut], cut_index: list[int], begin: _Cut, budget: Budget,
+                 where: str) -> tuple[_Built, Simulation | None, _Cut]:
     """The longest sortie from `begin` that fits: the last cut whose estimate fits (camera-off cuts first), then
     earlier ones until the re-flight fits; inside a line when no waypoint cut does."""
     # a sortie flies at most its budget of the whole mission's time and of its items: only cuts within both

@@ -23,7 +23,8 @@ def test_dubins_lengths_of_known_paths():
     assert dubins_length_m((0, 0), 0.0, (2 * R + 30, 0), 180.0, R) == pytest.approx(math.pi * R + 30)
     # onto a line d beside, closer than 2R: the loop (omega) turn, R·(π + 4·acos((2R + d) / 4R))
     d = 20.0
-    assert dubins_length_m((0, 0), 0.0, (d, 0), 180.0, R) == pytest.approx(R * (math.pi + 4 * math.acos((2 * R + d) / (4 * R))))
+    omega = R * (math.pi + 4 * math.acos((2 * R + d) / (4 * R)))
+    assert dubins_length_m((0, 0), 0.0, (d, 0), 180.0, R) == pytest.approx(omega)
     assert turn_radius_m(16.0, 30.0) == pytest.approx(16.0 ** 2 / (9.80665 * math.tan(math.radians(30))))
 
 
@@ -89,7 +90,8 @@ def test_a_plane_plan_defaults_its_turnaround_to_a_radius_and_warns_about_a_shor
     assert r > 30
     # the run-in before each line's entry is one radius long
     wps = slow_bank.intent[0].route.points
-    runs = [math.hypot(b.x - a.x, b.y - a.y) for a, b in zip(wps, wps[1:]) if a.kind == "turnaround" and b.kind == "entry"]
+    runs = [math.hypot(b.x - a.x, b.y - a.y) for a, b in zip(wps, wps[1:])
+            if a.kind == "turnaround" and b.kind == "entry"]
     assert runs and min(runs) >= math.ceil(r) - 0.5
     short = _plane(tmp_path, survey="\n      turnaround_m: 10")
     (w,) = [w for w in short.warnings if w.code == "turnaround_shorter_than_turn"]
