@@ -50,7 +50,8 @@ def measure_sorties(compiled: Compiled) -> SortieTable | None:
         geom = rp.area_geometry(a.area, projection)
         zones = rp._zones(a.area, projection)
         measured = tuple(rp._measure_payload(a, geom, zones, n, compiled.payload(n),
-                                             [p for p in photos if n in p.payloads], n in own) for n in a.payloads)
+                                             [p for p in photos if n in p.payloads], self_shooting=n in own)
+                         for n in a.payloads)
         steps.append(rp.StepMeasure(a, measured, None))
     rows = tuple(s.to_json(sortie_file(compiled.name, s.number)) | {"flight_time_s": round(sim.flight_time_s, 1)}
                  for s, sim in zip(compiled.sorties, sims))
