@@ -7,13 +7,15 @@ Pipeline, as `compile_plan` reads: load (schema, locations) -> the payloads' cam
 function `_STEPS` names for its type: a survey or corridor goes area -> geometry (missions.geometry.survey,
 missions.geometry.corridor) -> items (missions.emit.emitter, firmware × camera) -> firmware check
 (missions.emit.firmware) -> item limit / parts -> setup sequence (missions.emit.setup) -> Lua bridge
-(missions.emit.lua) -> autopilot params (missions.emit.params) -> warnings. What the steps add up as they go
+(missions.emit.lua) -> autopilot params (missions.emit.params) -> warnings -> fence (the survey steps' exclusion
+zones and the plan's inclusion fence, missions.geometry.fence). What the steps add up as they go
 (warnings, areas, altitudes, what the RedEdges fly) is one `_State`, local to the compile. Pure: no sockets, no
 files written; errors are PlanError with the plan's file:line:col.
 
 Warnings are `PlanWarning(code, message)` values. Codes: altitude_above_120m, assumed_optics, trigger_interval_near_min,
 area_smaller_than_footprint (and the survey planner's own codes), no_takeoff, component_id_chosen,
-no_optics, mission_split, px4_single_capture_all.
+no_optics, mission_split, px4_single_capture_all; with a DEM (missions.terrain) terrain_rate_limited,
+home_elevation_differs, rededge_over_terrain.
 """
 
 from __future__ import annotations
@@ -21,10 +23,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 import math
 from pathlib import Path
+
+import numpy as np
 from typing import Any, Callable, NamedTuple
 
 from cdf.catalogue import catalogue
-from missions.compiled import AreaInfo, CaptureSize, Compiled, PayloadInfo, PlanWarning, SetupStep, StepFacts
+from missions.compiled import (AreaInfo, CaptureSize, Compiled, PayloadInfo, PlanWarning, SetupStep, StepFacts,
+                               TransectPattern)
 from missions.emit.emitter import Emitted, Emitter, Track, TrackPoint, HOVER_HOLD_S
 from missions.emit.firmware import FirmwareProfile, check_items, profile
 from missions.emit.items import MissionItem
@@ -33,11 +38,14 @@ from missions.emit.params import Param, autopilot_params
 from missions.emit.setup import RedEdgeSurvey, setup_steps
 from missions.errors import PlanError, Problem
 from missions.geometry import optics, survey
-from missions.geometry.area import Area, load_area
+from missions.geometry.area import Area
 from missions.geometry.corridor import CorridorPlan, plan_corridor
 from missions.geometry.footprint import Footprint
-from missions.geometry.geo import MAX_EXTENT_M
+from missions.geometry.geo import MAX_EXTENT_M, LocalProjection
 from missions.geometry.survey import SurveyPlan, plan_survey
+from missions.geometry.zones import (RESUME_MARGIN_M, CameraPoint, StepZones, TransitRouter, Zone, ZoneRouter, area_clear_of,
+                                     capture_reaches, grown_union, keep_path_out, keep_photos_out, path_inside,
+                                     place_zones, plan_zones, zones_near)
 from missions.plan.load import (CameraStep, CorridorStep, LandStep, Plan, RtlStep, SurveyStep, TakeoffStep,
                                 WaypointStep, input_files, load_plan_partly, raise_problems)
 from missions.plan.meaning import Ceiling, ceiling_problem
@@ -98,6 +106,7 @@ class _State:
     warnings: list[PlanWarning | str]
     areas: list[AreaInfo] = field(default_factory=list)
     intent: list[SurveyPlan | CorridorPlan] = field(default_factory=list)
+    patterns: list[TransectPattern] = field(default_factory=list)
     altitudes: list[_Altitude] = field(default_factory=list)
     rededge_flights: dict[str, list[_RedEdgeFlight]] = field(default_factory=dict)
     rededge_checks: list[_RedEdgeCheck] = field(default_factory=list)
@@ -117,6 +126,9 @@ class _Compile:
     state: _State
     speed_mps: float                         # the plan's, or the one `auto` chose (`_mission_speed`)
     turn_radius_m: float | None = None       # a plane's or VTOL's (`missions.plan_turns.turn_radius_of`)
+    zones: tuple[Zone, ...] = ()             # every zone of the plan (missions.geometry.zones.plan_zones)
+    transits: TransitRouter | None = None    # routes the flight between steps around the no-fly zones
+    terrain: Any = None                      # missions.terrain.model.Terrain when the plan names a DEM
 
     def warn(self, code: str, message: str) -> None:
         self.state.warnings.append(PlanWarning(code, message))
@@ -226,7 +238,8 @@ def _takeoff(c: _Compile, step: TakeoffStep) -> None:
 
 def _waypoint(c: _Compile, step: WaypointStep) -> None:
     _check_reach(c.plan.home, step.lat, step.lon, "waypoint", c.plan.step_where(step))
-    c.emitter.waypoint(step.lat, step.lon, step.alt_m, step.hold_s, step.capture,
+    _transit_to(c, step.lat, step.lon, step.alt_m, "flight to this waypoint", c.plan.step_where(step))
+    c.emitter.waypoint(step.lat, step.lon, step.alt_m, step.hold_s, _capture_clear_of_zones(c, step),
                        where=c.plan.step_where(step, "capture"))
     c.state.altitudes.append(_Altitude(step.alt_m, c.plan.step_where(step, "alt_m")))
 
@@ -237,6 +250,10 @@ def _camera(c: _Compile, step: CameraStep) -> None:
 
 
 def _rtl(c: _Compile, step: RtlStep) -> None:
+    last = c.emitter.s.last_pos
+    if last is not None:
+        # the vehicle flies home straight from where it is: from the last way round the zones, that is clear
+        _transit_to(c, c.plan.home.lat, c.plan.home.lon, last[2], "return home", c.plan.step_where(step))
     c.emitter.rtl()
 
 
@@ -244,6 +261,9 @@ def _land(c: _Compile, step: LandStep) -> None:
     here = c.plan.step_where(step)
     if step.lat is not None:
         _check_reach(c.plan.home, step.lat, step.lon, "landing point", here)
+        last = c.emitter.s.last_pos
+        if last is not None:
+            _transit_to(c, step.lat, step.lon, last[2], "flight to the landing point", here)
     c.emitter.land(step.lat, step.lon, where=here)
 
 
@@ -273,10 +293,17 @@ def _lines_step(c: _Compile, step: SurveyStep | CorridorStep, kind: str,
     _record_rededges(c, step, lead, alt)
     try:
         lines = plan_lines(c, step, _line_inputs(c, step, lead, footprint))
+        if c.terrain is not None:
+            lines = _lines_for_the_ground(c, step, lead, alt, footprint, lines, plan_lines)
     except PlanError as e:
         raise _relocate(e, here) from None
     first = c.emitter.item_count
-    c.emitter.track(_track(c, step, lines.route, alt, lead), where=c.plan.step_where(step, "trigger"))
+    track = _track_clear_of_zones(c, step, lines, _track(c, step, lines.route, alt, lead), alt, kind)
+    if c.terrain is not None:
+        track = _terrain_track(c, step, kind, track)
+    _check_path_clear_of_zones(c, step, lines, track, kind)
+    _transit_to(c, track.points[0].lat, track.points[0].lon, alt, f"flight to the {kind}'s first line", here)
+    c.emitter.track(track, where=c.plan.step_where(step, "trigger"))
     for w in lines.route.warnings:
         c.warn(w.code, f"{kind} at {here}: {w.message}")
     for w in turn_warnings(lines.route, c.turn_radius_m, _line_inputs_turnaround(c, step)):
@@ -285,9 +312,47 @@ def _lines_step(c: _Compile, step: SurveyStep | CorridorStep, kind: str,
         step=step.index, kind=kind, payloads=step.payloads, area=lines.area, altitude_m=alt,
         front_overlap=step.front_pct / 100.0, side_overlap=step.side_pct / 100.0, trigger=step.trigger,
         trigger_distance_m=lines.route.trigger_distance_m, items=(first, c.emitter.item_count),
+        zones=_step_zones(c, step, lines, alt),
         line_items=_line_items(c.emitter.s.track_navs, lines.route)))
     c.state.intent.append(lines.route)
     c.state.step_facts.append(_step_facts(c, step, kind, lead, footprint, lines.route))
+    c.state.patterns.append(_pattern(c, step, kind, lines, lead, alt, first))
+
+
+def _pattern(c: _Compile, step: SurveyStep | CorridorStep, kind: str, lines: _Lines, lead: PayloadInfo, alt: float,
+             first: int) -> TransectPattern:
+    """The step as QGC's survey or corridor editor holds it, around the items it just emitted."""
+    from missions.formats.qgc_complex import transect_start
+
+    end = c.emitter.item_count
+    common = dict(kind=kind, items=(transect_start(c.emitter.s.items, first, end), end), payload=lead.name,
+                  altitude_m=alt, front_pct=step.front_pct, side_pct=step.side_pct,
+                  spacing_m=lines.route.spacing_m, trigger_distance_m=lines.route.trigger_distance_m,
+                  turnaround_m=_turnaround_m(c, step), hover=step.trigger == "hover")
+    if isinstance(step, CorridorStep):
+        return TransectPattern(**common, line=tuple(tuple(p) for p in step.line), width_m=step.width_m)
+    return TransectPattern(**common, polygon=_outline(lines.area), angle_deg=lines.route.angle_deg,
+                           refly_90=step.refly_90)
+
+
+def _outline(area: Area) -> tuple[tuple[float, float], ...]:
+    """One polygon around the surveyed area, (lat, lon), not closed: QGC's survey has one outline and no holes, so
+    an area the exclusions cut into pieces (or several polygons) is written as their convex hull."""
+    g = area.geometry
+    ring = g.exterior if g.geom_type == "Polygon" else g.convex_hull.exterior
+    return _latlon_ring(area, ring)
+
+
+def _latlon_ring(area: Area, ring: Any) -> tuple[tuple[float, float], ...]:
+    import numpy as np
+
+    xy = np.asarray(ring.coords)[:-1]
+    lat, lon = area.projection.to_latlon(xy[:, 0], xy[:, 1])
+    return tuple((round(float(a), 7), round(float(b), 7)) for a, b in zip(lat, lon))
+
+
+def _turnaround_m(c: _Compile, step: SurveyStep | CorridorStep) -> float:
+    return step.turnaround_m if step.turnaround_m is not None else TURNAROUND_DEFAULT_M[c.plan.vehicle.frame]
 
 
 def _step_facts(c: _Compile, step: SurveyStep | CorridorStep, kind: str, lead: PayloadInfo, footprint: Footprint,
@@ -319,7 +384,11 @@ def _capture_size(c: _Compile, name: str) -> CaptureSize:
 
 def _assumptions(c: _Compile, step: SurveyStep | CorridorStep) -> list[str]:
     """Every assumption the step's numbers rest on."""
-    out = ["flat ground at home's height: altitudes, footprints and GSD are above home, not above the terrain"]
+    if c.terrain is None:
+        out = ["flat ground at home's height: altitudes, footprints and GSD are above home, not above the terrain"]
+    else:
+        out = ["ground from the plan's DEM (terrain.dem): altitudes, footprints and GSD are above the ground below "
+               "the camera, as the DEM gives it"]
     for name in step.payloads:
         info = c.payloads.optics.get(name)
         if info is None:
@@ -437,8 +506,7 @@ def _line_inputs_turnaround(c: _Compile, step: SurveyStep | CorridorStep) -> flo
 
 
 def _plan_survey_lines(c: _Compile, step: SurveyStep, inputs: _LineInputs) -> _Lines:
-    area = load_area(step.area, exclude=step.exclude, base_dir=c.plan.base_dir,
-                     where=c.plan.step_where(step, "area"))
+    area = area_clear_of(step.area, c.zones, c.plan.base_dir, c.plan.step_where(step, "area"))
     _check_reach(c.plan.home, area.projection.lat0, area.projection.lon0, "area", c.plan.step_where(step))
     route = plan_survey(area, inputs.footprint, step.front_pct, step.side_pct, angle_deg=step.angle_deg,
                         turnaround_m=inputs.turnaround_m, speed_mps=c.speed_mps,
@@ -479,6 +547,162 @@ def _hover_hold_s(lead: PayloadInfo) -> float:
     return max(HOVER_HOLD_S, settle + (lead.min_interval_s or 0.0))
 
 
+# ------------------------------------------------------------------------------------------------- zones
+
+def _step_footprint(c: _Compile, step: SurveyStep | CorridorStep, alt: float) -> Footprint | None:
+    """The footprint holding every photo the autopilot triggers on the step (the largest across and along of its
+    payloads of known optics), None when it triggers none."""
+    sizes = [c.payloads.optics[n].footprint_m(alt) for n in step.payloads
+             if n in c.payloads.optics and not c.payloads.is_rededge(n)]
+    return Footprint(max(s[0] for s in sizes), max(s[1] for s in sizes)) if sizes else None
+
+
+def _track_clear_of_zones(c: _Compile, step: SurveyStep | CorridorStep, lines: _Lines, track: Track, alt: float,
+                          kind: str) -> Track:
+    """The track kept out of the no-fly and exclude zones (stretches ending at them, hops round them) and with its
+    camera off wherever a footprint would reach a no-photo or exclude zone (grown by its margin); hover photos in
+    either are dropped. Warned, with how many."""
+    path_zones = [z for z in c.zones if z.keeps_path_out]
+    photo_zones = [z for z in c.zones if z.keeps_photos_out]
+    if not path_zones and not photo_zones:
+        return track
+    proj = lines.area.projection
+    here = c.plan.step_where(step)
+    start = tuple(CameraPoint(w.x, w.y, w.kind, w.yaw_deg) for w in lines.route.waypoints)
+    points, spans, dropped = start, tuple(track.spans), 0
+    if path_zones:
+        cam = keep_path_out(points, spans, ZoneRouter(place_zones(path_zones, proj)), f"{kind}'s path", here)
+        if cam.points != points:
+            c.warn("zone_detour", f"{kind} at {here}: its lines stop at no-fly or exclude zones (grown by their "
+                   "margin) and its hops go round them")
+        points, spans, dropped = cam.points, cam.spans, cam.photos_dropped
+    fp = _step_footprint(c, step, alt)
+    if photo_zones and fp is not None and track.autopilot_triggers:
+        forbidden = grown_union(place_zones(photo_zones, proj))
+        cam = keep_photos_out(points, spans, forbidden, fp, track.trigger_distance_m, step.trigger == "hover")
+        if cam.stretches_off:
+            # the camera comes back on RESUME_MARGIN_M past the zone's reach, for a copter's 2 m early acceptance; a
+            # fixed-wing accepts a waypoint much earlier (ArduPlane's WP_RADIUS is 90 m by default)
+            plane = (" A fixed-wing accepts a waypoint up to its acceptance radius early (ArduPlane WP_RADIUS, PX4 "
+                     f"NAV_ACC_RAD): set it to at most {RESUME_MARGIN_M:g} m for this mission, or the camera comes "
+                     "back on before the zone is behind it.") if c.plan.vehicle.frame != "copter" else ""
+            c.warn("zone_camera_off", f"{kind} at {here}: the camera is off over {cam.stretches_off} stretch(es) "
+                   "of its lines where a footprint would reach a no-photo or exclude zone (DO_SET_CAM_TRIGG_DIST 0, "
+                   "then on again past it)." + plane)
+        points, spans, dropped = cam.points, cam.spans, dropped + cam.photos_dropped
+    if dropped:
+        c.warn("zone_photo_dropped", f"{kind} at {here}: {dropped} hover photo(s) dropped (flown through or left "
+               "out without a photo) because their footprint could reach a no-photo zone or they lie in a no-fly one")
+    if points == start and spans == tuple(track.spans):
+        return track
+    lat, lon = proj.to_latlon([p.x for p in points], [p.y for p in points])
+    pts = tuple(TrackPoint(float(a), float(o), p.kind, p.yaw_deg) for p, a, o in zip(points, lat, lon))
+    return replace(track, points=pts, spans=spans)
+
+
+def _check_path_clear_of_zones(c: _Compile, step: SurveyStep | CorridorStep, lines: _Lines, track: Track,
+                               kind: str) -> None:
+    """A step's own path (lines, turnarounds, connections) must not enter a no-fly or exclude zone."""
+    path_zones = [z for z in c.zones if z.keeps_path_out]
+    if not path_zones:
+        return
+    proj = lines.area.projection
+    x, y = proj.to_xy([p.lat for p in track.points], [p.lon for p in track.points])
+    for pz, metres in path_inside(np.column_stack([x, y]), place_zones(path_zones, proj)):
+        hint = ("a corridor's lines are not routed around zones: move its line or narrow it so the lines keep "
+                "clear of the zone, or make the zone no_photo if it may be flown over") if kind == "corridor" \
+            else "redraw the zone or the area so that a way round the zone is left inside the area"
+        raise PlanError(f"the {kind}'s path runs {metres:.1f} m inside {pz.zone.label}",
+                        where=c.plan.step_where(step), hint=hint)
+
+
+def _transit_to(c: _Compile, lat: float, lon: float, alt: float, what: str, where: str) -> None:
+    """Waypoints round the no-fly and exclude zones between where the vehicle is and (lat, lon), at `alt`."""
+    if c.transits is None:
+        return
+    last = c.emitter.s.last_pos
+    start = last[:2] if last else (c.plan.home.lat, c.plan.home.lon)
+    for la, lo in c.transits.route(start, (lat, lon), what, where):
+        c.emitter.via(la, lo, alt)
+
+
+def _capture_clear_of_zones(c: _Compile, step: WaypointStep) -> str | None:
+    """The waypoint's capture, or None (dropped, warned) when its footprint could reach a no-photo zone."""
+    name = step.capture
+    photo_zones = [z for z in c.zones if z.keeps_photos_out]
+    if name is None or not photo_zones or name not in c.payloads.optics or c.transits is None:
+        return name
+    proj = c.transits.proj
+    fp = Footprint(*c.payloads.optics[name].footprint_m(step.alt_m))
+    x, y = proj.point_to_xy(step.lat, step.lon)
+    for z in place_zones(photo_zones, proj):
+        if capture_reaches(x, y, z.grown, fp):
+            c.warn("zone_photo_dropped", f"waypoint at {c.plan.step_where(step)}: the photo of {name} is dropped "
+                   f"(the waypoint is flown without it): its footprint could reach {z.zone.label}")
+            return None
+    return name
+
+
+def _step_zones(c: _Compile, step: SurveyStep | CorridorStep, lines: _Lines, alt: float) -> StepZones | None:
+    """The zones the report measures against this step: its own, and any other a footprint from its area could
+    reach."""
+    fp = _step_footprint(c, step, alt)
+    if not c.zones:
+        return None
+    reach = max(fp.across_m, fp.along_m) if fp is not None else 0.0
+    near = set(zones_near(c.zones, lines.area, reach))
+    mine = tuple(z for z in c.zones if z.step == step.index or z in near)
+    return StepZones(mine, reach) if mine else None
+
+
+def _check_rededge_and_zones(plan: Plan, payloads: _Payloads, zones: tuple[Zone, ...]) -> None:
+    """A RedEdge shoots by itself whenever it is at its altitude: it cannot be switched off near a no-photo zone."""
+    photo_zones = [z for z in zones if z.keeps_photos_out]
+    flying = {n for s in plan.mission if isinstance(s, (SurveyStep, CorridorStep)) for n in s.payloads}
+    rededges = [n for n in flying if payloads.is_rededge(n)]
+    if photo_zones and rededges:
+        z = photo_zones[0]
+        raise PlanError(f"{rededges[0]} (a RedEdge) captures by itself in its overlap mode and cannot be switched "
+                        f"off near {z.label}", where=z.where,
+                        hint="fly the RedEdge in a plan without no_photo/exclude zones, or make the zone no_fly "
+                             "if only the flight over it is forbidden")
+
+
+def _lines_for_the_ground(c: _Compile, step: SurveyStep | CorridorStep, lead: PayloadInfo, alt: float,
+                          footprint: Footprint, lines: _Lines,
+                          plan_lines: Callable[[_Compile, Any, _LineInputs], _Lines]) -> _Lines:
+    """The lines planned again, once, with a shorter trigger distance and line spacing where the ground needs them
+    to hold the requested overlaps (missions.terrain.lines): footprints on a slope along the track are
+    trapezoids that consecutive photos share less of, and lines that fly higher than the target (within the
+    tolerance, where the ground bends) have wider photos beside narrower ones. Kept as planned when both
+    factors are within half a percent of 1."""
+    from missions.terrain.lines import front_overlap_scale, side_overlap_scale, terrain_track
+
+    track = _track(c, step, lines.route, alt, lead)
+    k_front = front_overlap_scale(track, c.terrain, footprint.along_m, alt)
+    followed = terrain_track(track, c.terrain, c.speed_mps, c.plan.step_where(step))
+    k_side = side_overlap_scale(step.side_pct, alt, followed.highest_agl_m)
+    if k_front > 0.995 and k_side > 0.995:
+        return lines
+    _check_triggering(c, step, lead, optics.trigger_m(lead, alt, step.front_pct) * k_front)
+    shorter = Footprint(footprint.across_m * k_side, footprint.along_m * k_front)
+    return plan_lines(c, step, _line_inputs(c, step, lead, shorter))
+
+
+def _terrain_track(c: _Compile, step: SurveyStep | CorridorStep, kind: str, track: Track) -> Track:
+    """The track following the DEM (missions.terrain.lines); where the rates keep it above its band, a warning."""
+    from missions.terrain.lines import terrain_track
+
+    height = c.plan.step_where(step, "altitude_m" if step.altitude_m is not None else "gsd_cm")
+    followed = terrain_track(track, c.terrain, c.speed_mps, height)
+    if followed.over_tolerance_m > 0.01:
+        c.warn("terrain_rate_limited", f"{kind} at {c.plan.step_where(step)}: the ground falls or rises faster than "
+               f"vehicle.climb_mps {c.terrain.climb_mps:g} / descent_mps {c.terrain.descent_mps:g} m/s allow at "
+               f"{c.speed_mps:g} m/s: the lines fly up to {followed.over_tolerance_m:.1f} m above the tolerance "
+               "there (coarser GSD, never lower than the target)")
+    return followed
+
+
 _STEPS: dict[type, Callable[[_Compile, Any], None]] = {
     TakeoffStep: _takeoff, SurveyStep: _survey, CorridorStep: _corridor, WaypointStep: _waypoint,
     CameraStep: _camera, RtlStep: _rtl, LandStep: _land}
@@ -491,10 +715,12 @@ def _warn_about_altitudes(c: _Compile) -> None:
     high = [a for a in c.state.altitudes if a.altitude_m > MAX_AGL_M]
     if high and c.plan.vehicle.max_altitude_m is not None:
         top = max(high, key=lambda a: a.altitude_m)
+        ground = ("ground assumed flat at home's height" if c.terrain is None else
+                  "a survey's or corridor's altitude is above the DEM's ground, the other steps' above home")
         c.warn("altitude_above_120m", f"the mission flies up to {top.altitude_m:g} m above home (at {top.where}), "
                f"above the {MAX_AGL_M:g} m most rules allow without a permit: flown under the permit the plan "
                f"states (vehicle.max_altitude_m: {c.plan.vehicle.max_altitude_m:g} at "
-               f"{c.plan.where('vehicle', 'max_altitude_m')}); ground assumed flat at home's height")
+               f"{c.plan.where('vehicle', 'max_altitude_m')}); {ground}")
 
 
 def _setup(c: _Compile) -> tuple[SetupStep, ...]:
@@ -593,6 +819,44 @@ def _mission_speed(plan: Plan, payloads: _Payloads, state: _State) -> float:
     return chosen.speed_mps
 
 
+# ------------------------------------------------------------------------------------------------- fence
+
+def _fence(c: _Compile, items: tuple[MissionItem, ...]) -> tuple[MissionItem, ...]:
+    """The fence: each zone the vehicle must not enter as an exclusion polygon, and with the plan's
+    `fence: {margin_m: M}` an inclusion polygon M metres around everything the mission flies. (A path through a
+    zone is the report's path_over_exclusion warning: with the fence enabled the vehicle breaches it there.)"""
+    from missions.geometry.fence import exclusion_polygon, inclusion_polygon
+
+    out: list[MissionItem] = []
+    seen: set[tuple] = set()
+    for ring in _fence_rings(c):
+        if ring not in seen:
+            seen.add(ring)
+            out.extend(exclusion_polygon(ring))
+    home = c.plan.home
+    if c.plan.fence_margin_m is not None:
+        out.extend(inclusion_polygon(items, (home.lat, home.lon), c.plan.fence_margin_m))
+    return tuple(out)
+
+
+def _fence_rings(c: _Compile) -> list[tuple[tuple[float, float], ...]]:
+    """The outline (lat, lon) of every zone the vehicle must not enter (no_fly and exclude; a no_photo zone may
+    be flown over), cleaned as the compiler keeps out of it."""
+    import numpy as np
+
+    proj = LocalProjection(c.plan.home.lat, c.plan.home.lon)
+    rings = []
+    for zone in c.zones:
+        if not zone.keeps_path_out:
+            continue
+        g = zone.xy(proj)
+        for poly in getattr(g, "geoms", [g]):
+            xy = np.asarray(poly.exterior.coords)[:-1]
+            lat, lon = proj.to_latlon(xy[:, 0], xy[:, 1])
+            rings.append(tuple((round(float(a), 7), round(float(b), 7)) for a, b in zip(lat, lon)))
+    return rings
+
+
 # -------------------------------------------------------------------------------------------- the driver
 
 def _problems_of(err: PlanError) -> list[Problem]:
@@ -611,6 +875,56 @@ def _compile_steps(c: _Compile) -> list[Problem]:
     return problems
 
 
+def _load_terrain(plan: Plan, prof: FirmwareProfile) -> Any:
+    """The plan's DEM and terrain settings (missions.terrain), None without one."""
+    if plan.terrain is None:
+        return None
+    from missions.terrain.dem import load_dem
+    from missions.terrain.model import Terrain, rates_for
+
+    t = plan.terrain
+    if t.frame == "terrain" and prof.name != "ardupilot":
+        raise PlanError(f"{prof.title} has no terrain frame in missions", where=plan.where("terrain", "frame"),
+                        hint="use terrain.frame: amsl (waypoint altitudes above mean sea level from the DEM, which "
+                             "every firmware flies), or fly ArduPilot")
+    dem = load_dem(t.dem, plan.base_dir, t.vertical, where=plan.where("terrain", "dem"))
+    climb, descent = rates_for(plan.vehicle.frame, plan.vehicle.climb_mps, plan.vehicle.descent_mps)
+    return Terrain(dem, t.frame, t.tolerance_m, t.clearance_m, climb, descent)
+
+
+def _home_amsl(plan: Plan, terrain: Any, state: _State) -> float:
+    """Home's elevation: the plan's, else the DEM's below home (a plan without either is refused at loading)."""
+    if terrain is None:
+        return float(plan.home.alt_amsl_m)
+    ground = float(terrain.dem.ground_at(plan.home.lat, plan.home.lon, "home", plan.where("home"))[0])
+    if plan.home.alt_amsl_m is None:
+        return round(ground, 2)
+    if abs(plan.home.alt_amsl_m - ground) > 5.0:
+        state.warnings.append(PlanWarning("home_elevation_differs", f"home.alt_amsl_m {plan.home.alt_amsl_m:g} m is "
+                                          f"{plan.home.alt_amsl_m - ground:+.1f} m from the DEM's {ground:.1f} m "
+                                          "there; relative altitudes (take-off, waypoints, RTL) use the plan's"))
+    return float(plan.home.alt_amsl_m)
+
+
+def _check_clearance(compiled: Compiled, terrain: Any, plan: Plan) -> None:
+    """Every metre of the re-flown path at least terrain.clearance_m above the DEM, or a PlanError saying where."""
+    from missions.measure.flight import simulate
+    from missions.terrain.clearance import path_clearance
+
+    c = path_clearance(compiled, simulate(compiled), terrain.dem)
+    if c is None or c.min_m >= terrain.clearance_m - 0.005:
+        return
+    base = 1 if compiled.firmware == "ardupilot" else 0
+    item = compiled.items[c.item] if 0 <= c.item < len(compiled.items) else None
+    raise PlanError(f"the path passes {c.min_m:.1f} m above the ground at {c.lat:.6f}, {c.lon:.6f} (altitude "
+                    f"{c.amsl_m:.1f} m AMSL over ground at {c.ground_m:.1f} m), below terrain.clearance_m "
+                    f"{terrain.clearance_m:g} m, flying to item {c.item + base}"
+                    + (f" ({item.comment})" if item is not None and item.comment else ""),
+                    where=plan.where("terrain"),
+                    hint="raise the take-off altitude or the step's altitude_m, add a waypoint step above the "
+                         "ground in the way, or lower terrain.clearance_m if the ground there is known clear")
+
+
 def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -> Compiled:
     """The compiled mission of a plan (a path or a loaded Plan), or one PlanError listing every problem of the
     plan and of its steps, ordered by where they are written."""
@@ -624,12 +938,23 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     prof = profile(firmware or plan.vehicle.firmware)
     state = _State(warnings=[f"component_id_chosen: {n}" for n in plan.notes])
     try:
+        terrain = _load_terrain(plan, prof)
+        home_amsl = _home_amsl(plan, terrain, state)
         payloads = _resolve_payloads(plan, prof, state)
         speed = _mission_speed(plan, payloads, state)
+        zones = plan_zones(plan)
+        _check_rededge_and_zones(plan, payloads, zones)
     except PlanError as e:
         raise_problems(problems + _problems_of(e), plan.path)
     radius = turn_radius_of(plan.vehicle, speed)
-    c = _Compile(plan, prof, payloads, _emitter(plan, prof, payloads, speed), state, speed, radius)
+    router = TransitRouter(zones, LocalProjection(plan.home.lat, plan.home.lon)) if zones else None
+    c = _Compile(plan, prof, payloads, _emitter(plan, prof, payloads, speed), state, speed, radius, zones, router,
+                 terrain)
+    c.emitter.home_amsl_m = home_amsl
+    if terrain is not None and any(c.payloads.is_rededge(p.name) for p in plan.payloads):
+        c.warn("rededge_over_terrain", "a RedEdge in overlap mode spaces its photos by its own height above the "
+               "take-off point, not above the DEM: over rising or falling ground its front overlap and its "
+               "capture threshold (operatingAlt) differ from the plan's; the report measures what it does")
     _warn_about_the_start(c)
     problems += _compile_steps(c)
     if problems:
@@ -647,16 +972,24 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     setup = _setup(c)
     lua = _lua_bridge(c, emitted)
     params = _params(c, emitted)
+    if terrain is not None and terrain.frame == "terrain":
+        params = (*params, ("TERRAIN_ENABLE", 1.0, "the survey lines fly in the terrain frame "
+                            "(MAV_FRAME_GLOBAL_TERRAIN_ALT): ArduPilot needs terrain data, from the ground station "
+                            "or its SD card, before it accepts them"))
     _warn_about_unknown_optics(c)
+    fence = _fence(c, emitted.items)
     compiled = Compiled(
         name=plan.name, firmware=prof.name, frame=plan.vehicle.frame,
-        home=(plan.home.lat, plan.home.lon, plan.home.alt_amsl_m), speed_mps=c.speed_mps, items=emitted.items,
+        home=(plan.home.lat, plan.home.lon, home_amsl), speed_mps=c.speed_mps, items=emitted.items,
         parts=(emitted.items,), item_limit=c.plan.vehicle.max_mission_items or prof.default_item_limit,
         # PayloadInfo only for payloads whose optics are known: the report measures coverage with them
         payloads=tuple(payloads.optics[p.name] for p in plan.payloads if p.name in payloads.optics),
         areas=tuple(state.areas), setup=setup, lua=lua, params=params,
         warnings=tuple(dict.fromkeys(state.warnings)), intent=tuple(state.intent), inputs=input_files(plan),
-        step_facts=tuple(state.step_facts), turn_radius_m=radius)
+        step_facts=tuple(state.step_facts), patterns=tuple(state.patterns), corridor_scan=plan.corridor_scan,
+        fence=fence, terrain=terrain, turn_radius_m=radius)
+    if terrain is not None:
+        _check_clearance(compiled, terrain, plan)
     return _with_the_sun(plan, in_sorties(plan, compiled))
 
 

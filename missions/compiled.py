@@ -71,6 +71,9 @@ class AreaInfo:
     # The report measures the step's overlaps, photo count and path against them; None (an AreaInfo built by
     # hand, without a mission) measures every photo and the whole path near the area.
     items: tuple[int, int] | None = None
+    # The zones near the step (missions.geometry.zones.StepZones): the report's zone table and the coverable area.
+    # None: no zone near it.
+    zones: Any = None
     # The NAV items that end a leg of the step's lines (flying from a span's entry to its exit): a payload that
     # shoots by itself (a RedEdge in overlap mode, also on turnarounds and transits) has its overlaps measured
     # over the photos taken flying towards them. None: every photo of `items`.
@@ -111,6 +114,29 @@ class StepFacts:
     def photo_interval_s(self) -> float | None:
         """Seconds between photos at the planned speed (None when hovering: each photo is a stop)."""
         return None if self.trigger == "hover" else self.trigger_distance_m / self.speed_mps
+
+
+@dataclass(frozen=True)
+class TransectPattern:
+    """A survey or corridor step as QGroundControl's pattern editor knows it (missions.formats.qgc_complex writes
+    it as a ComplexItem around the items it emitted): the shape, the camera numbers that spaced its lines, and
+    where its transect items are in Compiled.items."""
+
+    kind: str                                   # "survey" | "corridor"
+    items: tuple[int, int]                      # [first, end) of the transect items (the first waypoint on)
+    payload: str                                # the payload whose optics set the lines
+    altitude_m: float
+    front_pct: float
+    side_pct: float
+    spacing_m: float                            # between lines
+    trigger_distance_m: float
+    turnaround_m: float
+    hover: bool
+    polygon: tuple[tuple[float, float], ...] = ()   # survey: the area's outer ring, (lat, lon)
+    angle_deg: float = 0.0                      # survey: the lines' direction, degrees from north
+    refly_90: bool = False
+    line: tuple[tuple[float, float], ...] = ()  # corridor: the centre line, (lat, lon)
+    width_m: float = 0.0                        # corridor
 
 
 @dataclass(frozen=True)
@@ -178,6 +204,11 @@ class Compiled:
     inputs: tuple[str, ...] = field(default=(), compare=False)   # the files the plan was read from (never written)
     sun: tuple[Any, ...] = ()                   # missions.thermal.assess.StepSun per timed step (plans with `when`)
     step_facts: tuple[StepFacts, ...] = ()      # per survey or corridor step, what the compiler chose
+    patterns: tuple[TransectPattern, ...] = ()  # the surveys and corridors, for the .plan's ComplexItems
+    corridor_scan: bool = False                 # write corridors as QGC CorridorScan (MAVSDK 4.1 cannot read them)
+    fence: tuple[MissionItem, ...] = ()         # fence items (mission_type FENCE): exclusion zones, inclusion fence
+    # missions.terrain.model.Terrain: the DEM the lines follow and the report measures over; None: flat ground
+    terrain: Any = field(default=None, compare=False)
     # missions.sorties.Sortie per sortie when the mission is longer than a battery or the item limit (then
     # `parts` are their items); () when it is flown as one mission
     sorties: tuple[Any, ...] = field(default=(), compare=False)

@@ -42,6 +42,12 @@ def quiet_logs() -> None:
     log_subscribe(lambda level, msg, file, line: True)
 
 
+def _autopilot_known(system, autopilot: str) -> bool:
+    from mavsdk.autopilot import Autopilot
+
+    return system.autopilot_type() == (Autopilot.PX4 if autopilot == "px4" else Autopilot.ARDUPILOT)
+
+
 def do_import(autopilot: str) -> None:
     from pymavlink.dialects.v20 import common as mav
     from mavsdk import ComponentType, Configuration, Mavsdk
@@ -52,12 +58,14 @@ def do_import(autopilot: str) -> None:
     m.add_any_connection("raw://")
     enc = mav.MAVLink(None, srcSystem=1, srcComponent=1)
     ap = mav.MAV_AUTOPILOT_PX4 if autopilot == "px4" else mav.MAV_AUTOPILOT_ARDUPILOTMEGA
-    m.pass_received_raw_bytes(bytes(enc.heartbeat_encode(mav.MAV_TYPE_QUADROTOR, ap, 0, 0,
-                                                         mav.MAV_STATE_STANDBY).pack(enc)))
+    heartbeat = bytes(enc.heartbeat_encode(mav.MAV_TYPE_QUADROTOR, ap, 0, 0, mav.MAV_STATE_STANDBY).pack(enc))
     system = None
+    # The system shows up before MAVSDK has taken the autopilot type from its heartbeat; importing then reads
+    # the plan as for a generic autopilot (no home row for ArduPilot). Keep beating until the type is known.
     for _ in range(250):
+        m.pass_received_raw_bytes(heartbeat)
         systems = m.get_systems()
-        if systems:
+        if systems and systems[0].has_autopilot() and _autopilot_known(systems[0], autopilot):
             system = systems[0]
             break
         time.sleep(0.02)

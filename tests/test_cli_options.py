@@ -34,5 +34,7 @@ def test_every_link_command_has_the_shared_connect_and_signing_key():
         assert key.help == SIGNING_KEY_HELP, path
         if path == "wiris emulate":
             assert connect.help.startswith("pymavlink connection string: udpout:") and "towards a GCS" in connect.help
+        elif path == "wiris sim vehicle":      # a vehicle's end too: its examples are the ground station's peer
+            assert connect.help.startswith("pymavlink connection string: udpin:") and "towards a GCS" in connect.help
         else:
             assert connect.help == f"pymavlink connection string: {LINK_EXAMPLES}.", path

@@ -19,6 +19,7 @@ Every wait is bounded; errors are LinkError naming the step, setting or command 
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import json
 import math
@@ -130,6 +131,7 @@ class Step:
     type: str = ""
     message: str = ""                              # kind "message": the MAVLink message and its fields
     fields: tuple[tuple[str, float | int], ...] = ()
+    payload: str = ""                              # the plan's payload the step sets up ("" when not said)
 
     @property
     def label(self) -> str:
@@ -790,9 +792,28 @@ def _parse_step(i: int, s: Any, where: str) -> Step:
         raise LinkError(f"target_component {comp!r} is not a component id (0–255)", where=loc,
                         hint='write the camera\'s component id, e.g. "target_component": 100 (0: the camera '
                              'connected to)')
+    payload = s.get("payload", "")
+    if not isinstance(payload, str):
+        raise LinkError(f"payload {payload!r} is not a payload name", where=loc,
+                        hint='write the plan\'s payload name as text, e.g. "payload": "thermal", or leave it out')
     head = _StepHead(i, desc, kind, comp, loc)
     parse = _STEP_PARSERS.get(kind, _parse_param_step)
-    return parse(head, s)
+    return dataclasses.replace(parse(head, s), payload=payload)
+
+
+def steps_of_payload(steps: list[Step], name: str, where: str = "setup") -> list[Step]:
+    """The steps that set up payload `name` (in their order); LinkError naming the payloads there are when no
+    step is for it."""
+    mine = [s for s in steps if s.payload == name]
+    if mine:
+        return mine
+    names = sorted({s.payload for s in steps if s.payload})
+    if not names:
+        raise LinkError(f"no step names its payload, so none can be chosen as {name!r}", where=where,
+                        hint="compile the plan again: `wiris mission compile` names each step's payload")
+    close = difflib.get_close_matches(name, names, n=1)
+    raise LinkError(f"no step is for payload {name!r}" + (f"; did you mean {close[0]!r}?" if close else ""),
+                    where=where, hint=f"the payloads of this file: {', '.join(names)}")
 
 
 def _parse_command_step(head: _StepHead, s: dict) -> Step:
@@ -883,4 +904,4 @@ def load_setup(path: str | Path) -> list[Step]:
 
 
 __all__ = ["CameraClient", "CameraInformation", "LoadedDefinition", "Shot", "Step", "StepResult", "Target", "load_setup",
-           "parse_setup"]
+           "parse_setup", "steps_of_payload"]

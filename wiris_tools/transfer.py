@@ -805,6 +805,8 @@ def load_for_upload(path: str, mission_type: int = MISSION_TYPE_MISSION, *, part
         loaded = _list_of_plan_file(p, mission_type)
     elif suffix in WPL_SUFFIXES:
         loaded = _list_of_wpl_file(p, mission_type)
+    elif suffix in CAPTURE_SUFFIXES and mission_type == mavlink2.MAV_MISSION_TYPE_FENCE:
+        loaded = _capture_plan_fence(p, firmware)
     elif suffix in CAPTURE_SUFFIXES:
         _require_mission(p, mission_type, "a capture plan compiles to a mission")
         loaded = _capture_plan_part(p, part, firmware)
@@ -854,6 +856,16 @@ def _capture_plan_part(p, part: int | None, firmware: str | None) -> LoadedList:
     parts = list(compiled.parts) if compiled.parts else [compiled.items]
     made_for = next((code for code, name in CHECKED_FIRMWARES.items() if name == compiled.firmware), None)
     return LoadedList(list(parts[_part_index(p, part, len(parts), compiled.item_limit)]), compiled.home, made_for)
+
+
+def _capture_plan_fence(p, firmware: str | None) -> LoadedList:
+    """The fence capture plan `p` compiles to: its exclusion zones and `fence: {margin_m}` inclusion polygon."""
+    compiled = _compiled_without_errors(p, firmware)
+    if not compiled.fence:
+        raise PlanError("the capture plan has no fence: no step has no_fly: or exclude: zones and it has no fence: key",
+                        where=str(p), hint="add fence: {margin_m: 30} for an inclusion fence around the flight")
+    made_for = next((code for code, name in CHECKED_FIRMWARES.items() if name == compiled.firmware), None)
+    return LoadedList(list(compiled.fence), compiled.home, made_for)
 
 
 def _compiled_without_errors(p, firmware: str | None):

@@ -29,6 +29,8 @@ flavour "px4" (PX4's mavlink_mission.cpp):
   * the last item arriving again after completion gets the ACCEPTED ack again.
 Both: MISSION_ACK ACCEPTED carries an opaque_id (CRC32 of the stored items, as ArduPilot's is a
 CRC32 of the item fields), MISSION_COUNT on download carries it too; MISSION_CLEAR_ALL clears;
+MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES and MAV_CMD_REQUEST_MESSAGE(AUTOPILOT_VERSION) get MAV_RESULT_ACCEPTED and
+an AUTOPILOT_VERSION (the firmware's version number and the mission-protocol capabilities it has); any other
 COMMAND_LONG gets MAV_RESULT_UNSUPPORTED (ground stations probe capabilities). With
 `stores_like_firmware=True` a download gives each item back as that firmware does (params it
 does not keep as 0, whole numbers, centimetre altitudes, its frames, PX4's yaw through radians;
@@ -73,6 +75,13 @@ FLAVOURS = {
     "ardupilot": Flavour("ardupilot", mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA, True, 1.0, 8.0, True, None),
     "px4": Flavour("px4", mavlink2.MAV_AUTOPILOT_PX4, False, 0.25, 5.0, False, 500),
 }
+# AUTOPILOT_VERSION.flight_sw_version: (major, minor, patch) of a current release of each firmware, released
+# (FIRMWARE_VERSION_TYPE_OFFICIAL in the low byte)
+SOFTWARE_VERSION = {"ardupilot": (4, 5, 7), "px4": (1, 15, 4)}
+# what both firmwares report and the simulator does: MISSION_ITEM_INT missions, fence and rally lists, MAVLink 2
+CAPABILITIES = (mavlink2.MAV_PROTOCOL_CAPABILITY_MISSION_INT | mavlink2.MAV_PROTOCOL_CAPABILITY_COMMAND_INT
+                | mavlink2.MAV_PROTOCOL_CAPABILITY_MISSION_FENCE | mavlink2.MAV_PROTOCOL_CAPABILITY_MISSION_RALLY
+                | mavlink2.MAV_PROTOCOL_CAPABILITY_MAVLINK2)
 # the lists a vehicle keeps (MAV_MISSION_TYPE_ALL names them all at once)
 MISSION_TYPES = (mavlink2.MAV_MISSION_TYPE_MISSION, mavlink2.MAV_MISSION_TYPE_FENCE, mavlink2.MAV_MISSION_TYPE_RALLY)
 
@@ -261,8 +270,7 @@ class VehicleSim:
         src = (msg.get_srcSystem(), msg.get_srcComponent())
         kind = getattr(msg, "mission_type", 0)
         if mtype == "COMMAND_LONG":
-            self.link.send(self.link.mav.command_ack_encode(msg.command, mavlink2.MAV_RESULT_UNSUPPORTED, 0, 0,
-                                                            src[0], src[1]))
+            self._on_command(msg, src)
             return
         if kind not in self._store:
             self._ack(src, mavlink2.MAV_MISSION_UNSUPPORTED, kind)
@@ -302,6 +310,21 @@ class VehicleSim:
                 self._store[k] = []
             self._ack(src, mavlink2.MAV_MISSION_ACCEPTED, kind)
         # MISSION_ACK from the GCS ends a download; nothing to do.
+
+    def _on_command(self, msg, src: tuple[int, int]) -> None:
+        asks_version = (msg.command == mavlink2.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES
+                        or (msg.command == mavlink2.MAV_CMD_REQUEST_MESSAGE
+                            and int(msg.param1) == mavlink2.MAVLINK_MSG_ID_AUTOPILOT_VERSION))
+        result = mavlink2.MAV_RESULT_ACCEPTED if asks_version else mavlink2.MAV_RESULT_UNSUPPORTED
+        self.link.send(self.link.mav.command_ack_encode(msg.command, result, 0, 0, src[0], src[1]))
+        if asks_version:
+            self.link.send(self._autopilot_version())
+
+    def _autopilot_version(self):
+        major, minor, patch = SOFTWARE_VERSION[self.flavour.name]
+        version = (major << 24) | (minor << 16) | (patch << 8) | mavlink2.FIRMWARE_VERSION_TYPE_OFFICIAL
+        return self.link.mav.autopilot_version_encode(CAPABILITIES, version, 0, 0, 0, [0] * 8, [0] * 8, [0] * 8,
+                                                      0, 0, 0)
 
     def _ap_busy(self, kind: int) -> bool:
         return self.flavour.name == "ardupilot" and self._upload is not None and self._upload.mission_type == kind

@@ -37,7 +37,7 @@ from missions.compiled import PlanWarning
 from missions.errors import PlanError
 from missions.emit.firmware import FirmwareProfile
 from missions.geometry.geo import great_circle_m
-from missions.emit.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem, deg_to_e7, mavlink
+from missions.emit.items import FRAME_GLOBAL, FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem, deg_to_e7, mavlink
 from missions.emit import lua as bridge
 from missions.emit.setup import commands_for
 
@@ -72,6 +72,15 @@ class Track:
     hold_s: float = HOVER_HOLD_S
     # False when only RedEdges fly it: they capture themselves (overlap mode), no trigger items are emitted
     autopilot_triggers: bool = True
+    # Terrain following (missions.terrain.lines): the points' frame, and with it each point's own altitude
+    # (above mean sea level in FRAME_GLOBAL); None: every point at altitude_m
+    frame: int = FRAME_GLOBAL_RELATIVE_ALT
+    altitudes: tuple[float, ...] | None = None
+    over_tolerance_m: float = 0.0              # how far above its band the climb/descent rates forced it
+    highest_agl_m: float | None = None         # the most it rises above the ground (None: not followed)
+
+    def altitude_of(self, i: int) -> float:
+        return self.altitudes[i] if self.altitudes is not None else self.altitude_m
 
 
 @dataclass
@@ -80,6 +89,7 @@ class _State:
 
     items: list[MissionItem] = field(default_factory=list)
     last_pos: tuple[float, float, float] | None = None
+    last_frame: int = FRAME_GLOBAL_RELATIVE_ALT    # the frame last_pos's altitude is in
     script_run: int = 0        # script items since the last NAV item
     lua: bool = False
     warnings: list[PlanWarning] = field(default_factory=list)
@@ -101,10 +111,10 @@ def _do(command: int, p1: float = 0.0, p2: float = 0.0, p3: float = 0.0, p4: flo
 
 
 def _nav(command: int, lat: float, lon: float, alt: float, p1: float = 0.0, p2: float = 0.0, p3: float = 0.0,
-         p4: float = NAN, comment: str = "") -> MissionItem:
+         p4: float = NAN, comment: str = "", frame: int = FRAME_GLOBAL_RELATIVE_ALT) -> MissionItem:
     # ArduPilot stores mission altitudes in whole centimetres: a finer altitude reads back different and
     # would fail an upload's --verify, so emit what the vehicle will hold.
-    return MissionItem(command=command, frame=FRAME_GLOBAL_RELATIVE_ALT, param1=float(p1), param2=float(p2),
+    return MissionItem(command=command, frame=frame, param1=float(p1), param2=float(p2),
                        param3=float(p3), param4=float(p4), x=deg_to_e7(lat), y=deg_to_e7(lon),
                        z=round(float(alt), 2), comment=comment)
 
@@ -141,6 +151,9 @@ class Emitter:
         # in-flight value whose `when` a pre-flight setting meets travels (the plan loader judges alike)
         self.camera_state: dict[str, dict] = {name: dict(v) for name, v in (preflight or {}).items()}
         self.s = _State()
+        # home's elevation, for a height above home from an altitude above mean sea level (terrain-following
+        # lines emit FRAME_GLOBAL); None: every position is relative
+        self.home_amsl_m: float | None = None
 
     # ------------------------------------------------------------------------------------------ plumbing
     def _add(self, item: MissionItem) -> None:
@@ -149,6 +162,7 @@ class Emitter:
             self.s.script_run = 0
             if item.x or item.y:
                 self.s.last_pos = (item.lat, item.lon, item.z)
+                self.s.last_frame = item.frame
 
     def result(self) -> Emitted:
         return Emitted(tuple(self.s.items), self.s.lua, tuple(self.s.warnings))
@@ -200,10 +214,10 @@ class Emitter:
             self.set_speed()
         navs: list[int] = []
         if not t.autopilot_triggers:
-            for p in t.points:
+            for i, p in enumerate(t.points):
                 navs.append(len(self.s.items))
-                self._add(_nav(mavlink.MAV_CMD_NAV_WAYPOINT, p.lat, p.lon, t.altitude_m,
-                               comment=f"{p.kind} (RedEdge captures itself)"))
+                self._add(_nav(mavlink.MAV_CMD_NAV_WAYPOINT, p.lat, p.lon, t.altitude_of(i),
+                               comment=f"{p.kind} (RedEdge captures itself)", frame=t.frame))
             self.s.track_navs = tuple(navs)
             return
         if t.trigger == "interval" and not self.profile.interval_trigger:
@@ -215,12 +229,12 @@ class Emitter:
             navs.append(len(self.s.items))
             if t.trigger == "hover" and p.kind == "photo":
                 yaw = p.yaw_deg if p.yaw_deg is not None and self.keeps_waypoint_yaw else NAN
-                self._add(_nav(mavlink.MAV_CMD_NAV_WAYPOINT, p.lat, p.lon, t.altitude_m, p1=t.hold_s, p4=yaw,
+                self._add(_nav(mavlink.MAV_CMD_NAV_WAYPOINT, p.lat, p.lon, t.altitude_of(i), p1=t.hold_s, p4=yaw,
                                comment=f"hover {t.hold_s:g} s and shoot"
-                                       + ("" if math.isnan(yaw) else f" facing {yaw:.1f}°")))
+                                       + ("" if math.isnan(yaw) else f" facing {yaw:.1f}°"), frame=t.frame))
                 self._add(self._capture(None, where))
                 continue
-            self._add(_nav(mavlink.MAV_CMD_NAV_WAYPOINT, p.lat, p.lon, t.altitude_m, comment=p.kind))
+            self._add(_nav(mavlink.MAV_CMD_NAV_WAYPOINT, p.lat, p.lon, t.altitude_of(i), comment=p.kind, frame=t.frame))
             if i in starts and t.trigger != "hover":
                 self._trigger_on(t)
             if i in stops and t.trigger != "hover":
@@ -249,6 +263,10 @@ class Emitter:
                        comment=f"waypoint, hold {hold_s:g} s" if hold_s else "waypoint"))
         if capture is not None:
             self._add(self._capture(capture, where))
+
+    def via(self, lat: float, lon: float, alt_m: float) -> None:
+        """A waypoint of a transit routed round a no-fly zone (missions.geometry.zones)."""
+        self._add(_nav(mavlink.MAV_CMD_NAV_WAYPOINT, lat, lon, alt_m, comment="via (round a no-fly zone)"))
 
     def _capture(self, payload: str | None, where: str | None) -> MissionItem:
         """One photo: IMAGE_START_CAPTURE(total 1). `payload` None = every camera."""
@@ -310,7 +328,7 @@ class Emitter:
             if self.s.script_run >= bridge.QUEUE_SIZE:
                 lat, lon, alt = self.s.last_pos
                 self._add(_nav(mavlink.MAV_CMD_NAV_LOITER_TIME, lat, lon, alt, p1=BRIDGE_PAUSE_S, p4=0.0,
-                               comment="pause so the Lua bridge drains its 5-item queue"))
+                               comment="pause so the Lua bridge drains its 5-item queue", frame=self.s.last_frame))
             self._add(it)
             self.s.script_run += 1
         self.s.lua = True
@@ -358,6 +376,8 @@ class Emitter:
 
     def _check_glide(self, lat: float, lon: float, where: str | None) -> None:
         plat, plon, alt = self.s.last_pos
+        if self.s.last_frame == FRAME_GLOBAL and self.home_amsl_m is not None:
+            alt -= self.home_amsl_m
         dist = great_circle_m(plat, plon, lat, lon)
         need = alt / math.tan(math.radians(MAX_GLIDE_DEG))
         if alt > 0 and dist < need:

@@ -10,7 +10,8 @@ home, flat ground assumed as in the report). Every feature has a `kind` property
   waypoint    each NAV item's position: seq (as on the vehicle), command name, altitude
   home        the home position
   photo       each re-derived photo position: index, payloads, altitude, heading, mission item, time
-  footprint   each photo's ground footprint per payload (nadir rectangle at the photo's altitude)
+  footprint   each photo's ground footprint per payload (nadir rectangle at the photo's altitude; with a DEM the
+              view cone cut by the terrain, missions.terrain.reflight)
   sortie      a mission flown in sorties: each sortie's own re-flown path (home to home) as a LineString;
               properties: sortie (1..N), file, flight_time_s, photos, items, first_line, last_line
 
@@ -62,7 +63,8 @@ def feature_collection(compiled: Compiled, sim: Simulation, rep: MissionReport) 
             for hole in poly[1:]:
                 feats.append({"type": "Feature", "properties": {"kind": "gap", "step": a.step},
                               "geometry": {"type": "Polygon", "coordinates": [hole]}})
-    line = [[_r7(lon), _r7(lat), round(home_amsl + v.alt_m, 2)] for (lat, lon), v in zip(sim.latlon, sim.vertices)]
+    amsl = _vertex_amsl(compiled, sim)
+    line = [[_r7(lon), _r7(lat), round(z, 2)] for (lat, lon), z in zip(sim.latlon, amsl)]
     feats.append({"type": "Feature",
                   "properties": {"kind": "path", "length_m": rep.path_length_m, "flight_time_s": rep.flight_time_s,
                                  "flight_time_qgc_s": rep.flight_time_qgc_s},
@@ -71,7 +73,7 @@ def feature_collection(compiled: Compiled, sim: Simulation, rep: MissionReport) 
                   "geometry": {"type": "Point", "coordinates": [_r7(compiled.home[1]), _r7(compiled.home[0]), home_amsl]}})
     seq_base = 1 if compiled.firmware == "ardupilot" else 0
     seen: set[int] = set()
-    for (lat, lon), v in zip(sim.latlon, sim.vertices):
+    for (lat, lon), v, z in zip(sim.latlon, sim.vertices, amsl):
         if v.item < 0 or v.item in seen:
             continue
         seen.add(v.item)
@@ -79,15 +81,20 @@ def feature_collection(compiled: Compiled, sim: Simulation, rep: MissionReport) 
         feats.append({"type": "Feature",
                       "properties": {"kind": "waypoint", "seq": v.item + seq_base, "command": _command_name(it.command),
                                      "alt_m": round(v.alt_m, 2), "hold_s": v.hold_s, "comment": it.comment},
-                      "geometry": {"type": "Point", "coordinates": [_r7(lon), _r7(lat), round(home_amsl + v.alt_m, 2)]}})
+                      "geometry": {"type": "Point", "coordinates": [_r7(lon), _r7(lat), round(z, 2)]}})
     n_fp = sum(len(p.payloads) for p in sim.photos)
     write_fp = n_fp <= MAX_FOOTPRINT_FEATURES
+    heights = _photo_heights(compiled, sim)
     for k, p in enumerate(sim.photos):
-        feats.append({"type": "Feature",
-                      "properties": {"kind": "photo", "index": k, "payloads": list(p.payloads),
-                                     "alt_m": round(p.alt_m, 2), "heading_deg": round(p.heading_deg, 2),
-                                     "item_seq": p.cause + seq_base if p.cause >= 0 else None, "time_s": round(p.time_s, 1)},
-                      "geometry": {"type": "Point", "coordinates": [_r7(p.lon), _r7(p.lat), round(home_amsl + p.alt_m, 2)]}})
+        props = {"kind": "photo", "index": k, "payloads": list(p.payloads),
+                 "alt_m": round(p.alt_m, 2), "heading_deg": round(p.heading_deg, 2),
+                 "item_seq": p.cause + seq_base if p.cause >= 0 else None, "time_s": round(p.time_s, 1)}
+        amsl = home_amsl + p.alt_m
+        if heights is not None:          # over a DEM: the camera's altitude and its height above the ground below
+            amsl = float(heights[0][k])
+            props["agl_m"] = round(float(heights[0][k] - heights[1][k]), 2)
+        feats.append({"type": "Feature", "properties": props,
+                      "geometry": {"type": "Point", "coordinates": [_r7(p.lon), _r7(p.lat), round(amsl, 2)]}})
     if write_fp:
         feats.extend(_footprints(compiled, sim))
     feats.extend(_sortie_features(rep, home_amsl))
@@ -97,6 +104,24 @@ def feature_collection(compiled: Compiled, sim: Simulation, rep: MissionReport) 
         props["footprints_omitted"] = (f"{n_fp} footprints exceed {MAX_FOOTPRINT_FEATURES}; "
                                        "photo points are complete")
     return {"type": "FeatureCollection", "properties": props, "features": feats}
+
+
+def _vertex_amsl(compiled: Compiled, sim: Simulation) -> list[float]:
+    """Each path vertex's altitude above mean sea level: home's elevation plus its height above home, or over a
+    DEM the ground plus its height for a vertex in the terrain frame (missions.terrain.clearance)."""
+    if getattr(compiled, "terrain", None) is None or not sim.vertices:
+        return [compiled.home[2] + v.alt_m for v in sim.vertices]
+    from missions.terrain.clearance import vertex_heights
+    return vertex_heights(compiled, sim, compiled.terrain.dem)[0].tolist()
+
+
+def _photo_heights(compiled: Compiled, sim: Simulation) -> tuple[np.ndarray, np.ndarray] | None:
+    """(camera altitude AMSL, ground AMSL below) of every photo when the plan has a DEM, else None."""
+    if getattr(compiled, "terrain", None) is None or not sim.photos:
+        return None
+    from missions.terrain.reflight import camera_amsl
+    ground = compiled.terrain.dem.ground_amsl([p.lat for p in sim.photos], [p.lon for p in sim.photos])
+    return camera_amsl(compiled, sim.photos, ground), ground
 
 
 def _sortie_features(rep: MissionReport, home_amsl: float) -> list[dict]:
@@ -114,6 +139,9 @@ def _footprints(compiled: Compiled, sim: Simulation) -> list[dict]:
     owners = [(k, name) for k, p in enumerate(sim.photos) for name in p.payloads]
     if not owners:
         return []
+    if getattr(compiled, "terrain", None) is not None:      # cut by the DEM (missions.terrain.reflight)
+        from missions.terrain.reflight import footprint_rings
+        return _polygon_features(owners, footprint_rings(compiled, sim, owners), sim)
     ph = sim.photos
     idx = np.array([k for k, _ in owners])
     c = np.array([(ph[k].x, ph[k].y) for k in idx], dtype=float)
@@ -126,9 +154,15 @@ def _footprints(compiled: Compiled, sim: Simulation) -> list[dict]:
     n = np.column_stack([np.cos(h), -np.sin(h)])
     a, b = d * along[:, None], n * across[:, None]
     corners = np.stack([c - a - b, c + a - b, c + a + b, c - a + b, c - a - b], axis=1)   # as footprint_ring
+    return _polygon_features(owners, corners, sim)
+
+
+def _polygon_features(owners: list[tuple[int, str]], corners: np.ndarray, sim: Simulation) -> list[dict]:
+    """Footprint features from closed rings (m, k, 2) in the simulation's metres."""
+    k_pts = corners.shape[1]
     lat, lon = sim.projection.to_latlon(corners[..., 0].ravel(), corners[..., 1].ravel())
-    lat = np.round(lat, 7).reshape(-1, 5).tolist()
-    lon = np.round(lon, 7).reshape(-1, 5).tolist()
+    lat = np.round(lat, 7).reshape(-1, k_pts).tolist()
+    lon = np.round(lon, 7).reshape(-1, k_pts).tolist()
     return [{"type": "Feature", "properties": {"kind": "footprint", "photo": k, "payload": name},
              "geometry": {"type": "Polygon", "coordinates": [[[b, a] for a, b in zip(la, lo)]]}}
             for (k, name), la, lo in zip(owners, lat, lon)]

@@ -16,7 +16,8 @@ Conventions (shared with missions.formats.wpl and the transfer tools):
 What is written is what QGroundControl writes (MissionController, GeoFenceController,
 RallyPointController): `fileType` "Plan", `version` 1, `groundStation` "QGroundControl";
 `mission.version` 2 with firmwareType (MAV_AUTOPILOT), vehicleType (MAV_TYPE), cruiseSpeed,
-hoverSpeed, globalPlanAltitudeMode, plannedHomePosition and SimpleItems (NaN params as null);
+hoverSpeed, globalPlanAltitudeMode, plannedHomePosition and SimpleItems (NaN params as null), with a compiled
+mission's surveys (and corridors, when asked) as the ComplexItems of missions.formats.qgc_complex;
 `geoFence.version` 2 with `polygons` / `circles` (each version 1); `rallyPoints.version` 2. Both
 the geoFence and rallyPoints sections are always written (MAVSDK's importer fails silently without
 them). Keys sorted and four-space indents, like Qt's QJsonDocument.
@@ -239,10 +240,19 @@ def _code(table: dict[str, int], value: str | int | None, what: str) -> int:
         raise PlanError(f"unknown {what} {value!r}", hint=f"use one of: {', '.join(sorted(table))}") from None
 
 
+def _mission_items(items: list[MissionItem], patterns, payloads, corridor_scan: bool) -> list[dict[str, Any]]:
+    if not patterns:
+        return [_simple_item(it, i + 1) for i, it in enumerate(items)]
+    from missions.formats.qgc_complex import mission_items_json
+    return mission_items_json(items, patterns, payloads, _simple_item, corridor_scan=corridor_scan)
+
+
 def plan_document(items, home: Home | None, *, firmware: str | int | None, vehicle: str | int | None,
                   fence=None, rally=None, cruise_speed: float | None = None,
-                  hover_speed: float | None = None) -> dict[str, Any]:
-    """The .plan JSON object (see write_plan)."""
+                  hover_speed: float | None = None, patterns=(), payloads=(),
+                  corridor_scan: bool = False) -> dict[str, Any]:
+    """The .plan JSON object (see write_plan). `patterns` (Compiled.patterns, indices into `items`) are written
+    as QGC ComplexItems around the other items (missions.formats.qgc_complex); `payloads` give their optics."""
     items, fence, rally = list(items), list(fence or []), list(rally or [])
     if len(items) > MAX_ITEMS:
         raise PlanError(f"{len(items)} mission items do not fit a MAVLink mission (at most {MAX_ITEMS})",
@@ -257,7 +267,7 @@ def plan_document(items, home: Home | None, *, firmware: str | int | None, vehic
         "firmwareType": _code(FIRMWARE_TYPES, firmware, "firmware"),
         "globalPlanAltitudeMode": alt_mode,
         "hoverSpeed": _num(float(hover_speed if hover_speed is not None else QGC_DEFAULT_HOVER_SPEED)),
-        "items": [_simple_item(it, i + 1) for i, it in enumerate(items)],
+        "items": _mission_items(items, patterns, payloads, corridor_scan),
         "plannedHomePosition": [_num(float(lat)), _num(float(lon)), _num(float(alt))],
         "vehicleType": _code(VEHICLE_TYPES, vehicle, "vehicle type"),
         "version": 2,
@@ -268,7 +278,7 @@ def plan_document(items, home: Home | None, *, firmware: str | int | None, vehic
 
 def write_plan(items, home=None, /, *, firmware: str | int | None = None, vehicle: str | int | None = None,
                fence=None, rally=None, cruise_speed: float | None = None, hover_speed: float | None = None,
-               **file_form) -> str:
+               patterns=(), payloads=(), corridor_scan: bool = False, **file_form) -> str:
     """The .plan text for `items` (no home row) with `home` = (lat, lon, alt AMSL) or None.
 
     `firmware`: "ardupilot" | "px4" | a MAV_AUTOPILOT number; `vehicle`: "copter" | "plane" |
@@ -283,15 +293,21 @@ def write_plan(items, home=None, /, *, firmware: str | int | None = None, vehicl
         if file_form:
             raise TypeError(f"unexpected arguments {sorted(file_form)}")
         speed = getattr(compiled, "speed_mps", None)
+        whole = chosen is None or tuple(chosen) == tuple(compiled.items)
+        # a part's item numbers are not the whole mission's: only the whole mission carries the patterns
         text = write_plan(list(chosen if chosen is not None else compiled.items), compiled.home,
                           firmware=compiled.firmware, vehicle=getattr(compiled, "frame", None),
-                          cruise_speed=speed, hover_speed=speed)
+                          cruise_speed=speed, hover_speed=speed, fence=list(getattr(compiled, "fence", ())),
+                          patterns=getattr(compiled, "patterns", ()) if whole else (),
+                          payloads=getattr(compiled, "payloads", ()),
+                          corridor_scan=getattr(compiled, "corridor_scan", False))
         atomic_write(Path(items), text)
         return text
     if file_form:
         raise TypeError(f"unexpected arguments {sorted(file_form)}")
     doc = plan_document(items, home, firmware=firmware, vehicle=vehicle, fence=fence, rally=rally,
-                        cruise_speed=cruise_speed, hover_speed=hover_speed)
+                        cruise_speed=cruise_speed, hover_speed=hover_speed, patterns=patterns, payloads=payloads,
+                        corridor_scan=corridor_scan)
     text = json.dumps(doc, indent=4, sort_keys=True, allow_nan=False) + "\n"
     if len(text) > MAX_PLAN_BYTES:  # only a vehicle's hostile fence or rally list gets here
         raise PlanError(f"the .plan would be {len(text) / 2**20:.0f} MB, more than the {MAX_PLAN_BYTES // 2**20} MB "

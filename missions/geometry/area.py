@@ -67,6 +67,11 @@ class Area:
     excluded: Any = None
     # pieces narrower than MIN_PART_WIDTH_M that the exclusions cut off and that were dropped: (count, m²)
     dropped: tuple[int, float] = (0, 0.0)
+    # the polygons as drawn, before the exclusions (and their margin) were taken away; None: not recorded
+    drawn: Any = None
+    # what the route keeps its turnarounds and connections out of when that is more than `excluded`: the holes and
+    # the exclusions grown by their margin (build_area's margin_m); None: `excluded`
+    keep_out: Any = None
 
     @property
     def area_m2(self) -> float:
@@ -494,8 +499,9 @@ def _polygonal(g: Any) -> Any:
 
 
 def build_area(polygons: Sequence[LatLonPolygon], exclusions: Sequence[LatLonPolygon] = (),
-               source: str = "", projection: LocalProjection | None = None) -> Area:
-    """Project, clean and validate polygons (centring the projection on them), union them, subtract exclusions."""
+               source: str = "", projection: LocalProjection | None = None, margin_m: float = 0.0) -> Area:
+    """Project, clean and validate polygons (centring the projection on them), union them, subtract exclusions
+    grown by `margin_m` (the position error a zone is kept clear by: missions.geometry.zones)."""
     import shapely
     from shapely.geometry.polygon import orient
 
@@ -516,14 +522,16 @@ def build_area(polygons: Sequence[LatLonPolygon], exclusions: Sequence[LatLonPol
     projected = [_project_polygon(p, projection) for p in polygons]
     geom = shapely.union_all(projected) if len(projected) > 1 else projected[0]
     _check_extent(geom, source)
+    drawn = geom
     from shapely.geometry import Polygon
     holes = [Polygon(r) for p in projected for r in p.interiors]
     cut = None
     dropped = (0, 0.0)
     if exclusions:
         cut = shapely.union_all([_project_polygon(e, projection) for e in exclusions])
-        geom = geom.difference(cut)
-        geom, dropped = _drop_slivers(_polygonal(geom), cut)
+        grown = cut.buffer(margin_m, join_style="mitre") if margin_m > 0 else cut
+        geom = geom.difference(grown)
+        geom, dropped = _drop_slivers(_polygonal(geom), grown)
         if geom.is_empty:
             raise PlanError("the area is empty once the exclusion zones are removed", where=source or None,
                             hint="check that the exclusions do not cover the whole area (pieces narrower than "
@@ -536,7 +544,8 @@ def build_area(polygons: Sequence[LatLonPolygon], exclusions: Sequence[LatLonPol
         geom = MultiPolygon([orient(g, 1.0) for g in geom.geoms])
     zones = [*holes, *([cut] if cut is not None else [])]
     excluded = (shapely.union_all(zones) if len(zones) > 1 else zones[0]) if zones else Polygon()
-    return Area(geom, projection, source, excluded, dropped)
+    keep_out = shapely.union_all([*holes, grown]) if exclusions and margin_m > 0 else None
+    return Area(geom, projection, source, excluded, dropped, drawn, keep_out)
 
 
 def _drop_slivers(geom: Any, cut: Any) -> tuple[Any, tuple[int, float]]:

@@ -472,8 +472,9 @@ def _flown_route(area: Area, passes: OrderedLegs, turnaround_m: float, exit_marg
     # holes and exclusions), stopping at the photos instead of running the camera along the leg: see _hover_route.
     # A hover stop is held, so no exit margin against an early waypoint acceptance.
     margin = 0.0 if hover else min(exit_margin_m, 0.45 * trig)
+    avoid = area.keep_out if getattr(area, "keep_out", None) is not None else area.excluded
     route = build_route(passes.legs, area.geometry, turnaround_m, exit_margin_m=margin, order=passes.order,
-                        avoid=area.excluded)
+                        avoid=avoid)
     return _hover_route(route, trig) if hover else route
 
 

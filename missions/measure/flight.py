@@ -12,7 +12,8 @@ How the items are flown (the model, stated so it can be checked):
   ending in a hold (LOITER_UNLIM) while the next one is uploaded; upload time is not in the flight time.
 * Altitude: relative frames are above home; absolute (AMSL) frames are converted with home's AMSL altitude;
   terrain frames are taken as height above the ground (a warning says so). The ground is assumed flat at
-  home's elevation: the report cannot know the terrain, and neither can the autopilot without terrain data.
+  home's elevation here; with a DEM in the plan the report measures the photos over it instead
+  (missions.terrain.reflight: heights above the ground below each photo, footprints cut by the terrain).
 * Camera: DO commands execute when the vehicle leaves the previous NAV position, so a command takes effect
   at the path vertex it follows. DO_SET_CAM_TRIGG_DIST (on/off, param3 "trigger once") is re-run through
   `missions.geometry.triggers.simulate_distance_trigger`, which fires as ArduPilot's AP_Camera and PX4's

@@ -43,7 +43,9 @@ from missions.measure.coverage import (coverage_fraction, footprint_polygons, mi
 from missions.measure.flight import Photo, Simulation, self_triggering, simulate
 from missions.measure.numbers import StepNumbers, step_numbers
 from missions.measure.seams import measure_sorties, table_lines
+from missions.measure.zones import ZoneMeasure, ZoneRow, measure_zones, photographed_warnings
 from missions.plan.schema import MAX_AGL_M
+from missions.terrain.reflight import GROUND_FLAT
 
 # Coverage below this is worth a warning: the examples and the tests hold the compiler to it.
 COVERAGE_TARGET = 0.995
@@ -150,6 +152,11 @@ class AreaRow:
     photos: Mapping[str, int]                 # the step's own photos
     path: StepPath | None                     # None: the step has no payload, its path was not measured
     photos_in_zones: Mapping[str, int]        # the whole flight's photos centred inside the step's zones
+    # the no_fly / no_photo / exclude zones near the step (missions.measure.zones); coverage is measured on the
+    # coverable area when there are any
+    zones: tuple[ZoneRow, ...] = ()
+    coverable_m2: float | None = None
+    zone_margin_m: float | None = None
 
     def to_json(self) -> dict[str, Any]:
         out: dict[str, Any] = {"step": self.step, "kind": self.kind, "area_m2": self.area_m2,
@@ -160,6 +167,10 @@ class AreaRow:
         if self.path is not None:
             out.update(self.path.to_json())
             out["photos_in_zones"] = dict(self.photos_in_zones)
+        if self.zones:
+            out["zone_margin_m"] = self.zone_margin_m
+            out["coverable_m2"] = self.coverable_m2
+            out["zones"] = [z.to_json() for z in self.zones]
         return out
 
 
@@ -194,6 +205,8 @@ class MissionReport:
     steps: tuple[StepNumbers, ...] = ()      # per survey or corridor step, the numbers a pilot reads
     sorties: Any = None                       # missions.measure.seams.SortieTable (a mission flown in sorties)
     endurance: Any = None                     # missions.sorties.Endurance the compile judged the flight by
+    ground: str = GROUND_FLAT                 # where heights above ground come from
+    terrain: Any = None                       # missions.terrain.reflight.GroundReport when a DEM is given
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -221,12 +234,13 @@ class MissionReport:
             "speed_mps": self.speed_mps,
             "sun": [s.to_json() for s in self.sun],
             "steps": [s.to_json() for s in self.steps],
+            "ground": self.ground,
             "endurance": None if self.endurance is None else self.endurance.to_json(),
             "sorties": [] if self.sorties is None else list(self.sorties.rows),
             "sorties_union": None if self.sorties is None else
             {"coverage": dict(self.sorties.coverage),
              "overlap": {n: o.to_json() for n, o in self.sorties.overlap.items()}},
-        }
+        } | ({"terrain": self.terrain.to_json()} if self.terrain is not None else {})
 
 
 @dataclass(frozen=True)
@@ -305,6 +319,7 @@ class StepMeasure:
     area: AreaInfo
     payloads: tuple[PayloadMeasure, ...]
     path: StepPath | None
+    zones: ZoneMeasure | None = None
 
 
 @dataclass(frozen=True)
@@ -385,8 +400,24 @@ def _min_overlaps(ph: _PhotoArrays, groups: dict[float, list[int]], payload: Pay
     return OverlapMin(_lowest(fronts), _lowest(sides))
 
 
+def _measure_payload_over_dem(area_info: AreaInfo, geom: Any, zones: Any, name: str, payload: PayloadInfo,
+                              photos: Sequence[Photo], ground: Any) -> PayloadMeasure:
+    """`_measure_payload` with footprints cut by the DEM (missions.terrain.reflight): coverage of every photo
+    whose ground footprint meets the area, overlaps of the step's own."""
+    import shapely
+    from missions.terrain import reflight
+
+    ph = _PhotoArrays.of(photos)
+    near = np.flatnonzero(shapely.intersects(ground.polygons, geom)) if len(photos) else np.zeros(0, int)
+    own = near if area_info.items is None else ph.taken_during(area_info.items)
+    overlap = OverlapMin(reflight.min_front_overlap(photos, ground, own),
+                         reflight.min_side_overlap(photos, ground, own, payload))
+    return PayloadMeasure(name, reflight.coverage_on_ground(geom, ground, near), overlap, int(len(own)),
+                          _photos_in(zones, photos))
+
+
 def _measure_payload(area_info: AreaInfo, geom: Any, zones: Any, name: str, payload: PayloadInfo,
-                     photos: Sequence[Photo], self_shooting: bool = False) -> PayloadMeasure:
+                     photos: Sequence[Photo], ground: Any = None, self_shooting: bool = False) -> PayloadMeasure:
     """Coverage and overlaps of one payload's photos over one step's area `geom`.
 
     Coverage counts every photo whose footprint can reach the area: a neighbouring step's photo covers ground
@@ -397,6 +428,8 @@ def _measure_payload(area_info: AreaInfo, geom: Any, zones: Any, name: str, payl
     mode) shoots on the turnarounds and transits too; its overlaps take the photos on the step's lines
     (`area_info.line_items`): a turnaround's photos beside a line of the crossing pass (refly_90) are no side
     neighbour of it."""
+    if ground is not None:
+        return _measure_payload_over_dem(area_info, geom, zones, name, payload, photos, ground)
     ph = _PhotoArrays.of(photos)
     near = ph.reaching(geom, payload)
     own = near if area_info.items is None else ph.taken_during(area_info.items)
@@ -406,7 +439,8 @@ def _measure_payload(area_info: AreaInfo, geom: Any, zones: Any, name: str, payl
 
 
 def _measure_step(compiled: Compiled, area_info: AreaInfo, path: np.ndarray | None,
-                  photos_of: Mapping[str, Sequence[Photo]], sim: Simulation) -> StepMeasure:
+                  photos_of: Mapping[str, Sequence[Photo]], sim: Simulation,
+                  grounds: Mapping[str, Any] | None = None) -> StepMeasure:
     """One step's payloads and path, in the simulation's projection. The metres outside the area take the path
     segments the step flew (`path`, a mask over the simulation's segments, `_step_paths`; None: the whole path);
     the metres over its zones the whole flight, whichever step flies there."""
@@ -415,10 +449,46 @@ def _measure_step(compiled: Compiled, area_info: AreaInfo, path: np.ndarray | No
     geom = area_geometry(area_info.area, sim.projection)
     zones = _zones(area_info.area, sim.projection)
     own = self_triggering(compiled)
-    payloads = tuple(_measure_payload(area_info, geom, zones, n, compiled.payload(n), photos_of.get(n, []), n in own)
-                     for n in area_info.payloads)
+    table = _zone_table(compiled, area_info, geom, photos_of, sim) if area_info.zones is not None else None
+    measured = geom if table is None else table.coverable
+    payloads = tuple(_measure_payload(area_info, measured, zones, n, compiled.payload(n), photos_of.get(n, []),
+                                      (grounds or {}).get(n), n in own) for n in area_info.payloads)
     over_m, over_camera_m = _over_zones_m(sim, zones)
-    return StepMeasure(area_info, payloads, StepPath(_outside_m(sim.xy, path, geom), over_m, over_camera_m))
+    return StepMeasure(area_info, payloads, StepPath(_outside_m(sim.xy, path, geom), over_m, over_camera_m), table)
+
+
+def _footprint_union(ph: _PhotoArrays, idx: np.ndarray, payload: PayloadInfo) -> Any:
+    """The ground under the footprints of the photos `idx` (the simulation's metres)."""
+    import shapely   # heavy: loads only when a plan has an area
+    from shapely.geometry import Polygon
+
+    polys = [footprint_polygons(np.column_stack([ph.x[ks], ph.y[ks]]),
+                                np.radians([ph.photos[k].heading_deg for k in ks]),
+                                Footprint(*payload.footprint_m(alt))) for alt, ks in ph.by_altitude(idx).items()]
+    return shapely.union_all(np.concatenate(polys)) if polys else Polygon()
+
+
+def _zone_table(compiled: Compiled, area_info: AreaInfo, geom: Any, photos_of: Mapping[str, Sequence[Photo]],
+                sim: Simulation) -> ZoneMeasure:
+    """The step's zone table (missions.measure.zones): photographed by any photo of the flight, lost as the step's
+    lead payload leaves it uncovered."""
+    import shapely   # heavy: loads only when a plan has an area
+
+    zones_xy = shapely.union_all([z.xy(sim.projection) for z in area_info.zones.zones])
+    everything = []
+    for p in compiled.payloads:
+        ph = _PhotoArrays.of(photos_of.get(p.name, []))
+        everything.append(_footprint_union(ph, ph.reaching(zones_xy, p), p))
+    lead = next((n for n in area_info.payloads if any(p.name == n for p in compiled.payloads)), None)
+    if lead is None:
+        from shapely.geometry import Polygon
+        lead_covered = Polygon()
+    else:
+        ph = _PhotoArrays.of(photos_of.get(lead, []))
+        pay = compiled.payload(lead)
+        lead_covered = _footprint_union(ph, ph.reaching(geom.union(zones_xy), pay), pay)
+    return measure_zones(area_info.zones, area_info.area, sim.projection, sim.xy, lead_covered,
+                         shapely.union_all(everything))
 
 
 def _step_paths(compiled: Compiled, sim: Simulation) -> list[np.ndarray | None]:
@@ -499,9 +569,11 @@ def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | N
     sim = sim or simulate(compiled)
     names = [p.name for p in compiled.payloads]
     photos_of = {n: [p for p in sim.photos if n in p.payloads] for n in names}
-    steps = [_measure_step(compiled, a, path, photos_of, sim)
+    grounds = _ground_photos(compiled, sim, photos_of)
+    steps = [_measure_step(compiled, a, path, photos_of, sim, grounds)
              for a, path in zip(compiled.areas, _step_paths(compiled, sim))]
     rows = tuple(_area_row(s) for s in steps)
+    terrain = _ground_report(compiled, sim, photos_of, grounds)
     return MissionReport(
         plan=plan_path or compiled.name,
         name=compiled.name,
@@ -518,18 +590,58 @@ def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | N
         flight_time_qgc_s=_r(sim.flight_time_qgc_s, 1),
         max_altitude_m=_r(max((v.alt_m for v in sim.vertices), default=0.0), 2),
         area_m2=_r(sum(a.area.area_m2 for a in compiled.areas), 1),
-        gsd_cm=_gsd_ranges(compiled, photos_of),
+        gsd_cm=_gsd_ranges(compiled, photos_of, grounds),
         coverage=_mission_coverage(steps),
         overlap=_mission_overlap(steps),
         areas=rows,
-        warnings=tuple(_warnings(compiled, sim, steps, rows)),
+        warnings=tuple(_warnings(compiled, sim, steps, rows)) + _ground_warnings(terrain),
         errors=tuple(_errors(compiled)),
         speed_mps=compiled.speed_mps,
         sun=tuple(compiled.sun),
         steps=step_numbers(compiled, sim),
         sorties=measure_sorties(compiled),
         endurance=compiled.endurance,
+        ground=GROUND_FLAT if terrain is None else terrain.ground,
+        terrain=terrain,
     )
+
+
+def _ground_photos(compiled: Compiled, sim: Simulation, photos_of: Mapping[str, Sequence[Photo]]) -> dict[str, Any]:
+    """Per payload, its photos over the DEM (heights above ground, footprints cut by the terrain); {} without one."""
+    if getattr(compiled, "terrain", None) is None:
+        return {}
+    from missions.terrain.reflight import ground_photos
+    return {n: ground_photos(compiled, sim, photos_of[n], compiled.payload(n)) for n in photos_of}
+
+
+def _ground_report(compiled: Compiled, sim: Simulation, photos_of: Mapping[str, Sequence[Photo]],
+                   grounds: Mapping[str, Any]) -> Any:
+    """The terrain section: DEM, minimum clearance, each step's heights above ground (its first payload's)."""
+    if not grounds:
+        return None
+    from missions.terrain.reflight import ground_report, step_ground
+
+    rows = []
+    for a in compiled.areas:
+        if not a.payloads or a.payloads[0] not in grounds:
+            continue
+        ph = _PhotoArrays.of(photos_of[a.payloads[0]])
+        own = ph.taken_during(a.items) if a.items is not None else np.arange(len(ph.photos))
+        rows.append(step_ground(a, compiled.terrain.tolerance_for(a.altitude_m), grounds[a.payloads[0]], own))
+    return ground_report(compiled, sim, rows)
+
+
+def _ground_warnings(terrain: Any) -> tuple[Finding, ...]:
+    if terrain is None:
+        return ()
+    out = [Finding("height_above_ground_off", f"step {s.step}: {s.outside_tolerance} photos are taken outside "
+                   f"{s.target_m:g}..{s.target_m + s.tolerance_m:g} m above the ground below them "
+                   f"({s.hag_min_m:.1f}..{s.hag_max_m:.1f} m)") for s in terrain.steps if s.outside_tolerance]
+    c = terrain.clearance
+    if c is not None and c.min_m < terrain.clearance_m - 0.005:
+        out.append(Finding("clearance", f"the path passes {c.min_m:.1f} m above the DEM at {c.lat:.6f}, {c.lon:.6f}, "
+                                        f"below the {terrain.clearance_m:g} m asked for"))
+    return tuple(out)
 
 
 def _area_row(step: StepMeasure) -> AreaRow:
@@ -540,7 +652,10 @@ def _area_row(step: StepMeasure) -> AreaRow:
                    overlap=_frozen({m.name: m.overlap.rounded() for m in step.payloads}),
                    photos=_frozen({m.name: m.photos for m in step.payloads}),
                    path=None if step.path is None else step.path.rounded(),
-                   photos_in_zones=_frozen({m.name: m.photos_in_zones for m in step.payloads}))
+                   photos_in_zones=_frozen({m.name: m.photos_in_zones for m in step.payloads}),
+                   zones=step.zones.rows if step.zones else (),
+                   coverable_m2=_r(step.zones.coverable.area, 1) if step.zones else None,
+                   zone_margin_m=step.zones.margin_m if step.zones else None)
 
 
 def _mission_coverage(steps: Sequence[StepMeasure]) -> Mapping[str, float]:
@@ -567,10 +682,12 @@ def _mission_overlap(steps: Sequence[StepMeasure]) -> Mapping[str, OverlapMin]:
                     for n, ov in by_payload.items()})
 
 
-def _gsd_ranges(compiled: Compiled, photos_of: Mapping[str, Sequence[Photo]]) -> Mapping[str, GsdRange | None]:
+def _gsd_ranges(compiled: Compiled, photos_of: Mapping[str, Sequence[Photo]],
+                grounds: Mapping[str, Any] | None = None) -> Mapping[str, GsdRange | None]:
     out: dict[str, GsdRange | None] = {}
     for n, photos in photos_of.items():
-        alts = [p.alt_m for p in photos if p.alt_m > 0]
+        heights = grounds[n].hag_m.tolist() if grounds else [p.alt_m for p in photos]   # above the DEM, or home
+        alts = [a for a in heights if a > 0]
         pay = compiled.payload(n)
         out[n] = GsdRange(_r(pay.gsd_cm(min(alts)), 3), _r(pay.gsd_cm(max(alts)), 3)) if alts else None
     return _frozen(out)
@@ -623,6 +740,7 @@ def _step_warnings(step: StepMeasure, row: AreaRow) -> list[Finding]:
                                                    f"< requested {100 * a.side_overlap:.0f} %"))
     if row.path is not None and row.path.over_gaps_m > 1.0:
         out.append(Finding("path_over_exclusion", _over_zones_text(row, row.path)))
+    out.extend(Finding(code, msg) for code, msg in photographed_warnings(a.step, a.kind, row.zones))
     return out
 
 
@@ -642,6 +760,8 @@ def _over_zones_text(row: AreaRow, path: StepPath) -> str:
 
 def _altitude_warnings(compiled: Compiled, sim: Simulation) -> list[Finding]:
     """The highest vertex above MAX_AGL_M, unless the compiler already warned (with the plan's file:line:col)."""
+    if getattr(compiled, "terrain", None) is not None:
+        return []        # above home is not above ground: the compiler checks the heights above the DEM
     high = [v for v in sim.vertices if v.alt_m > MAX_AGL_M + 1e-6]
     if not high or any(w.code == "altitude_above_120m" for w in compiled.warnings):
         return []
@@ -766,8 +886,16 @@ def format_report(rep: MissionReport) -> str:
                                                 f"{100 * a.requested.side:g} %"))
         numbers = next((s for s in rep.steps if s.facts.step == a.step), None)
         rows += [(f"  {k}", v) for k, v in (numbers.rows() if numbers else [])]
+        if a.zones:
+            rows.append((f"  zones (margin {a.zone_margin_m:g} m)",
+                         f"coverage measured on {a.coverable_m2:.0f} m² that can be covered"))
+        for z in a.zones:
+            rows.append((f"  {z.kind} {z.name}", f"{z.area_m2:.0f} m², {z.flown_inside_m:.0f} m flown inside, "
+                                                 f"{z.photographed_m2:.0f} m² photographed, {z.lost_m2:.0f} m² of "
+                                                 "the area lost to it"))
     rows.append(("speed", f"{rep.speed_mps:g} m/s"))
     rows += [(f"sun step {s.step}", _sun_text(s)) for s in rep.sun]
+    rows.extend(_ground_rows(rep))
     width = max(len(k) for k, _ in rows)
     out = [f"{k.ljust(width)}  {v}" for k, v in rows]
     if rep.sorties is not None:
@@ -799,6 +927,23 @@ def _sun_text(s: Any) -> str:
 def _clock_h(h: float) -> str:
     minutes = int(round(h * 60.0)) % (24 * 60)
     return f"{minutes // 60:02d}:{minutes % 60:02d}"
+
+
+def _ground_rows(rep: MissionReport) -> list[tuple[str, str]]:
+    """The ground the figures stand on; with a DEM the clearance and each step's heights above ground."""
+    rows = [("ground", rep.ground)]
+    t = rep.terrain
+    if t is None:
+        return rows
+    c = t.clearance
+    if c is not None:
+        rows.append(("clearance", f"at least {c.min_m:.1f} m above the DEM (asked {t.clearance_m:g} m; lowest at "
+                                  f"{c.lat:.6f}, {c.lon:.6f})"))
+    for s in t.steps:
+        if s.hag_min_m is not None:
+            rows.append((f"step {s.step} above ground", f"{s.hag_min_m:.1f}–{s.hag_max_m:.1f} m (target "
+                                                         f"{s.target_m:g} m, tolerance +{s.tolerance_m:g} m)"))
+    return rows
 
 
 def error_report(plan_path: str, err: Exception) -> UncompiledReport:

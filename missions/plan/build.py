@@ -14,8 +14,9 @@ from typing import Any, Callable, Collection, Mapping
 
 from cdf.catalogue import catalogue
 from missions.plan.meaning import Resolved
+from missions.plan.schema import ZONE_KINDS
 from missions.plan.types import (CameraStep, CorridorStep, Home, LandStep, Payload, Plan, RtlStep, Step, SurveyStep,
-                                 TakeoffStep, Target, Timing, Vehicle, WaypointStep)
+                                 TakeoffStep, Target, TerrainSettings, Timing, Vehicle, WaypointStep)
 from missions.thermal.blur import DEFAULT_BLUR_PX
 from missions.thermal.pv import pv_profile
 from missions.thermal.when import parse_when
@@ -42,19 +43,27 @@ def build_plan(data: dict, resolved: Resolved, path: str, base_dir: Path, locati
         version=int(data["version"]), name=data.get("name") or _default_name(path),
         vehicle=Vehicle(v["firmware"], v["frame"], None if v["speed_mps"] == "auto" else float(v["speed_mps"]),
                         v.get("max_mission_items"), max_speed_mps=_float_or_none(v, "max_speed_mps"),
-                        max_altitude_m=_float_or_none(v, "max_altitude_m"),
-                        endurance_min=_float_or_none(v, "endurance_min"), reserve_pct=float(v.get("reserve_pct", 20.0)),
+                        max_altitude_m=_float_or_none(v, "max_altitude_m"), climb_mps=_float_or_none(v, "climb_mps"),
+                        descent_mps=_float_or_none(v, "descent_mps"),
+                        endurance_min=_float_or_none(v, "endurance_min"),
+                        reserve_pct=float(v.get("reserve_pct", 20.0)),
                         turn_radius_m=_float_or_none(v, "turn_radius_m"),
                         max_bank_deg=float(v.get("max_bank_deg", 30.0))),
-        home=Home(float(h["lat"]), float(h["lon"]), float(h["alt_amsl_m"])),
+        home=Home(float(h["lat"]), float(h["lon"]), _float_or_none(h, "alt_amsl_m")),
         payloads=payloads, mission=tuple(steps), path=path, base_dir=str(base_dir), notes=tuple(resolved.notes),
-        timing=_timing(data), locations=locations)
+        timing=_timing(data), locations=locations, fence_margin_m=_fence_margin(data),
+        corridor_scan=bool((data.get("qgc") or {}).get("corridor_scan", False)), terrain=_terrain(data.get("terrain")))
 
 
 def _timing(body: Mapping[str, Any]) -> Timing:
     """`when` (checked by the meaning pass) and `when_wind_mps` of a plan or step."""
     when = body.get("when")
     return Timing(parse_when(when) if when else None, _float_or_none(body, "when_wind_mps"))
+
+
+def _fence_margin(data: dict) -> float | None:
+    fence = data.get("fence")
+    return None if fence is None else float(fence["margin_m"])
 
 
 def _default_name(path: str) -> str:
@@ -87,6 +96,15 @@ def _payload(name: str, p: dict, camera: Any, component_id: int) -> Payload:
         settings=_as_written(camera, settings), values=_wire_values(camera, settings))
 
 
+def _terrain(t: dict | None) -> TerrainSettings | None:
+    if t is None:
+        return None
+    dem = t["dem"]
+    return TerrainSettings(dem=(dem,) if isinstance(dem, str) else tuple(dem), frame=t.get("frame", "amsl"),
+                           tolerance_m=_float_or_none(t, "tolerance_m"), clearance_m=float(t.get("clearance_m", 20.0)),
+                           vertical=t.get("vertical", "auto"))
+
+
 def _float_or_none(body: Mapping[str, Any], key: str) -> float | None:
     return float(body[key]) if key in body else None
 
@@ -109,13 +127,19 @@ def _survey(i: int, b: dict, cameras: Mapping[str, Any]) -> SurveyStep:
     return SurveyStep(
         i, _area_value(b["area"]), tuple(b["payloads"]), float(ov["front"]), float(ov["side"]),
         altitude_m=_float_or_none(b, "altitude_m"), gsd_cm=_float_or_none(b, "gsd_cm"),
-        exclude=tuple(_area_value(x) for x in b.get("exclude", ())),
         angle_deg=angle if angle == "auto" else float(angle),
         trigger=b.get("trigger", "distance"), turnaround_m=_float_or_none(b, "turnaround_m"),
         refly_90=bool(b.get("refly_90", False)), blur_px=float(b.get("blur_px", DEFAULT_BLUR_PX)), timing=_timing(b),
         target=Target(float(b["target"]["tilt_deg"]), float(b["target"]["azimuth_deg"])) if "target" in b else None,
         camera_pitch_deg=float(b.get("camera_pitch_deg", 0.0)),
-        profile=pv_profile(b["profile"]) if "profile" in b else None)
+        profile=pv_profile(b["profile"]) if "profile" in b else None, **_zone_fields(b))
+
+
+def _zone_fields(b: dict) -> dict[str, Any]:
+    """A survey's or corridor's zones (missions.geometry.zones) as the step's fields."""
+    out: dict[str, Any] = {k: tuple(_area_value(x) for x in b.get(k, ())) for k in ZONE_KINDS}
+    out["zone_margin_m"] = _float_or_none(b, "zone_margin_m")
+    return out
 
 
 def _corridor(i: int, b: dict, cameras: Mapping[str, Any]) -> CorridorStep:
@@ -124,7 +148,7 @@ def _corridor(i: int, b: dict, cameras: Mapping[str, Any]) -> CorridorStep:
         i, _pairs(b["line"]), float(b["width_m"]), tuple(b["payloads"]), float(ov["front"]), float(ov["side"]),
         altitude_m=_float_or_none(b, "altitude_m"), gsd_cm=_float_or_none(b, "gsd_cm"),
         trigger=b.get("trigger", "distance"), turnaround_m=_float_or_none(b, "turnaround_m"),
-        blur_px=float(b.get("blur_px", DEFAULT_BLUR_PX)), timing=_timing(b))
+        blur_px=float(b.get("blur_px", DEFAULT_BLUR_PX)), timing=_timing(b), **_zone_fields(b))
 
 
 def _waypoint(i: int, b: dict, cameras: Mapping[str, Any]) -> WaypointStep:

@@ -155,10 +155,13 @@ def input_files(plan: Plan) -> tuple[str, ...]:
     """Every file the plan is read from: the plan file itself and each area and exclusion file, as paths."""
     files = [plan.path] if plan.path != "<plan>" else []
     for step in plan.mission:
-        if isinstance(step, SurveyStep):
-            for src in (step.area, *step.exclude):
+        if isinstance(step, (SurveyStep, CorridorStep)):
+            area = (step.area,) if isinstance(step, SurveyStep) else ()
+            for src in (*area, *step.exclude, *step.no_fly, *step.no_photo):
                 if isinstance(src, str):
                     files.append(str(Path(src) if Path(src).is_absolute() else Path(plan.base_dir) / src))
+    for src in plan.terrain.dem if plan.terrain is not None else ():
+        files.append(str(Path(src) if Path(src).is_absolute() else Path(plan.base_dir) / src))
     return tuple(dict.fromkeys(files))
 
 

@@ -20,7 +20,7 @@ from typing import Any, Callable, Mapping, NamedTuple
 from cdf.catalogue import catalogue
 from cdf.errors import ECHO_CHARS, CdfError, clip, shown
 from cdf.userfile import not_a_file
-from missions.plan.schema import COMPONENT_IDS, MAX_AGL_M, MAX_ALTITUDE_M, MIN_ALTITUDE_M
+from missions.plan.schema import COMPONENT_IDS, MAX_AGL_M, MAX_ALTITUDE_M, MIN_ALTITUDE_M, ZONE_KINDS
 from missions.plan.settings import check_settings
 from missions.plan.thermal_keys import check_thermal_keys
 from missions.plan.yaml_reader import PositionedYaml
@@ -55,7 +55,28 @@ def check_meaning(data: dict, doc: PositionedYaml, base_dir: Path) -> Resolved:
     _check_steps(data, _Written(doc, payloads, cameras, states, vehicle.get("frame"), base_dir,
                                 altitude_ceiling(vehicle)))
     check_thermal_keys(data, doc)
+    _check_terrain(data, doc, base_dir)
     return resolved
+
+
+def _check_terrain(data: dict, doc: PositionedYaml, base_dir: Path) -> None:
+    """Home's elevation comes from the plan or from the DEM; the DEM files exist (their contents are read by
+    the compiler, missions.terrain.dem)."""
+    terrain = data.get("terrain") if isinstance(data.get("terrain"), dict) else None
+    home = data.get("home") if isinstance(data.get("home"), dict) else None
+    if home is not None and "alt_amsl_m" not in home and terrain is None:
+        doc.report(("home",), "home needs alt_amsl_m (no terrain.dem to take it from)",
+                   "give home's elevation above mean sea level, e.g. alt_amsl_m: 312, or a DEM: terrain: {dem: FILE}")
+    dem = terrain.get("dem") if terrain is not None else None
+    files = [dem] if isinstance(dem, str) else dem if isinstance(dem, list) else []
+    for j, src in enumerate(files):
+        if isinstance(src, str) and src:
+            p = Path(src) if Path(src).is_absolute() else base_dir / src
+            found, why = _is_file(p)
+            if not found:
+                at = ("terrain", "dem") if isinstance(dem, str) else ("terrain", "dem", j)
+                doc.report(at, f"DEM file {shown(src)} {why} (looked at {clip(str(p), 2 * ECHO_CHARS)})",
+                           "paths in a plan are relative to the plan file; give a GeoTIFF (.tif) or SRTM .hgt")
 
 
 # ------------------------------------------------------------------------------------------------ payloads
@@ -310,16 +331,29 @@ def _check_overlap(plan: _Written, base: tuple, body: dict) -> None:
 
 def _check_survey(plan: _Written, base: tuple, body: dict) -> None:
     _check_flown_area(plan, base, body)
-    area, exclude = body.get("area"), body.get("exclude")
-    # a wrong type of either (exclude: 5) is the schema's finding: only strings are looked up here
-    sources = [area] + (exclude if isinstance(exclude, list) else [])
-    for j, src in enumerate(sources):
+    _check_area_files(plan, base, [(("area",), body.get("area"))])
+    _check_zone_files(plan, base, body)
+
+
+def _check_corridor(plan: _Written, base: tuple, body: dict) -> None:
+    _check_flown_area(plan, base, body)
+    _check_zone_files(plan, base, body)
+
+
+def _check_zone_files(plan: _Written, base: tuple, body: dict) -> None:
+    """The zone files of a survey or corridor (exclude, no_fly, no_photo) must be there."""
+    # a wrong type (exclude: 5) is the schema's finding: only strings are looked up here
+    _check_area_files(plan, base, [((kind, j), src) for kind in ZONE_KINDS
+                                   if isinstance(body.get(kind), list) for j, src in enumerate(body[kind])])
+
+
+def _check_area_files(plan: _Written, base: tuple, sources: list[tuple[tuple, Any]]) -> None:
+    for at, src in sources:
         if isinstance(src, str) and src:
             p = Path(src) if Path(src).is_absolute() else plan.base_dir / src
             found, why = _is_file(p)
             if not found:
-                at = base + ("area",) if j == 0 else base + ("exclude", j - 1)
-                plan.doc.report(at, f"area file {shown(src)} {why} (looked at {clip(str(p), 2 * ECHO_CHARS)})",
+                plan.doc.report(base + at, f"area file {shown(src)} {why} (looked at {clip(str(p), 2 * ECHO_CHARS)})",
                                 "paths in a plan are relative to the plan file")
 
 
@@ -359,6 +393,7 @@ def _check_camera(plan: _Written, base: tuple, body: dict) -> None:
 
 # The steps with meaning to check (rtl has none beyond the schema), by their name in the plan.
 _STEP_CHECKS: dict[str, Callable[[_Written, tuple, dict], None]] = {
-    "takeoff": _check_takeoff, "survey": _check_survey, "corridor": _check_flown_area, "waypoint": _check_waypoint, "land": _check_land,
+    "takeoff": _check_takeoff, "survey": _check_survey, "corridor": _check_corridor, "waypoint": _check_waypoint,
+    "land": _check_land,
     "camera": _check_camera,
 }

@@ -75,7 +75,8 @@ AREA = {"description": "a KML or GeoJSON file (relative to the plan) or an inlin
         "anyOf": [{"type": "string", "minLength": 1}, POLYGON]}
 PAYLOAD_LIST = {"type": "array", "minItems": 1, "uniqueItems": True, "items": {"type": "string"},
                 "description": "payload names; the first one's footprint sets the lines, the others trigger alongside"}
-ALTITUDE = _num(MIN_ALTITUDE_M, MAX_ALTITUDE_M, desc="flight altitude above home, metres", hint=_ALT_HINT)
+ALTITUDE = _num(MIN_ALTITUDE_M, MAX_ALTITUDE_M, desc="flight altitude above home, metres (survey and corridor: above "
+                  "the ground below with terrain.dem)", hint=_ALT_HINT)
 GSD = _num(exclusive_min=0, maximum=1000, desc="ground sample distance of the first payload, cm/pixel",
            hint="GSD in centimetres per pixel, e.g. 3.5")
 OVERLAP = _obj({
@@ -87,6 +88,20 @@ OVERLAP = _obj({
 TRIGGER = {"enum": ["distance", "interval", "hover"], "default": "distance",
            "description": "distance: DO_SET_CAM_TRIGG_DIST; interval: timed (PX4 only); hover: stop and shoot"}
 TURNAROUND = _num(0, 500, desc="straight run-in/out beyond each line end, metres (default 10 copter, 30 plane)")
+# The kinds of zone, by their key in a survey or corridor step (missions.geometry.zones says what each keeps out).
+ZONE_KINDS = ("no_fly", "no_photo", "exclude")
+# Zones a survey or corridor keeps clear of (missions.geometry.zones): every zone of the plan holds for the whole
+# flight, whichever step declares it.
+ZONES = {
+    "exclude": {"type": "array", "items": AREA,
+                "description": "zones not to fly over or photograph (no_fly and no_photo at once)"},
+    "no_fly": {"type": "array", "items": AREA,
+               "description": "zones the path stays out of (lines, turnarounds and transits); photos may see them"},
+    "no_photo": {"type": "array", "items": AREA,
+                 "description": "zones no photo footprint touches (the camera is off near them); may be flown over"},
+    "zone_margin_m": _num(0, 100, desc="position error the zones are kept clear by, metres (default 2)",
+                          hint="metres of margin around every zone, e.g. zone_margin_m: 2"),
+}
 
 SETTINGS = {"type": "object", "minProperties": 1,
             "description": "camera settings, checked against the camera catalogue: each by its plan name or its "
@@ -126,7 +141,7 @@ STEPS: dict[str, dict] = {
     "takeoff": _obj({"alt_m": ALTITUDE}, required=("alt_m",), desc="take off to alt_m above home"),
     "survey": _obj({
         "area": AREA,
-        "exclude": {"type": "array", "items": AREA, "description": "areas not to fly over or photograph"},
+        **ZONES,
         "payloads": PAYLOAD_LIST,
         "altitude_m": ALTITUDE,
         "gsd_cm": GSD,
@@ -150,6 +165,7 @@ STEPS: dict[str, dict] = {
         "trigger": TRIGGER,
         "turnaround_m": TURNAROUND,
         "blur_px": BLUR_PX, "when": WHEN, "when_wind_mps": WHEN_WIND,
+        **ZONES,
     }, required=("line", "width_m", "payloads", "overlap"), desc="corridor along a line"),
     "waypoint": _obj({
         "lat": _num(-90, 90, desc=_LAT), "lon": _num(-180, 180, desc=_LON), "alt_m": ALTITUDE,
@@ -176,6 +192,27 @@ PAYLOAD = _obj({
                     "description": "landscape: the long image side across the flight line"},
     "settings": SETTINGS,
 }, required=("camera",), desc="a camera on board (camera ids: `wiris cdf models`)")
+
+
+# Terrain following (missions.terrain): a DEM makes survey and corridor altitudes heights above the ground.
+CLIMB_DESC = "climb rate the lines may ask for, m/s (default: 2.5 copter, 5 plane/VTOL)"
+DESCENT_DESC = "descent rate the lines may ask for, m/s (default: 1.5 copter, 5 plane/VTOL)"
+CLIMB_HINT = "a vertical speed in m/s, e.g. 2.5 (ArduCopter's WPNAV_SPEED_UP is 2.5, WPNAV_SPEED_DN 1.5)"
+_DEM_FILE = {"type": "string", "minLength": 1, "description": "GeoTIFF (any CRS) or SRTM .hgt, relative to the plan"}
+TERRAIN = _obj({
+    "dem": {"anyOf": [_DEM_FILE, {"type": "array", "minItems": 1, "maxItems": 64, "items": _DEM_FILE}],
+            "description": "DEM file or list of files (mosaicked, the first with a height wins)"},
+    "frame": {"enum": ["amsl", "terrain"], "default": "amsl",
+              "description": "amsl: line waypoints above mean sea level from the DEM; terrain: ArduPilot's "
+                             "terrain frame (MAV_FRAME_GLOBAL_TERRAIN_ALT, TERRAIN_ENABLE=1)"},
+    "tolerance_m": _num(exclusive_min=0, maximum=500, desc="how far above the target height above ground the "
+                        "lines may fly (default 10 % of the altitude)", hint="metres, e.g. tolerance_m: 5"),
+    "clearance_m": _num(0, 500, desc="least height above the DEM of every metre of the path (default 20)",
+                        hint="metres, e.g. clearance_m: 20"),
+    "vertical": {"enum": ["auto", "egm96", "ellipsoid"], "default": "auto",
+                 "description": "what the DEM's heights are above: auto (as the file says; SRTM and files that do "
+                                "not say: mean sea level), egm96, or ellipsoid (WGS84)"},
+}, required=("dem",), desc="ground model: survey and corridor altitudes become heights above the ground")
 
 
 _FRAME_NAMES = {"copter": "copter", "plane": "plane", "vtol": "VTOL"}
@@ -220,6 +257,8 @@ def _build() -> dict:
                                             f"without it no step may fly above {MAX_AGL_M:g} m",
                                        hint=f"a permit's ceiling above home, {MIN_ALTITUDE_M:g} to "
                                             f"{MAX_ALTITUDE_M:g} m"),
+                "climb_mps": _num(exclusive_min=0, maximum=30, desc=CLIMB_DESC, hint=CLIMB_HINT),
+                "descent_mps": _num(exclusive_min=0, maximum=30, desc=DESCENT_DESC, hint=CLIMB_HINT),
                 "endurance_min": _num(1, 1440, desc="minutes in the air on one battery at survey speed: a longer "
                                       "flight is split into sorties (missions.sorties)"),
                 "reserve_pct": _num(0, 90, desc="share of the endurance kept in reserve, % (default 20)"),
@@ -229,7 +268,9 @@ def _build() -> dict:
             }, required=("firmware", "frame", "speed_mps"), desc="the aircraft") | {"allOf": _speed_ranges()},
             "home": _obj({"lat": _num(-90, 90, desc=_LAT), "lon": _num(-180, 180, desc=_LON),
                           "alt_amsl_m": _num(-500, 9000, desc="home altitude above mean sea level")},
-                         required=("lat", "lon", "alt_amsl_m"), desc="the take-off point"),
+                         required=("lat", "lon"),
+                         desc="the take-off point, alt_amsl_m its elevation (from terrain.dem when left out)"),
+            "terrain": TERRAIN,
             "payloads": {"type": "object", "minProperties": 1,
                          "propertyNames": {"pattern": "^[A-Za-z_][A-Za-z0-9_-]{0,31}$"},
                          "additionalProperties": PAYLOAD,
@@ -240,6 +281,16 @@ def _build() -> dict:
                         "items": {"type": "object", "minProperties": 1, "maxProperties": 1,
                                   "properties": STEPS, "additionalProperties": False,
                                   "description": "one step: " + ", ".join(STEPS)}},
+            "fence": _obj({"margin_m": _num(5, 5000, desc="distance of the inclusion fence from everything the "
+                                                            "mission flies, m")},
+                          required=("margin_m",),
+                          desc="an inclusion fence around the whole flight, in the .plan's geoFence (exclusion "
+                               "zones go there whether or not this is given)"),
+            "qgc": _obj({"corridor_scan": {"type": "boolean", "default": False,
+                                           "description": "write corridors into the .plan as QGroundControl "
+                                                          "CorridorScan items (MAVSDK 4.1's importer then refuses "
+                                                          "the file)"}},
+                        desc="how the .plan presents the mission to QGroundControl"),
         },
     }
 

@@ -17,7 +17,7 @@ from typing import Any, Callable, Iterable, NamedTuple
 
 from cdf.errors import ECHO_CHARS, clip, shown
 from missions.errors import Problem
-from missions.plan.schema import MAX_ALTITUDE_M, MIN_ALTITUDE_M, STEPS, plan_schema
+from missions.plan.schema import MAX_ALTITUDE_M, MIN_ALTITUDE_M, STEPS, ZONE_KINDS, plan_schema
 from missions.plan.yaml_reader import PositionedYaml
 
 
@@ -233,7 +233,7 @@ def _item_count(e: _SchemaError) -> list[Problem]:
     inst = e.err.instance
     if e.last == "line":
         return e.said("a corridor line needs at least 2 points", "give [[lat, lon], [lat, lon], ...]")
-    if e.name.endswith("area") or "exclude" in e.path:
+    if e.name.endswith("area") or any(k in e.path for k in ZONE_KINDS):
         return e.said("an inline area needs at least 3 [lat, lon] points", _AREA_HINT)
     if isinstance(inst, list) and len(inst) in (2, 3) or e.schema.get("description", "").startswith("[lat"):
         return e.said(f"{e.name} must be [lat, lon], got {describe(inst)}", _LATLON_HINT)
@@ -250,7 +250,7 @@ def _property_count(e: _SchemaError) -> list[Problem]:
 def _neither_form(e: _SchemaError) -> list[Problem] | None:
     """An anyOf: an area (a file or inline points) or angle_deg ('auto' or degrees)."""
     path = e.path
-    if e.last in ("area",) or (len(path) >= 2 and path[-2] == "exclude"):
+    if e.last in ("area",) or (len(path) >= 2 and path[-2] in ZONE_KINDS):
         return e.said(f"{e.name} must be a file path or a list of at least 3 [lat, lon] points, got "
                       f"{describe(e.err.instance)}", _AREA_HINT)
     if e.last == "angle_deg":

@@ -19,6 +19,8 @@ class Vehicle:
     max_mission_items: int | None = None
     max_speed_mps: float | None = None
     max_altitude_m: float | None = None     # a permit's ceiling above home; None: MAX_AGL_M (120 m) holds
+    climb_mps: float | None = None       # None: the frame's default (missions.terrain.settings)
+    descent_mps: float | None = None
     endurance_min: float | None = None          # None: the frame's conservative default (missions.sorties)
     reserve_pct: float = 20.0
     turn_radius_m: float | None = None          # planes and VTOLs; None: from speed and max_bank_deg
@@ -29,7 +31,19 @@ class Vehicle:
 class Home:
     lat: float
     lon: float
-    alt_amsl_m: float
+    alt_amsl_m: float | None             # None: from the DEM (only with terrain.dem; the loader checks)
+
+
+@dataclass(frozen=True)
+class TerrainSettings:
+    """The plan's `terrain:` block as written; defaults are applied where the altitude is known
+    (missions.terrain.settings)."""
+
+    dem: tuple[str, ...]                 # file paths as written (relative to the plan)
+    frame: str = "amsl"                  # "amsl" | "terrain"
+    tolerance_m: float | None = None     # None: 10 % of each step's altitude
+    clearance_m: float = 20.0
+    vertical: str = "auto"               # "auto" | "egm96" | "ellipsoid"
 
 
 @dataclass(frozen=True)
@@ -89,6 +103,9 @@ class SurveyStep:
     target: Target | None = None
     camera_pitch_deg: float = 0.0
     profile: Any = None             # missions.thermal.pv.PvProfile, or None
+    no_fly: tuple[Any, ...] = ()          # zones (missions.geometry.zones): inline points or file paths
+    no_photo: tuple[Any, ...] = ()
+    zone_margin_m: float | None = None    # None: zones.DEFAULT_ZONE_MARGIN_M
 
 
 @dataclass(frozen=True)
@@ -105,6 +122,10 @@ class CorridorStep:
     turnaround_m: float | None = None
     blur_px: float = 1.0
     timing: Timing = Timing()
+    exclude: tuple[Any, ...] = ()
+    no_fly: tuple[Any, ...] = ()
+    no_photo: tuple[Any, ...] = ()
+    zone_margin_m: float | None = None
 
 
 @dataclass(frozen=True)
@@ -152,6 +173,9 @@ class Plan:
     base_dir: str = "."
     notes: tuple[str, ...] = ()          # decisions the loader took for the user (e.g. a moved component id)
     timing: Timing = Timing()            # `when` and `when_wind_mps` of the whole plan
+    fence_margin_m: float | None = None  # `fence: {margin_m}`: an inclusion fence this far around the flight
+    corridor_scan: bool = False          # `qgc: {corridor_scan: true}`: corridors as QGC CorridorScan items
+    terrain: TerrainSettings | None = None
     locations: Mapping[tuple, str] = field(default_factory=lambda: MappingProxyType({}), compare=False, repr=False)
 
     def payload(self, name: str) -> Payload:

@@ -15,9 +15,10 @@ from cdf.errors import CdfError
 from cdf.validate import PROFILES, RULES, CameraInfo, validate_bytes
 from cdf.validation.rules import RANK, render_markdown
 from wiris_tools.cli import cli
+import corpus
 
 REPO = Path(__file__).resolve().parents[2]
-CORPUS = REPO.parent / "shared" / "corpus" / "cdf"
+CORPUS = corpus.CDF
 
 HEAD = '<?xml version="1.0" encoding="UTF-8"?>\n'
 

@@ -3,16 +3,15 @@ conforms, xmlschema applying cdf/schema/mavlinkcamera.xsd reports nothing the va
 
 from __future__ import annotations
 
-from pathlib import Path
-
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from lxml import etree
 
 from cdf.validation.schema import conforms_fast, xmlschema_hits
 from cdf.xmlsafe import parse_xml
+import corpus
 
-CORPUS = Path(__file__).resolve().parents[3] / "shared" / "corpus" / "cdf"
+CORPUS = corpus.CDF
 
 BASE = b"""<mavlinkcamera><definition version="1"><model>m</model><vendor>v</vendor></definition><parameters>
 <parameter name="CAM_MODE" type="uint32" default="0" control="0"><description>Mode</description>

@@ -18,6 +18,7 @@ from lxml import etree
 from cdf.validation import engine, schema, semantic
 from cdf.validation.rules import PROFILES
 from cdf.validate import validate_bytes
+import corpus
 
 def _sibling(name: str):
     """The mutation strategy of test_validate_schema.py (tests/cdf is not a package, so load it by path)."""
@@ -31,8 +32,7 @@ def _sibling(name: str):
 
 _schema_tests = _sibling("test_validate_schema")
 BASE, mutation, mutate = _schema_tests.BASE, _schema_tests.mutation, _schema_tests.mutate
-CORPUS = Path(__file__).resolve().parents[3] / "shared" / "corpus" / "cdf"
-FILES = sorted(CORPUS.rglob("*.xml")) + sorted(CORPUS.rglob("*.xml.xz"))
+FILES = corpus.cdf_files()
 
 
 def _report(data: bytes, name: str, profile: str, monkeypatch, **engine_attrs):

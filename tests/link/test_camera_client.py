@@ -860,3 +860,67 @@ def test_the_client_loads_no_emulator():
             "print(sorted(m for m in sys.modules if m.startswith('wiris_tools.emulate')))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+# -- `wiris camera apply --payload NAME`: one payload's steps of a compiled two-camera sequence -------------------
+
+@pytest.fixture(scope="module")
+def two_camera_setup(tmp_path_factory):
+    """field-multispectral's NAME.setup.json: a WIRIS Pro as component 101, a RedEdge-MX as 100."""
+    from missions.compile import compile_plan
+    from missions.formats.outputs import write_outputs
+
+    out = tmp_path_factory.mktemp("two-cameras")
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    compiled = compile_plan(root / "examples" / "field-multispectral.yaml")
+    write_outputs(compiled, out)
+    return out / f"{compiled.name}.setup.json", compiled
+
+
+def test_apply_runs_only_the_chosen_payloads_steps(two_camera_setup):
+    path, compiled = two_camera_setup
+    thermal = [s for s in compiled.setup if s.payload == "thermal"]
+    assert thermal and len(thermal) < len(compiled.setup)
+    with start_emulator("wiris-pro", "udpin:127.0.0.1:0", component=101) as emu:
+        result = CliRunner().invoke(cli, ["camera", "apply", str(path), "--payload", "thermal", "--connect",
+                                          _url(emu), "--json"])
+        assert result.exit_code == 0, result.output
+        out = json.loads(result.output)
+        assert out["ok"] and [s["description"] for s in out["completed"]] == [s.description for s in thermal]
+        with emu.lock:
+            assert emu.state.value("emissivity") == pytest.approx(0.98)    # the thermal steps did run
+
+
+@pytest.mark.parametrize("name,fragment", [("thermall", "did you mean 'thermal'?"),
+                                           ("zoom", "the payloads of this file: multispectral, thermal")])
+def test_apply_with_an_unknown_payload_sends_nothing(two_camera_setup, name, fragment):
+    path, _ = two_camera_setup
+    with start_emulator("wiris-pro", "udpin:127.0.0.1:0", component=101) as emu:
+        result = CliRunner().invoke(cli, ["camera", "apply", str(path), "--payload", name, "--connect", _url(emu)])
+        assert result.exit_code == 1, result.output
+        assert f"no step is for payload '{name}'" in result.output and fragment in result.output
+        assert str(path) in result.output and "Traceback" not in result.output
+        with emu.lock:
+            assert emu.state.value("emissivity") != pytest.approx(0.98)    # nothing reached the camera
+
+
+def test_a_setup_step_whose_payload_is_no_name_is_refused_where_it_is(tmp_path):
+    path = tmp_path / "flight.setup.json"
+    doc = json.loads(dumps_setup("flight", _compiled_like_steps()))
+    doc["steps"][1]["payload"] = 7
+    path.write_text(json.dumps(doc))
+    result = CliRunner().invoke(cli, ["camera", "apply", str(path), "--payload", "thermal", "--connect",
+                                      "udpout:127.0.0.1:9"])
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    assert f"{path}: step 2" in result.output and "payload 7 is not a payload name" in result.output
+    assert "hint: " in result.output
+
+
+def test_apply_payload_on_a_file_whose_steps_name_none(tmp_path):
+    path = _setup_file(tmp_path, _compiled_like_steps())       # SetupStep's payload left empty
+    result = CliRunner().invoke(cli, ["camera", "apply", path, "--payload", "thermal", "--connect",
+                                      "udpout:127.0.0.1:9"])
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    assert "no step names its payload" in result.output and "compile the plan again" in result.output

@@ -17,9 +17,10 @@ from missions.formats.wpl import load_wpl, write_wpl
 from wiris_tools.cli import cli
 from wiris_tools.readback import compare_items
 from wiris_tools.vehicle_sim import VehicleSim
+import corpus
 
 ROOT = Path(__file__).resolve().parents[2]
-CORPUS = ROOT.parent / "shared" / "corpus" / "plans"
+CORPUS = corpus.PLANS
 
 ITEMS = [MissionItem(command=22, param1=15, param4=math.nan, x=473977507, y=85456075, z=50),
          MissionItem(command=16, param4=math.nan, x=473977711, y=85466122, z=50),

@@ -291,7 +291,8 @@ def test_a_number_written_as_text_gets_a_hint_that_fixes_it(tmp_path, written, h
 def test_a_mapping_of_the_wrong_type_hints_its_keys(tmp_path):
     p = one(BASE.replace("home: {lat: 50.1098, lon: 14.5002, alt_amsl_m: 262}", "home: 262"), tmp_path,
             "home must be a mapping")
-    assert p.hint == "the take-off point: write {lat: ..., lon: ..., alt_amsl_m: ...}"
+    assert p.hint == ("the take-off point, alt_amsl_m its elevation (from terrain.dem when left out): "
+                      "write {lat: ..., lon: ...}")
     p = one(BASE.replace("  - rtl: {}", "  - rtl: 1"), tmp_path, "rtl must be")
     assert p.message.endswith("must be a mapping or nothing, got 1")  # not "object or null"
     assert "write {}" in p.hint

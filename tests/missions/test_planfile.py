@@ -18,10 +18,9 @@ from missions.formats.itemcheck import item_problem
 from missions.emit.items import MISSION_TYPE_FENCE, MISSION_TYPE_RALLY, MissionItem
 from missions.formats.planfile import load_plan, read_plan, write_plan
 from missions.formats.wpl import load_wpl, read_wpl, write_wpl
+import corpus
 
-CORPUS = Path(__file__).resolve().parents[3] / "shared" / "corpus" / "plans"
-if not CORPUS.is_dir():
-    CORPUS = Path(__file__).resolve().parents[2].parent / "shared" / "corpus" / "plans"
+CORPUS = corpus.PLANS
 
 # MAVSDK's mission_import_test.cpp expectations for its own samples: items (no home row) or the
 # fragment of our error's location.

@@ -3,6 +3,7 @@ show the area and the path where they belong, self-contained HTML."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 import xml.etree.ElementTree as ET
 
@@ -11,7 +12,7 @@ import pytest
 
 from handmade_mission import handmade
 from missions.errors import PlanError
-from missions.formats.preview import COLOURS, MAX_WAYPOINT_LABELS, build_picture, write_preview
+from missions.formats.preview import COLOURS, MAX_FOOTPRINTS, MAX_WAYPOINT_LABELS, build_picture, write_preview
 from missions.measure.flight import simulate
 from missions.measure.report import report
 
@@ -33,9 +34,10 @@ def test_svg_is_well_formed_with_one_shape_per_thing(mission, tmp_path):
     assert root.tag == SVG + "svg"
     groups = {g.get("id"): g for g in root.iter(SVG + "g")}
     sim = simulate(mission)
-    # every photo a dot, every footprint a polygon (few enough here to draw all)
+    # every photo a dot; the footprints of a regular subset outlined, at most MAX_FOOTPRINTS of them
     assert len(groups["photos"].findall(SVG + "circle")) == len(sim.photos)
-    assert len(groups["footprints"].findall(SVG + "polygon")) == len(sim.photos)
+    stride = math.ceil(len(sim.photos) / MAX_FOOTPRINTS)
+    assert stride > 1 and len(groups["footprints"].findall(SVG + "polygon")) == len(sim.photos[::stride])
     # the area with its hole as an even-odd path, the hole again in red
     area_paths = groups["area"].findall(SVG + "path")
     assert len(area_paths) == 1 and area_paths[0].get("fill-rule") == "evenodd"
@@ -94,13 +96,12 @@ def test_png_shows_path_and_area_where_they_are(mission, tmp_path):
     assert sum(p[1] for p in patch) > sum(p[0] for p in patch)
 
 
-def test_html_is_self_contained(mission, tmp_path):
+def test_html_is_the_interactive_map_with_the_report(mission, tmp_path):
+    # the map itself is tested in a browser: tests/missions/test_webmap.py
     out = write_preview(mission, tmp_path / "p.html")
     text = out.read_text(encoding="utf-8")
     assert text.startswith("<!DOCTYPE html>")
-    assert "<svg" in text and 'id="report"' in text
-    assert "http://" not in text.replace("http://www.w3.org/2000/svg", "")
-    assert "https://" not in text and "<script" not in text and "<link" not in text
+    assert 'id="map"' in text and 'id="report"' in text and "<link" not in text
     rep = report(mission)
     assert f"{100 * rep.coverage['thermal']:.2f} %" in text
 
@@ -130,3 +131,77 @@ def test_unusable_output_path_says_what_to_do(mission, tmp_path, out, text, hint
         write_preview(mission, tmp_path / out)
     assert e.value.where == str(tmp_path / out) and hint in e.value.hint
     assert list(tmp_path.iterdir()) == []
+
+
+def _scale_px_per_m(pic):
+    """The map's scale read off its scale bar: the bar's pixel length over the length it is labelled with."""
+    bar = next(s for s in pic.shapes if s.layer == "scale" and s.kind == "polyline")
+    label = next(s.text for s in pic.shapes if s.layer == "scale" and s.kind == "text")
+    value, unit = label.split()
+    metres = float(value) * (1000 if unit == "km" else 1)
+    return (bar.points[2][0] - bar.points[1][0]) / metres
+
+
+def _ticks(pic, hemispheres):
+    """(degrees, pixel) of the frame's labelled ticks whose label ends in one of `hemispheres`."""
+    out = []
+    for s in pic.shapes:
+        if s.layer == "graticule" and s.kind == "text" and s.text[-1] in hemispheres:
+            value = float(s.text.split()[0]) * (-1 if s.text[-1] in "SW" else 1)
+            out.append((value, s.points[0][0] if hemispheres in ("EW",) else s.points[0][1] - 3))
+    return sorted(out)
+
+
+def test_the_frame_carries_coordinates_where_they_are(mission):
+    from pyproj import Geod
+
+    pic = build_picture(mission)
+    scale = _scale_px_per_m(pic)
+    lons, lats = _ticks(pic, "EW"), _ticks(pic, "NS")
+    assert len(lons) >= 2 and len(lats) >= 2
+    geod = Geod(ellps="WGS84")
+    home_lat, home_lon = mission.home[0], mission.home[1]
+    home_x = next(s for s in pic.shapes if s.layer == "home" and s.kind == "polygon").points[0][0]
+    home_y = next(s for s in pic.shapes if s.layer == "home" and s.kind == "polygon").points[0][1] + 9
+    for lon, x in lons:
+        # east of home by the geodesic distance along home's parallel, at the bar's scale (within 2 px)
+        _, _, d = geod.inv(home_lon, home_lat, lon, home_lat)
+        assert x - home_x == pytest.approx(math.copysign(d, lon - home_lon) * scale, abs=2.0)
+    for lat, y in lats:
+        _, _, d = geod.inv(home_lon, home_lat, home_lon, lat)
+        assert home_y - y == pytest.approx(math.copysign(d, lat - home_lat) * scale, abs=2.0)
+
+
+def test_footprints_are_drawn_over_the_area_fill(mission, tmp_path):
+    root = _svg(write_preview(mission, tmp_path / "p.svg"))
+    order = [g.get("id") for g in root.iter(SVG + "g")]
+    assert order.index("area") < order.index("footprints") < order.index("area_outline")
+    fp = root.find(f".//{SVG}g[@id='footprints']/{SVG}polygon")
+    assert fp.get("stroke") == COLOURS["footprint_line"]
+
+
+def test_a_wide_area_needs_no_detail(mission):
+    assert build_picture(mission).detail is None
+
+
+def test_a_thin_corridor_gets_a_detail_where_its_passes_are_apart(tmp_path):
+    from missions.compile import compile_plan
+
+    corridor = compile_plan(Path(__file__).resolve().parents[2] / "examples" / "powerline-corridor.yaml")
+    sim = simulate(corridor)
+    pic = build_picture(corridor, sim)
+    assert pic.detail is not None
+    x0, y0, x1, y1 = pic.detail.window_m
+    inside = [p for p in sim.photos if x0 <= p.x <= x1 and y0 <= p.y <= y1]
+    # the nearest photos of two different passes inside the window
+    across = min(math.hypot(a.x - b.x, a.y - b.y) for a in inside for b in inside if a.span != b.span)
+    main = _scale_px_per_m(pic)
+    assert across * main < 8                                  # on the map the passes' photos nearly touch ...
+    assert across * pic.detail.scale >= 30 and pic.detail.scale >= 4 * main   # ... in the detail they are apart
+    root = _svg(write_preview(corridor, tmp_path / "c.svg"))
+    groups = {g.get("id"): g for g in root.iter(SVG + "g")}
+    assert groups["detail-path"].findall(SVG + "polyline") and groups["detail-photos"].findall(SVG + "circle")
+    assert groups["detail-mark"].findall(SVG + "polygon")
+    bx0, by0, bx1, by1 = pic.detail.box_px
+    for c in groups["detail-photos"].findall(SVG + "circle"):    # cut to the detail's box
+        assert bx0 <= float(c.get("cx")) <= bx1 and by0 <= float(c.get("cy")) <= by1

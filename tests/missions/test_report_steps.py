@@ -115,15 +115,17 @@ def test_coverage_counts_a_neighbours_photos_but_the_photo_count_does_not(tmp_pa
     assert rep.areas[0].coverage["thermal"] >= 0.995
 
 
-def test_a_neighbour_flying_over_an_exclusion_is_still_reported(tmp_path):
-    # An exclusion is ground not to fly over or photograph: the west field's route keeps out of the substation
-    # across its east edge, the east field (drawn over it, without the exclusion) flies and shoots across it, and
-    # the west step says so (the figures of the zones stay the whole flight's)
+def test_a_neighbour_keeps_out_of_an_exclusion_another_step_declares(tmp_path):
+    # An exclusion is ground not to fly over or photograph for the whole flight: the west field's route keeps out
+    # of the substation across its east edge, and so does the east field drawn over it without declaring it (before
+    # zones held for the whole flight, it flew and shot across it: 10+ m with the camera on, photos centred inside)
     sub = [[50.1004, 14.5017], [50.1004, 14.5023], [50.1006, 14.5023], [50.1006, 14.5017]]
     over = [[50.1, 14.5012], [50.1, 14.5026], [50.101, 14.5026], [50.101, 14.5012]]
     west = _survey(WEST, 40, 80, 70, exclude=[sub])
     alone = report(_compile(tmp_path, [west], "alone"))
     assert alone.areas[0].path.over_gaps_m < 0.1
     rep = report(_compile(tmp_path, [west, _survey(over, 50, 60, 40)], "over"))
-    assert rep.areas[0].path.over_gaps_camera_m > 10.0 and rep.areas[0].photos_in_zones["thermal"] > 0
-    assert any(w.code == "path_over_exclusion" and w.message.startswith("step 1 ") for w in rep.warnings)
+    for row in rep.areas:
+        assert [(z.kind, z.flown_inside_m, z.photographed_m2) for z in row.zones] == [("exclude", 0.0, 0.0)]
+    assert rep.areas[0].path.over_gaps_m < 0.1 and rep.areas[0].photos_in_zones["thermal"] == 0
+    assert not any(w.code in ("path_over_exclusion", "zone_photographed") for w in rep.warnings)

@@ -5,8 +5,6 @@ what we write."""
 from __future__ import annotations
 
 import math
-from pathlib import Path
-
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -15,8 +13,9 @@ from missions.errors import PlanError
 from missions.formats.itemcheck import item_problem
 from missions.emit.items import MissionItem
 from missions.formats.wpl import load_wpl, read_wpl, write_wpl
+import corpus
 
-CORPUS = Path(__file__).resolve().parents[3] / "shared" / "corpus" / "plans"
+CORPUS = corpus.PLANS
 
 
 def items():

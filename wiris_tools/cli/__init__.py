@@ -81,8 +81,9 @@ from wiris_tools.cli.camera_cmd import camera  # noqa: E402
 from wiris_tools.cli.cdf_cmd import cdf  # noqa: E402
 from wiris_tools.cli.emulate_cmd import emulate  # noqa: E402
 from wiris_tools.cli.mission_cmd import mission  # noqa: E402
+from wiris_tools.cli.sim_cmd import sim  # noqa: E402
 
-for _command in (cdf, mission, camera, emulate):
+for _command in (cdf, mission, camera, emulate, sim):
     cli.add_command(_command)
 
 

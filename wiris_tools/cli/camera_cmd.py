@@ -208,13 +208,19 @@ def capture(url, component, system, signing_key, mavlink1, timeout, find_s, inte
 @camera.command()
 @click.argument("setup_file", type=click.Path(dir_okay=False))
 @_link_options
+@click.option("--payload", default=None, metavar="NAME",
+              help="Run only the steps of this payload of the plan (e.g. thermal), in their order.")
 @click.option("--json", "as_json", is_flag=True, help="Print the step results as JSON.")
-def apply(setup_file, url, component, system, signing_key, mavlink1, timeout, find_s, as_json) -> None:
+def apply(setup_file, url, component, system, signing_key, mavlink1, timeout, find_s, payload, as_json) -> None:
     """Run the pre-flight command sequence of SETUP_FILE (NAME.setup.json), each step acknowledged (a RedEdge's
     DIGICAM_CONFIGURE, which it never answers, is sent repeatedly instead)."""
-    from wiris_tools.camera_client import load_setup
+    from wiris_tools.camera_client import load_setup, steps_of_payload
 
     steps = load_setup(setup_file)       # checked completely before anything is sent
+    if payload is not None:
+        steps = steps_of_payload(steps, payload, setup_file)
+        if component is None:               # the camera of that payload, not the first one heard
+            component = steps[0].target_component or None
     done = []
 
     def report(result) -> None:

@@ -98,13 +98,21 @@ def check_cmd(plan: str, as_json: bool, firmware: str | None) -> None:
 @click.option("-o", "--output", "out", required=True, type=click.Path(dir_okay=False),
               help="FILE.svg, FILE.png or FILE.html")
 @click.option("--firmware", type=click.Choice(["ardupilot", "px4"]), help="override the plan's vehicle.firmware")
-def preview_cmd(plan: str, out: str, firmware: str | None) -> None:
-    """Draw the compiled mission: area, path, photo footprints, scale, legend."""
+@click.option("--tiles", metavar="URL_TEMPLATE",
+              help="HTML only: a basemap from this XYZ tile server, e.g. https://tile.openstreetmap.org/{z}/{x}/{y}.png "
+                   "(without it the page makes no network request)")
+@click.option("--attribution", metavar="TEXT", help="the basemap's attribution shown on the map "
+              "(default: OpenStreetMap's for its servers, else the tile host)")
+def preview_cmd(plan: str, out: str, firmware: str | None, tiles: str | None, attribution: str | None) -> None:
+    """Draw the compiled mission: area, path, photo footprints, scale, legend; FILE.html is an interactive map
+    (pan, zoom, layers to toggle, every item clickable) that works offline."""
     from missions.formats.preview import write_preview
+    from missions.formats.webmap import TileSource
 
+    source = TileSource.parse(tiles, attribution) if tiles is not None else None
     compiled = _compile(plan, firmware)
     with _located(plan):
-        click.echo(f"wrote {write_preview(compiled, out)}")
+        click.echo(f"wrote {write_preview(compiled, out, source)}")
 
 # --- end of the compiler's commands ----------------------------------------------------------------------------
 

@@ -69,8 +69,8 @@ def _progress(label: str, quiet: bool):
 @click.command("upload")
 @click.argument("file", type=click.Path(exists=True, dir_okay=False))
 @click.option("--type", "kind", type=click.Choice(TYPES), default="mission", show_default=True,
-              help="which list to upload (fence and rally from a .plan, or a fence/rally WPL file as Mission "
-                   "Planner saves one)")
+              help="which list to upload (fence from a .plan or a capture plan, rally from a .plan, or a fence/rally "
+                   "WPL file as Mission Planner saves one)")
 @click.option("--verify", is_flag=True,
               help="download again after the upload and compare each item as the vehicle's firmware keeps it")
 @click.option("--sortie", "--part", "part", type=click.IntRange(1), default=None,
