@@ -27,7 +27,7 @@ import tracemalloc
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-# 1 ha, 10 ha, 1 km², 10 km²: 100 km² at 60 m would take some 660,000 photos, over the 100,000 one plan holds
+# 1 ha, 10 ha, 1 km², 10 km² in one mission (item limit 65535); bench_big_areas.py flies 1 to 100 km² in sorties
 SIZES_M2 = (1e4, 1e5, 1e6, 1e7)
 REPEAT = 3
 HOME = (50.0000, 14.5000)
@@ -35,7 +35,7 @@ HOME = (50.0000, 14.5000)
 PLAN = """\
 version: 1
 name: bench-{tag}
-vehicle: {{firmware: ardupilot, frame: copter, speed_mps: 8, max_mission_items: 65535}}
+vehicle: {{firmware: ardupilot, frame: copter, speed_mps: 7, max_mission_items: 65535}}
 home: {{lat: {lat}, lon: {lon}, alt_amsl_m: 300}}
 payloads:
   thermal: {{camera: wiris-pro, imager: thermal, lens_mm: 13, component_id: 100}}

@@ -33,7 +33,7 @@ from cdf.catalogue import catalogue
 from missions.compiled import (AreaInfo, CaptureSize, Compiled, PayloadInfo, PlanWarning, SetupStep, StepFacts,
                                TransectPattern)
 from missions.emit.emitter import Emitted, Emitter, Track, TrackPoint, HOVER_HOLD_S
-from missions.emit.firmware import FirmwareProfile, check_items, profile, split_parts
+from missions.emit.firmware import FirmwareProfile, check_items, profile
 from missions.emit.items import MissionItem
 from missions.emit.lua import render_script
 from missions.emit.params import Param, autopilot_params
@@ -51,6 +51,8 @@ from missions.geometry.zones import (RESUME_MARGIN_M, CameraPoint, StepZones, Tr
 from missions.plan.load import (CameraStep, CorridorStep, LandStep, Plan, RtlStep, SurveyStep, TakeoffStep,
                                 WaypointStep, input_files, load_plan_partly, raise_problems)
 from missions.plan.meaning import Ceiling, ceiling_problem
+from missions.sorties import in_sorties
+from missions.plan_turns import default_turnaround_m, turn_radius_of, turn_warnings
 from missions.plan.schema import MAX_AGL_M, MAX_ALTITUDE_M, MIN_ALTITUDE_M, SPEED_RANGE_MPS
 from missions.thermal.assess import assess
 from missions.thermal.speed import SpeedLimit, check_sharp, choose_speed, line_limits
@@ -125,6 +127,7 @@ class _Compile:
     emitter: Emitter
     state: _State
     speed_mps: float                         # the plan's, or the one `auto` chose (`_mission_speed`)
+    turn_radius_m: float | None = None       # a plane's or VTOL's (`missions.plan_turns.turn_radius_of`)
     zones: tuple[Zone, ...] = ()             # every zone of the plan (missions.geometry.zones.plan_zones)
     transits: TransitRouter | None = None    # routes the flight between steps around the no-fly zones
     terrain: Any = None                      # missions.terrain.model.Terrain when the plan names a DEM
@@ -148,11 +151,6 @@ class _Lines(NamedTuple):
 
     route: SurveyPlan | CorridorPlan
     area: Area
-
-
-class _Parts(NamedTuple):
-    limit: int                               # items per part
-    parts: tuple[tuple[MissionItem, ...], ...]
 
 
 # ----------------------------------------------------------------------------------------------- helpers
@@ -333,11 +331,14 @@ def _lines_step(c: _Compile, step: SurveyStep | CorridorStep, kind: str,
     c.emitter.track(track, where=c.plan.step_where(step, "trigger"))
     for w in lines.route.warnings:
         c.warn(w.code, f"{kind} at {here}: {w.message}")
+    for w in turn_warnings(lines.route, c.turn_radius_m, _line_inputs_turnaround(c, step)):
+        c.warn(w.code, f"{kind} at {here}: {w.message}")
     c.state.areas.append(AreaInfo(
         step=step.index, kind=kind, payloads=step.payloads, area=lines.area, altitude_m=alt,
         front_overlap=step.front_pct / 100.0, side_overlap=step.side_pct / 100.0, trigger=step.trigger,
         trigger_distance_m=lines.route.trigger_distance_m, items=(first, c.emitter.item_count),
-        zones=_step_zones(c, step, lines, alt)))
+        zones=_step_zones(c, step, lines, alt),
+        line_items=_line_items(c.emitter.s.track_navs, lines.route)))
     c.state.intent.append(lines.route)
     c.state.step_facts.append(_step_facts(c, step, kind, lead, footprint, lines.route))
     c.state.patterns.append(_pattern(c, step, kind, lines, lead, alt, first))
@@ -430,6 +431,12 @@ def _assumptions(c: _Compile, step: SurveyStep | CorridorStep) -> list[str]:
     return out
 
 
+def _line_items(navs: tuple[int, ...], route: SurveyPlan | CorridorPlan) -> tuple[int, ...]:
+    """The items of the points after each camera span's entry up to its exit: flying towards them is flying a line."""
+    return tuple(navs[k] for s in route.camera_spans for k in range(s.start_index + 1, s.stop_index + 1)
+                 if k < len(navs))
+
+
 def _lead_optics(plan: Plan, payloads: _Payloads, step: SurveyStep | CorridorStep, kind: str) -> PayloadInfo:
     """The optics of the step's first payload, which sets the lines: without them there is no footprint."""
     lead = step.payloads[0]
@@ -512,10 +519,15 @@ def _line_inputs(c: _Compile, step: SurveyStep | CorridorStep, lead: PayloadInfo
     return _LineInputs(
         footprint=footprint,
         turnaround_m=step.turnaround_m if step.turnaround_m is not None
-        else TURNAROUND_DEFAULT_M[c.plan.vehicle.frame],
+        else default_turnaround_m(TURNAROUND_DEFAULT_M[c.plan.vehicle.frame], c.turn_radius_m),
         start_latlon=last[:2] if last else (c.plan.home.lat, c.plan.home.lon),
         photos_left=max(0, survey.MAX_PHOTOS - sum(len(g.photos) for g in c.state.intent)),
         min_interval_s=lead.min_interval_s)
+
+
+def _line_inputs_turnaround(c: _Compile, step: SurveyStep | CorridorStep) -> float | None:
+    """The step's own turnaround_m (None: the default, which a plane's turn already sizes)."""
+    return step.turnaround_m
 
 
 def _plan_survey_lines(c: _Compile, step: SurveyStep, inputs: _LineInputs) -> _Lines:
@@ -525,7 +537,7 @@ def _plan_survey_lines(c: _Compile, step: SurveyStep, inputs: _LineInputs) -> _L
                         turnaround_m=inputs.turnaround_m, speed_mps=c.speed_mps,
                         min_interval_s=inputs.min_interval_s, refly_90=step.refly_90,
                         hover=step.trigger == "hover", start_latlon=inputs.start_latlon,
-                        photos_left=inputs.photos_left)
+                        photos_left=inputs.photos_left, turn_radius_m=c.turn_radius_m)
     return _Lines(route, area)
 
 
@@ -722,22 +734,6 @@ _STEPS: dict[type, Callable[[_Compile, Any], None]] = {
 
 
 # --------------------------------------------------------------------------------------- after the steps
-
-def _split_into_parts(c: _Compile, items: tuple[MissionItem, ...]) -> _Parts:
-    """The items as missions within the vehicle's item limit, each part checked against the firmware."""
-    prof = c.profile
-    limit = c.plan.vehicle.max_mission_items or prof.default_item_limit
-    parts = split_parts(items, limit, prof)
-    for k, part in enumerate(parts):
-        check_items(part, prof, where=f"part {k + 1}")
-    if len(parts) > 1:
-        c.warn("mission_split", f"{len(items)} items exceed {prof.title}'s limit of {limit} "
-               f"({prof.item_limit_why if not c.plan.vehicle.max_mission_items else 'vehicle.max_mission_items'})"
-               f"; split into {len(parts)} parts: each part ends holding position (NAV_LOITER_UNLIM), upload "
-               "the next and switch to AUTO again; it resumes at that position with speed and camera trigger "
-               "restored")
-    return _Parts(limit, parts)
-
 
 def _warn_about_altitudes(c: _Compile) -> None:
     """One note for a mission above MAX_AGL_M under the plan's permit (without one the loader refused it)."""
@@ -983,8 +979,10 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
         _check_rededge_and_zones(plan, payloads, zones)
     except PlanError as e:
         raise_problems(problems + _problems_of(e), plan.path)
+    radius = turn_radius_of(plan.vehicle, speed)
     router = TransitRouter(zones, LocalProjection(plan.home.lat, plan.home.lon)) if zones else None
-    c = _Compile(plan, prof, payloads, _emitter(plan, prof, payloads, speed), state, speed, zones, router, terrain)
+    c = _Compile(plan, prof, payloads, _emitter(plan, prof, payloads, speed), state, speed, radius, zones, router,
+                 terrain)
     c.emitter.home_amsl_m = home_amsl
     if terrain is not None and any(c.payloads.is_rededge(p.name) for p in plan.payloads):
         c.warn("rededge_over_terrain", "a RedEdge in overlap mode spaces its photos by its own height above the "
@@ -1003,7 +1001,6 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     emitted = c.emitter.result()
     state.warnings.extend(emitted.warnings)
     check_items(emitted.items, prof)
-    parts = _split_into_parts(c, emitted.items)
     _warn_about_altitudes(c)
     setup = _setup(c)
     lua = _lua_bridge(c, emitted)
@@ -1017,16 +1014,16 @@ def compile_plan(path_or_plan: str | Path | Plan, firmware: str | None = None) -
     compiled = Compiled(
         name=plan.name, firmware=prof.name, frame=plan.vehicle.frame,
         home=(plan.home.lat, plan.home.lon, home_amsl), speed_mps=c.speed_mps, items=emitted.items,
-        parts=parts.parts, item_limit=parts.limit,
+        parts=(emitted.items,), item_limit=c.plan.vehicle.max_mission_items or prof.default_item_limit,
         # PayloadInfo only for payloads whose optics are known: the report measures coverage with them
         payloads=tuple(payloads.optics[p.name] for p in plan.payloads if p.name in payloads.optics),
         areas=tuple(state.areas), setup=setup, lua=lua, params=params,
         warnings=tuple(dict.fromkeys(state.warnings)), intent=tuple(state.intent), inputs=input_files(plan),
         step_facts=tuple(state.step_facts), patterns=tuple(state.patterns), corridor_scan=plan.corridor_scan,
-        fence=fence, terrain=terrain)
+        fence=fence, terrain=terrain, turn_radius_m=radius)
     if terrain is not None:
         _check_clearance(compiled, terrain, plan)
-    return _with_the_sun(plan, compiled)
+    return _with_the_sun(plan, in_sorties(plan, compiled))
 
 
 def _with_the_sun(plan: Plan, compiled: Compiled) -> Compiled:

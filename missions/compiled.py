@@ -74,6 +74,10 @@ class AreaInfo:
     # The zones near the step (missions.geometry.zones.StepZones): the report's zone table and the coverable area.
     # None: no zone near it.
     zones: Any = None
+    # The NAV items that end a leg of the step's lines (flying from a span's entry to its exit): a payload that
+    # shoots by itself (a RedEdge in overlap mode, also on turnarounds and transits) has its overlaps measured
+    # over the photos taken flying towards them. None: every photo of `items`.
+    line_items: tuple[int, ...] | None = None
 
 
 @dataclass(frozen=True)
@@ -167,6 +171,19 @@ class SetupStep:
         return out
 
 
+class FlightCache:
+    """The re-flight of a Compiled, kept by `missions.measure.flight.simulate` so that the compile's own checks
+    (battery, sun), the report and the outputs fly a mission once: a 100 km² survey's re-flight places ~660,000
+    photos. It holds the values it was flown from and answers only while they are the very same objects, so a
+    `dataclasses.replace` with other items (or home, payloads, setup, areas) flies again."""
+
+    __slots__ = ("key", "sim")
+
+    def __init__(self) -> None:
+        self.key: tuple = ()
+        self.sim: Any = None
+
+
 @dataclass(frozen=True)
 class Compiled:
     name: str
@@ -192,6 +209,12 @@ class Compiled:
     fence: tuple[MissionItem, ...] = ()         # fence items (mission_type FENCE): exclusion zones, inclusion fence
     # missions.terrain.model.Terrain: the DEM the lines follow and the report measures over; None: flat ground
     terrain: Any = field(default=None, compare=False)
+    # missions.sorties.Sortie per sortie when the mission is longer than a battery or the item limit (then
+    # `parts` are their items); () when it is flown as one mission
+    sorties: tuple[Any, ...] = field(default=(), compare=False)
+    endurance: Any = field(default=None, compare=False)   # missions.sorties.Endurance the split used
+    turn_radius_m: float | None = None          # a plane's or VTOL's (missions.geometry.turns); None: a copter
+    flight_cache: FlightCache = field(default_factory=FlightCache, compare=False, repr=False)
 
     def payload(self, name: str) -> PayloadInfo:
         return next(p for p in self.payloads if p.name == name)

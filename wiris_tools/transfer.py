@@ -850,8 +850,8 @@ def _require_mission(p, mission_type: int, what: str) -> None:
 
 
 def _capture_plan_part(p, part: int | None, firmware: str | None) -> LoadedList:
-    """The mission of capture plan `p` compiled for `firmware` (None: the plan's), its part `part` (1..N) when
-    it is split at the vehicle's item limit."""
+    """The mission of capture plan `p` compiled for `firmware` (None: the plan's), its sortie `part` (1..N) when
+    it is flown in sorties (missions.sorties)."""
     compiled = _compiled_without_errors(p, firmware)
     parts = list(compiled.parts) if compiled.parts else [compiled.items]
     made_for = next((code for code, name in CHECKED_FIRMWARES.items() if name == compiled.firmware), None)
@@ -883,14 +883,14 @@ def _compiled_without_errors(p, firmware: str | None):
 
 
 def _part_index(p, part: int | None, count: int, item_limit: int) -> int:
-    """The index into the `count` parts of --part `part` (None: the only one); PlanError when it names none."""
+    """The index into the `count` sorties of --sortie `part` (None: the only one); PlanError when it names none."""
     if count > 1 and part is None:
-        raise PlanError(f"the mission is split into {count} parts to fit the vehicle's {item_limit} items",
-                        where=str(p), hint="choose one with --part 1..N")
+        raise PlanError(f"the mission is flown in {count} sorties (one battery or {item_limit} items each)",
+                        where=str(p), hint=f"choose one with --sortie 1..{count}")
     if part is not None and not 1 <= part <= count:
-        raise PlanError(f"--part {part}: the mission has {count} part(s)", where=str(p),
-                        hint="leave out --part: the mission fits the vehicle in one upload" if count == 1
-                        else f"give --part 1..{count}: each part is a complete mission, flown in turn")
+        raise PlanError(f"--sortie {part}: the mission has {count} sortie(s)", where=str(p),
+                        hint="leave out --sortie: the mission is flown in one" if count == 1
+                        else f"give --sortie 1..{count}: each sortie is a complete mission, flown in turn")
     return (part or 1) - 1
 
 
@@ -1016,10 +1016,10 @@ def too_big_hint(path, count: int, mission_type: int) -> str:
                 "it: upload them one at a time, each after the last is flown")
     if Path(path).suffix.lower() in CAPTURE_SUFFIXES:
         return (f"the vehicle has no room for {count} items: set vehicle.max_mission_items in the plan to the "
-                "vehicle's limit (PX4: 500 by default) and upload with --part 1..N")
+                "vehicle's limit (PX4: 500 by default) and upload with --sortie 1..N")
     return (f"the vehicle has no room for {count} {kind} items (PX4 holds 500 by default, ArduPilot about 700 on "
             "common boards): compile the capture plan with vehicle.max_mission_items set to the vehicle's limit to "
-            "get NAME.partK files, or use fewer items")
+            "get NAME.sortieK files, or use fewer items")
 
 
 def download_file(link: Link, out: str, *, target_system: int | None = None, target_component: int = 1,

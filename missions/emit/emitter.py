@@ -94,6 +94,7 @@ class _State:
     lua: bool = False
     warnings: list[PlanWarning] = field(default_factory=list)
     speed_set: bool = False
+    track_navs: tuple[int, ...] = ()    # the item index of each point of the last track (`Emitter.track`)
 
 
 @dataclass(frozen=True)
@@ -211,10 +212,13 @@ class Emitter:
     def track(self, t: Track, where: str | None = None) -> None:
         if not self.s.speed_set:
             self.set_speed()
+        navs: list[int] = []
         if not t.autopilot_triggers:
             for i, p in enumerate(t.points):
+                navs.append(len(self.s.items))
                 self._add(_nav(mavlink.MAV_CMD_NAV_WAYPOINT, p.lat, p.lon, t.altitude_of(i),
                                comment=f"{p.kind} (RedEdge captures itself)", frame=t.frame))
+            self.s.track_navs = tuple(navs)
             return
         if t.trigger == "interval" and not self.profile.interval_trigger:
             raise PlanError(f"trigger: interval cannot be flown on {self.profile.title}", where=where,
@@ -222,6 +226,7 @@ class Emitter:
         starts = {a for a, _ in t.spans}
         stops = {b for _, b in t.spans}
         for i, p in enumerate(t.points):
+            navs.append(len(self.s.items))
             if t.trigger == "hover" and p.kind == "photo":
                 yaw = p.yaw_deg if p.yaw_deg is not None and self.keeps_waypoint_yaw else NAN
                 self._add(_nav(mavlink.MAV_CMD_NAV_WAYPOINT, p.lat, p.lon, t.altitude_of(i), p1=t.hold_s, p4=yaw,
@@ -234,6 +239,7 @@ class Emitter:
                 self._trigger_on(t)
             if i in stops and t.trigger != "hover":
                 self._trigger_off(t)
+        self.s.track_navs = tuple(navs)
 
     def _trigger_on(self, t: Track, shoot_now: bool = True) -> None:
         if t.trigger == "interval":

@@ -12,6 +12,8 @@ home, flat ground assumed as in the report). Every feature has a `kind` property
   photo       each re-derived photo position: index, payloads, altitude, heading, mission item, time
   footprint   each photo's ground footprint per payload (nadir rectangle at the photo's altitude; with a DEM the
               view cone cut by the terrain, missions.terrain.reflight)
+  sortie      a mission flown in sorties: each sortie's own re-flown path (home to home) as a LineString;
+              properties: sortie (1..N), file, flight_time_s, photos, items, first_line, last_line
 
 `kml_out` renders the same collection, so the two files can never disagree.
 """
@@ -95,6 +97,7 @@ def feature_collection(compiled: Compiled, sim: Simulation, rep: MissionReport) 
                       "geometry": {"type": "Point", "coordinates": [_r7(p.lon), _r7(p.lat), round(amsl, 2)]}})
     if write_fp:
         feats.extend(_footprints(compiled, sim))
+    feats.extend(_sortie_features(rep, home_amsl))
     props: dict[str, Any] = {"plan": compiled.name, "firmware": compiled.firmware,
                              "generator": "wiris-tools", "altitudes": "metres AMSL (home AMSL + height above home)"}
     if not write_fp:
@@ -119,6 +122,16 @@ def _photo_heights(compiled: Compiled, sim: Simulation) -> tuple[np.ndarray, np.
     from missions.terrain.reflight import camera_amsl
     ground = compiled.terrain.dem.ground_amsl([p.lat for p in sim.photos], [p.lon for p in sim.photos])
     return camera_amsl(compiled, sim.photos, ground), ground
+
+
+def _sortie_features(rep: MissionReport, home_amsl: float) -> list[dict]:
+    table = rep.sorties
+    if table is None:
+        return []
+    return [{"type": "Feature", "properties": {"kind": "sortie", "sortie": k, **row},
+             "geometry": {"type": "LineString",
+                          "coordinates": [[_r7(lon), _r7(lat), round(home_amsl + alt, 2)] for lat, lon, alt in path]}}
+            for k, (row, path) in enumerate(zip(table.rows, table.paths), start=1)]
 
 
 def _footprints(compiled: Compiled, sim: Simulation) -> list[dict]:

@@ -16,8 +16,10 @@ STYLES = {
     "footprint": ("1400a5ff", "6000a5ff", 1),   # faint orange
     "fence": ("200000ff", "ff0000ff", 2),       # red line, faint fill (`wiris mission convert`)
 }
-FOLDERS = (("area", "Areas"), ("gap", "Holes and exclusions"), ("path", "Flight path"), ("home", "Home"),
-           ("waypoint", "Waypoints"), ("photo", "Photos"), ("footprint", "Footprints"),
+# one line colour per sortie (cycled), so that neighbouring sorties tell apart
+SORTIE_COLOURS = ("ff3030e6", "ff1ea0ff", "ff00b000", "ffb01ea0", "ffa0a000", "ff0060c0")
+FOLDERS = (("area", "Areas"), ("gap", "Holes and exclusions"), ("path", "Flight path"), ("sortie", "Sorties"),
+           ("home", "Home"), ("waypoint", "Waypoints"), ("photo", "Photos"), ("footprint", "Footprints"),
            ("fence", "Fence"), ("fence_return", "Fence return point"), ("rally", "Rally points"))
 
 
@@ -60,6 +62,8 @@ def _name(p: dict) -> str:
         return f"photo {p['index']}"
     if kind == "footprint":
         return f"footprint {p['photo']} {p['payload']}"
+    if kind == "sortie":
+        return f"sortie {p['sortie']} ({p['file']})"
     if kind == "fence":
         return f"fence {'inclusion' if p['inclusion'] else 'exclusion'}"
     if kind == "rally":
@@ -79,6 +83,8 @@ def render_kml(fc: dict) -> str:
     for kind, (fill, line, width) in STYLES.items():
         out.append(f'<Style id="{kind}"><LineStyle><color>{line}</color><width>{width}</width></LineStyle>'
                    f"<PolyStyle><color>{fill}</color></PolyStyle></Style>")
+    for k, line in enumerate(SORTIE_COLOURS):
+        out.append(f'<Style id="sortie{k}"><LineStyle><color>{line}</color><width>3</width></LineStyle></Style>')
     for kind, title in FOLDERS:
         feats = [f for f in fc["features"] if f["properties"]["kind"] == kind]
         if not feats:
@@ -87,6 +93,8 @@ def render_kml(fc: dict) -> str:
         for f in feats:
             p = f["properties"]
             style = f"<styleUrl>#{kind}</styleUrl>" if kind in STYLES else ""
+            if kind == "sortie":
+                style = f"<styleUrl>#sortie{(p['sortie'] - 1) % len(SORTIE_COLOURS)}</styleUrl>"
             # footprints are many and say nothing beyond their photo's number: no description
             desc = "" if kind == "footprint" else f"<description>{_description(p)}</description>"
             out.append(f"<Placemark><name>{escape(_name(p))}</name>{desc}{style}{_geometry(f['geometry'])}</Placemark>")

@@ -11,9 +11,10 @@ Files, named after the plan (NAME = compiled.name):
   NAME.lua             the ArduPilot Lua bridge, only when the mission needs it (copy to the SD card's APM/scripts)
   NAME.params          autopilot parameters the mission relies on, with the reason for each
   NAME.report.json     the measured report, identical to `wiris mission check --json`
-  NAME.partK.plan, NAME.partK.waypoints  (K = 1..N) only when the mission exceeds the vehicle's item limit:
-                       each part is a complete mission to upload and fly in turn; NAME.plan still holds the
-                       whole mission for review.
+  NAME.sortieK.plan, NAME.sortieK.waypoints  (K = 1..N) only when the mission is longer than one battery
+                       (vehicle.endurance_min) or the vehicle's item limit: each sortie is a complete mission
+                       (take-off to landing) to upload and fly in turn on a fresh battery (missions.sorties);
+                       NAME.plan still holds the whole mission for review.
   NAME.manifest.json   every file above with its sha256, written last: the set's commit record (below)
 
 One set at a time, also across a SIGKILL or a power cut at any moment. The files are siblings in the user's
@@ -26,7 +27,7 @@ committed set is always finished by rolling it forward:
    folder). Nothing outside it has changed yet: a kill here leaves DIR's set as it was.
 3. Commit: one rename of that folder to `DIR/.NAME.commit` (then DIR is fsynced). From here the new set wins:
    each file is renamed from the commit folder into DIR (a file already moved is skipped, so this can be
-   repeated after a kill), files the previous manifest lists and the new set lacks (stale `NAME.partK.*`) are
+   repeated after a kill), files the previous manifest lists and the new set lacks (stale `NAME.sortieK.*`) are
    removed, DIR is fsynced, the manifest is renamed in last, and the empty commit folder is removed.
 
 Readers of compiled files (`load_plan`, `load_wpl`, `wiris camera apply`'s setup loader) call check_output():
@@ -91,10 +92,10 @@ def _writers(compiled: Compiled, rep: MissionReport, sim) -> list[tuple[str, Cal
     ]
     if compiled.lua:
         out.append((f"{name}.lua", lambda p: p.write_text(compiled.lua, encoding="utf-8")))
-    if len(compiled.parts) > 1:
+    if len(compiled.parts) > 1:     # sorties (missions.sorties): one complete mission each
         for k, part in enumerate(compiled.parts, start=1):
-            out.append((f"{name}.part{k}.plan", lambda p, part=part: planfile.write_plan(p, compiled, items=part)))
-            out.append((f"{name}.part{k}.waypoints",
+            out.append((f"{name}.sortie{k}.plan", lambda p, part=part: planfile.write_plan(p, compiled, items=part)))
+            out.append((f"{name}.sortie{k}.waypoints",
                         lambda p, part=part: wpl.write_wpl(p, part, home=compiled.home, firmware=compiled.firmware)))
     return out
 
@@ -162,13 +163,13 @@ def _previous_manifest(out_dir: Path, name: str) -> Manifest | None:
 
 
 def _candidate_names(fname: str) -> list[str]:
-    """The plan names whose outputs `fname` could be, most specific first ("a.part2.plan": "a.part2", "a")."""
+    """The plan names whose outputs `fname` could be, most specific first ("a.sortie2.plan": "a.sortie2", "a")."""
     names = []
     for suffix in _READ_SUFFIXES:
         if fname.endswith(suffix) and len(fname) > len(suffix):
             stem = fname[: -len(suffix)]
             names.append(stem)
-            part = re.fullmatch(r"(.+)\.part\d+", stem)
+            part = re.fullmatch(r"(.+)\.sortie\d+", stem)
             if part and suffix in (".plan", ".waypoints"):
                 names.append(part.group(1))
     return names

@@ -177,7 +177,8 @@ def build_picture(compiled: Compiled, sim: Any = None, rep: MissionReport | None
     rep = rep or report(compiled, sim)
     content = _map_content(compiled, sim)
     frame = _Frame.fitting(content.points())
-    shapes = [*_terrain_shapes(compiled, sim, frame), *_map_shapes(compiled, content, frame), *_waypoint_shapes(compiled, sim, frame),
+    shapes = [*_terrain_shapes(compiled, sim, frame), *_map_shapes(compiled, content, frame),
+              *_sortie_shapes(rep, sim.projection, frame), *_waypoint_shapes(compiled, sim, frame),
               *_home_shapes(compiled, sim.projection, frame), *_graticule_shapes(sim.projection, frame),
               *_scale_bar_shapes(frame.scale), *_north_arrow_shapes()]
     detail = _detail(content, frame)
@@ -266,6 +267,23 @@ def _path_shapes(path: Sequence[XY], f: _Frame) -> list[Shape]:
         return []
     return [Shape("polyline", f.ring(path), stroke=COLOURS["path"], stroke_width=2, layer="path"),
             *_arrows(list(f.ring(path)))]
+
+
+# a mission flown in sorties: each sortie's path in its own colour (cycled), over the whole path's blue
+SORTIE_COLOURS = ("#e63030", "#ff9f1e", "#00b000", "#a01eb0", "#00a0a0", "#c06000")
+SORTIE_COLOUR_NAMES = ("red", "orange", "green", "purple", "teal", "brown")
+
+
+def _sortie_shapes(rep: MissionReport, proj: Any, f: _Frame) -> list[Shape]:
+    table = rep.sorties
+    if table is None:
+        return []
+    out = []
+    for k, path in enumerate(table.paths):
+        x, y = proj.to_xy([p[0] for p in path], [p[1] for p in path])
+        out.append(Shape("polyline", f.ring(tuple(zip(x.tolist(), y.tolist()))),
+                         stroke=SORTIE_COLOURS[k % len(SORTIE_COLOURS)], stroke_width=2, layer="sorties"))
+    return out
 
 
 def _photo_shapes(compiled: Compiled, photos: Sequence[Any], f: _Frame) -> list[Shape]:
@@ -526,7 +544,7 @@ def _legend_rows(compiled: Compiled, rep: MissionReport) -> list[tuple[str, str]
     """The report's key figures, as (key, value) text."""
     rows: list[tuple[str, str]] = [
         ("firmware", f"{rep.firmware} {compiled.frame}"),
-        ("mission items", f"{rep.mission_items} (limit {rep.item_limit}, {rep.parts} part"
+        ("mission items", f"{rep.mission_items} (limit {rep.item_limit}, {rep.parts} sortie"
                           f"{'s' if rep.parts != 1 else ''})"),
         ("path", f"{rep.path_length_m / 1000:.2f} km"),
         ("flight time", f"{_fmt_time(rep.flight_time_s)} (QGC: {_fmt_time(rep.flight_time_qgc_s or 0)})"),
@@ -542,6 +560,11 @@ def _legend_rows(compiled: Compiled, rep: MissionReport) -> list[tuple[str, str]
         ov = rep.overlap[name]
         rows.append((f"coverage {name}", _pct(c)))
         rows.append((f"overlap {name}", f"front {_pct(ov.front_min)}, side {_pct(ov.side_min)} (min)"))
+    if rep.sorties is not None:
+        for k, r in enumerate(rep.sorties.rows):
+            lines = "" if r["first_line"] is None else f", lines {r['first_line']}..{r['last_line']}"
+            rows.append((f"sortie {k + 1} ({SORTIE_COLOUR_NAMES[k % len(SORTIE_COLOURS)]})",
+                         f"{_fmt_time(r['flight_time_s'])}, {r['photos']} photos{lines}"))
     rows.append(("warnings / errors", f"{len(rep.warnings)} / {len(rep.errors)}"))
     return rows
 

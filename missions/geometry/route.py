@@ -125,8 +125,38 @@ def build_cells(legs: Sequence[Leg]) -> list[list[int]]:
     return cells
 
 
-def _cell_sequence(legs: Sequence[Leg], cell: list[int], from_start: bool, first_forward: bool) -> list[FlownLeg]:
+def skip_line_order(n: int, gap: int) -> list[int]:
+    """Positions 0..n-1 in an order where consecutive ones are at least `gap` apart: a plane cannot turn onto the
+    line beside the one it leaves when they are closer than two turn radii. Blocks of 2s lines (s = gap + 1) are
+    flown as pairs out and back, b, b+s, b+1, b+s+1, ..., every other block mirrored so that it starts s lines
+    from where the last one ended; the lines left over at the end are flown lowest-far-enough first, and where
+    none is far enough, nearest (a loop turn)."""
+    if gap <= 1 or n <= 2:
+        return list(range(n))
+    s = gap + 1
+    out: list[int] = []
+    b = 0
+    mirrored = False
+    while b + 2 * s <= n:
+        pairs = [(b + i, b + s + i) for i in range(s)]
+        if mirrored:
+            pairs = [(b + s - 1 - i, b + 2 * s - 1 - i) for i in range(s)]
+        out += [k for pair in pairs for k in pair]
+        b += 2 * s
+        mirrored = not mirrored
+    left = list(range(b, n))
+    while left:
+        far = next((k for k, m in enumerate(left) if not out or abs(m - out[-1]) >= gap), None)
+        if far is None:
+            far = min(range(len(left)), key=lambda k: abs(left[k] - out[-1]))
+        out.append(left.pop(far))
+    return out
+
+
+def _cell_sequence(legs: Sequence[Leg], cell: list[int], from_start: bool, first_forward: bool,
+                   gap: int = 1) -> list[FlownLeg]:
     order = cell if from_start else cell[::-1]
+    order = [order[k] for k in skip_line_order(len(order), gap)]
     out = []
     fwd = first_forward
     for i in order:
@@ -244,11 +274,11 @@ class _Tour(NamedTuple):
     steps: list[int]
 
 
-def _ways_through(legs: Sequence[Leg], cell: list[int]) -> list[_CellWay]:
+def _ways_through(legs: Sequence[Leg], cell: list[int], gap: int = 1) -> list[_CellWay]:
     ways = []
     for from_start in (True, False):
         for first_forward in (True, False):
-            seq = _cell_sequence(legs, cell, from_start, first_forward)
+            seq = _cell_sequence(legs, cell, from_start, first_forward, gap)
             ways.append(_CellWay(seq, _ends(legs[seq[0].index], seq[0].reversed)[0],
                                  _ends(legs[seq[-1].index], seq[-1].reversed)[1]))
     return ways
@@ -286,12 +316,13 @@ def _tour_starts(legs: Sequence[Leg], cells: list[list[int]], entries: np.ndarra
 
 
 def order_legs(legs: Sequence[Leg], start_xy: tuple[float, float] | None = None,
-               max_starts: int = 24) -> list[FlownLeg]:
-    """The legs in flying order: cell by cell, nearest next (see module doc, step 2)."""
+               max_starts: int = 24, gap: int = 1) -> list[FlownLeg]:
+    """The legs in flying order: cell by cell, nearest next (see module doc, step 2); within a cell, consecutive
+    legs at least `gap` lines apart where possible (`skip_line_order`: a plane's turn)."""
     if not legs:
         return []
     cells = build_cells(legs)
-    ways = [_ways_through(legs, cell) for cell in cells]
+    ways = [_ways_through(legs, cell, gap) for cell in cells]
     entries = np.array([[w.entry for w in cell_ways] for cell_ways in ways])      # cells×4×2
     exits = np.array([[w.exit for w in cell_ways] for cell_ways in ways])
     best: _Tour | None = None

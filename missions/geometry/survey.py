@@ -67,11 +67,11 @@ from missions.geometry.triggers import PhotoPoint, TriggerSpan, simulate_distanc
 
 # ArduCopter accepts a waypoint within WPNAV_RADIUS (200 cm default) — before the vehicle is on it.
 DEFAULT_EXIT_MARGIN_M = 2.0
-# The photos of one plan's survey and corridor steps together: at the WIRIS's 1 s minimum interval this is
-# 28 h of shooting, beyond any one vehicle's mission, while planning and measuring it stays within seconds
-# and a few hundred MB (both grow with the photo count). Checked per step from an estimate, before anything
-# is generated.
-MAX_PHOTOS = 100_000
+# The photos of one plan's survey and corridor steps together, flown in as many sorties as it takes: 100 km² at
+# 60 m with a WIRIS is ~660,000 (bench/bench_compile_scaling.py plans and measures it within 2 GB); three times
+# that is no survey anyone flies from one plan but a typo (an area in the wrong units), refused from an estimate
+# before anything is generated.
+MAX_PHOTOS = 2_000_000
 # Separate polygons one survey plans. The planner's cost grows about linearly with them (20,000 small triangles
 # compile in ~25 s of one core: bench/bench_survey_scaling.py), and an area of more is better merged or split
 # over several plans. Checked before any swaths are generated.
@@ -86,8 +86,9 @@ EXHAUSTIVE_ANGLE_PARTS = 100
 FULL_RANK_PARTS = 4000
 
 
-def check_photo_budget(estimate: float, what: str, left: int = MAX_PHOTOS) -> None:
-    """PlanError when a step's estimated photos exceed what the plan has `left` of MAX_PHOTOS."""
+def check_photo_budget(estimate: float, what: str, left: int | None = None) -> None:
+    """PlanError when a step's estimated photos exceed what the plan has `left` of MAX_PHOTOS (None: all)."""
+    left = MAX_PHOTOS if left is None else left
     if estimate > left:
         earlier = f" after {MAX_PHOTOS - left:,} in earlier steps" if left < MAX_PHOTOS else ""
         raise PlanError(f"this {what} would take about {estimate:,.0f} photos{earlier}, more than the "
@@ -363,9 +364,10 @@ def plan_survey(area: Area, footprint: Footprint, front_pct: float, side_pct: fl
                 min_interval_s: float | None = None, refly_90: bool = False, hover: bool = False,
                 start_latlon: tuple[float, float] | None = None,
                 exit_margin_m: float = DEFAULT_EXIT_MARGIN_M, photos_left: int = MAX_PHOTOS,
-                objective: Objective = flight_time_s) -> SurveyPlan:
+                objective: Objective = flight_time_s, turn_radius_m: float | None = None) -> SurveyPlan:
     """Plan a survey of `area` (see module doc); `photos_left`: what the plan's earlier steps left of
-    MAX_PHOTOS; `objective`: what angle_deg "auto" minimises (`objectives`)."""
+    MAX_PHOTOS; `objective`: what angle_deg "auto" minimises (`objectives`); `turn_radius_m`: a plane's, whose
+    consecutive lines are then flown at least two radii apart where the cell allows (skip-line order)."""
     spacing = transect_spacing_m(footprint, side_pct)
     trig = trigger_distance_m(footprint, front_pct)
     _check_speed_and_turnaround(speed_mps, turnaround_m)
@@ -378,7 +380,8 @@ def plan_survey(area: Area, footprint: Footprint, front_pct: float, side_pct: fl
     lines = LineSettings(footprint.across_m, spacing, trig, footprint.along_m, turnaround_m, speed_mps)
     angle = _line_angle(angle_deg, geom, lines, objective)
     start_xy = area.projection.point_to_xy(*start_latlon) if start_latlon else None
-    passes = _ordered_passes(geom, angle, lines, refly_90, start_xy)
+    gap = 1 if not turn_radius_m else max(1, math.ceil(2.0 * turn_radius_m / spacing - 1e-9))
+    passes = _ordered_passes(geom, angle, lines, refly_90, start_xy, gap)
     if not passes.legs:
         raise PlanError("the area produced no flight lines", where=area.source or None,
                         hint="check the area's size against the footprint")
@@ -444,7 +447,7 @@ def _line_angle(angle_deg: float | str, geom: Any, lines: LineSettings, objectiv
 
 
 def _ordered_passes(geom: Any, angle: float, lines: LineSettings, refly_90: bool,
-                    start_xy: tuple[float, float] | None) -> OrderedLegs:
+                    start_xy: tuple[float, float] | None, gap: int = 1) -> OrderedLegs:
     """The passes' legs in flying order: each pass ordered from where the one before it ended."""
     passes = [lines.swaths(geom, angle)]
     if refly_90:
@@ -454,7 +457,7 @@ def _ordered_passes(geom: Any, angle: float, lines: LineSettings, refly_90: bool
     pos = start_xy
     for sw in passes:
         off = len(legs)
-        o = order_legs(sw.legs, pos)
+        o = order_legs(sw.legs, pos, gap=gap)
         legs.extend(sw.legs)
         order.extend(FlownLeg(i + off, r) for i, r in o)
         if o:

@@ -58,6 +58,7 @@ from missions.emit.items import FRAME_GLOBAL, FRAME_GLOBAL_RELATIVE_ALT, FRAME_G
 from missions.geometry.geo import LocalProjection
 from missions.geometry.survey import check_photo_budget
 from missions.emit.firmware import PX4_ACCEPTANCE_M, PX4_TRIGGER_CHECK_S
+from missions.geometry.turns import dubins_length_m
 from missions.geometry.triggers import TriggerSpan, simulate_distance_trigger
 
 # ArduCopter defaults (WPNAV_ACCEL 250 cm/s², WPNAV_SPEED_UP 250 cm/s, WPNAV_SPEED_DN 150 cm/s,
@@ -579,13 +580,30 @@ _HANDLERS: dict[int, Callable[[_Flight, int, MissionItem], int | None]] = {
 }
 
 
+def _flown_from(compiled: Compiled) -> tuple:
+    return (compiled.items, compiled.home, compiled.frame, compiled.firmware, compiled.payloads, compiled.setup,
+            compiled.areas, compiled.speed_mps)
+
+
 def simulate(compiled: Compiled) -> Simulation:
-    """Fly `compiled.items` in the model above; return path, photos and times."""
+    """Fly `compiled.items` in the model above; return path, photos and times. Flown once per Compiled value
+    (`FlightCache`): asked again for the same items, it answers with the same Simulation."""
+    cache = getattr(compiled, "flight_cache", None)
+    key = _flown_from(compiled)
+    if cache is not None and len(cache.key) == len(key) and all(a is b for a, b in zip(cache.key, key)):
+        return cache.sim
+    sim = _simulate(compiled)
+    if cache is not None:
+        cache.key, cache.sim = key, sim
+    return sim
+
+
+def _simulate(compiled: Compiled) -> Simulation:
     flight = _Flight(compiled)
     flight.fly()
     proj = flight.proj
     verts = _yaws_in_plane(_mark_stops(flight.verts, flight.copter), proj)
-    times = _timeline(verts, flight.copter)
+    times = _timeline(verts, flight.copter, None if flight.copter else compiled.turn_radius_m)
     photos = _photos(compiled, verts, times, flight, proj)
     xy = np.array([(v.x, v.y) for v in verts], dtype=float)
     seg = np.hypot(*np.diff(xy, axis=0).T) if len(xy) > 1 else np.zeros(0)
@@ -677,13 +695,47 @@ def _segment_time(L: float, v0: float, v1: float, vmax: float, a: float) -> floa
     return max(0.0, (vp - v0) / a) + max(0.0, (vp - v1) / a)
 
 
-def _timeline(verts: Sequence[Vertex], copter: bool) -> np.ndarray:
+def turn_lengths(verts: Sequence[Vertex], radius_m: float | None) -> np.ndarray:
+    """The horizontal length flown over each segment: straight for a copter (radius None). A plane flies each
+    segment as the Dubins path at its turn radius (missions.geometry.turns) between the headings it holds at the
+    two ends: along the segment leaving a vertex when that segment is at least a radius long (it lines up with a
+    flight line, a run-in, a long connection), else towards the next vertex whose leaving segment is (short
+    connection stubs are flown through, not lined up with). So a corner between long segments is an arc flown
+    ahead of the waypoint, and a turnaround onto a line closer than two radii is the loop a plane really flies.
+    Segments from or onto a standstill (a vertical take-off, a landing) stay straight."""
+    xy = np.array([(v.x, v.y) for v in verts], dtype=float).reshape(-1, 2)
+    straight = np.hypot(*np.diff(xy, axis=0).T) if len(verts) > 1 else np.zeros(0)
+    L = straight.copy()
+    n = len(verts)
+    if not radius_m or n < 3:
+        return L
+    heading = np.zeros(n)
+    nxt = n - 1
+    for k in range(n - 2, -1, -1):
+        if straight[k] >= radius_m or verts[k + 1].stop:
+            nxt = k
+        d = xy[nxt + 1 if nxt == k else nxt] - xy[k]
+        if math.hypot(*d) < 1e-6:
+            d = xy[k + 1] - xy[k]
+        heading[k] = _heading(*d) if math.hypot(*d) > 1e-6 else (heading[k + 1] if k + 1 < n else 0.0)
+    heading[n - 1] = heading[n - 2]
+    for k in range(1, n - 1):
+        if straight[k] < 1e-6 or verts[k].stop or verts[k + 1].stop or straight[k - 1] < 1e-6:
+            continue
+        if abs((heading[k + 1] - heading[k] + 180.0) % 360.0 - 180.0) < 0.1 and \
+                abs((heading[k] - _heading(*(xy[k + 1] - xy[k])) + 180.0) % 360.0 - 180.0) < 0.1:
+            continue
+        L[k] = max(straight[k], dubins_length_m(tuple(xy[k]), float(heading[k]), tuple(xy[k + 1]),
+                                                float(heading[k + 1]), radius_m))
+    return L
+
+
+def _timeline(verts: Sequence[Vertex], copter: bool, radius_m: float | None = None) -> np.ndarray:
     """Arrival time at each vertex (holds at a vertex are spent after arriving)."""
     n = len(verts)
     vc = _corner_speeds(verts, copter)
     a = ACCEL_MPS2 if copter else 2.0 * ACCEL_MPS2
-    xy = np.array([(v.x, v.y) for v in verts], dtype=float).reshape(-1, 2)
-    L = np.hypot(*np.diff(xy, axis=0).T) if n > 1 else np.zeros(0)
+    L = turn_lengths(verts, radius_m)
     # speeds a vehicle can actually reach at the vertices given the segment lengths (forward/backward pass)
     for k in range(1, n):
         vc[k] = min(vc[k], math.sqrt(vc[k - 1] ** 2 + 2 * a * L[k - 1]))

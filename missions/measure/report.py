@@ -40,8 +40,9 @@ from missions.geometry.route import ZONE_EDGE_TOL_M
 from missions.geometry.triggers import PhotoPoint
 from missions.measure.coverage import (coverage_fraction, footprint_polygons, min_front_overlap, min_side_overlap,
                                        outside_length_m)
-from missions.measure.flight import Photo, Simulation, simulate
+from missions.measure.flight import Photo, Simulation, self_triggering, simulate
 from missions.measure.numbers import StepNumbers, step_numbers
+from missions.measure.seams import measure_sorties, table_lines
 from missions.measure.zones import ZoneMeasure, ZoneRow, measure_zones, photographed_warnings
 from missions.plan.schema import MAX_AGL_M
 from missions.terrain.reflight import GROUND_FLAT
@@ -202,6 +203,8 @@ class MissionReport:
     speed_mps: float = 0.0                    # the survey speed flown (the plan's, or the one `auto` chose)
     sun: tuple[Any, ...] = ()                 # missions.thermal.assess.StepSun per timed step (a plan with `when`)
     steps: tuple[StepNumbers, ...] = ()      # per survey or corridor step, the numbers a pilot reads
+    sorties: Any = None                       # missions.measure.seams.SortieTable (a mission flown in sorties)
+    endurance: Any = None                     # missions.sorties.Endurance the compile judged the flight by
     ground: str = GROUND_FLAT                 # where heights above ground come from
     terrain: Any = None                       # missions.terrain.reflight.GroundReport when a DEM is given
 
@@ -232,6 +235,11 @@ class MissionReport:
             "sun": [s.to_json() for s in self.sun],
             "steps": [s.to_json() for s in self.steps],
             "ground": self.ground,
+            "endurance": None if self.endurance is None else self.endurance.to_json(),
+            "sorties": [] if self.sorties is None else list(self.sorties.rows),
+            "sorties_union": None if self.sorties is None else
+            {"coverage": dict(self.sorties.coverage),
+             "overlap": {n: o.to_json() for n, o in self.sorties.overlap.items()}},
         } | ({"terrain": self.terrain.to_json()} if self.terrain is not None else {})
 
 
@@ -344,6 +352,11 @@ class _PhotoArrays:
         first, end = items
         return np.array([k for k, p in enumerate(self.photos) if first <= p.item < end], dtype=int)
 
+    def on_lines(self, idx: np.ndarray, line_items: tuple[int, ...]) -> np.ndarray:
+        """Of the photos `idx`, those taken flying towards one of `line_items` (a line's leg)."""
+        wanted = set(line_items)
+        return np.array([k for k in idx.tolist() if self.photos[k].item in wanted], dtype=int)
+
     def by_altitude(self, idx: np.ndarray) -> dict[float, list[int]]:
         """The photos `idx` above the ground grouped by altitude (one Footprint per group), in mission order."""
         groups: dict[float, list[int]] = {}
@@ -404,21 +417,25 @@ def _measure_payload_over_dem(area_info: AreaInfo, geom: Any, zones: Any, name: 
 
 
 def _measure_payload(area_info: AreaInfo, geom: Any, zones: Any, name: str, payload: PayloadInfo,
-                     photos: Sequence[Photo], ground: Any = None) -> PayloadMeasure:
+                     photos: Sequence[Photo], ground: Any = None, self_shooting: bool = False) -> PayloadMeasure:
     """Coverage and overlaps of one payload's photos over one step's area `geom`.
 
     Coverage counts every photo whose footprint can reach the area: a neighbouring step's photo covers ground
     too. The overlaps and the photo count take the photos the step took (`area_info.items`): another step's
     photos are measured against its own area. Without a range (an AreaInfo built by hand) the photos near the
     area stand in for them. The zones are checked against every photo: an exclusion is ground not to
-    photograph, whichever step does it."""
+    photograph, whichever step does it. A payload that shoots by itself (`self_shooting`: a RedEdge in overlap
+    mode) shoots on the turnarounds and transits too; its overlaps take the photos on the step's lines
+    (`area_info.line_items`): a turnaround's photos beside a line of the crossing pass (refly_90) are no side
+    neighbour of it."""
     if ground is not None:
         return _measure_payload_over_dem(area_info, geom, zones, name, payload, photos, ground)
     ph = _PhotoArrays.of(photos)
     near = ph.reaching(geom, payload)
     own = near if area_info.items is None else ph.taken_during(area_info.items)
+    on_lines = own if not self_shooting or area_info.line_items is None else ph.on_lines(own, area_info.line_items)
     return PayloadMeasure(name, _coverage(geom, ph, ph.by_altitude(near), payload),
-                          _min_overlaps(ph, ph.by_altitude(own), payload), int(len(own)), _photos_in(zones, photos))
+                          _min_overlaps(ph, ph.by_altitude(on_lines), payload), int(len(own)), _photos_in(zones, photos))
 
 
 def _measure_step(compiled: Compiled, area_info: AreaInfo, path: np.ndarray | None,
@@ -431,10 +448,11 @@ def _measure_step(compiled: Compiled, area_info: AreaInfo, path: np.ndarray | No
         return StepMeasure(area_info, (), None)
     geom = area_geometry(area_info.area, sim.projection)
     zones = _zones(area_info.area, sim.projection)
+    own = self_triggering(compiled)
     table = _zone_table(compiled, area_info, geom, photos_of, sim) if area_info.zones is not None else None
     measured = geom if table is None else table.coverable
     payloads = tuple(_measure_payload(area_info, measured, zones, n, compiled.payload(n), photos_of.get(n, []),
-                                      (grounds or {}).get(n)) for n in area_info.payloads)
+                                      (grounds or {}).get(n), n in own) for n in area_info.payloads)
     over_m, over_camera_m = _over_zones_m(sim, zones)
     return StepMeasure(area_info, payloads, StepPath(_outside_m(sim.xy, path, geom), over_m, over_camera_m), table)
 
@@ -581,6 +599,8 @@ def report(compiled: Compiled, sim: Simulation | None = None, plan_path: str | N
         speed_mps=compiled.speed_mps,
         sun=tuple(compiled.sun),
         steps=step_numbers(compiled, sim),
+        sorties=measure_sorties(compiled),
+        endurance=compiled.endurance,
         ground=GROUND_FLAT if terrain is None else terrain.ground,
         terrain=terrain,
     )
@@ -817,7 +837,7 @@ def summary_lines(rep: MissionReport) -> list[str]:
     """A few lines for `wiris mission compile`."""
     mins, secs = divmod(int(round(rep.flight_time_s or 0)), 60)
     lines = [f"{rep.name}: {rep.firmware} {rep.frame}, {rep.mission_items} items "
-             f"(limit {rep.item_limit}, {rep.parts} part{'s' if rep.parts != 1 else ''}), "
+             f"(limit {rep.item_limit}, {rep.parts} {'sorties' if rep.parts != 1 else 'sortie'}), "
              f"{rep.path_length_m / 1000:.2f} km, ~{mins} min {secs:02d} s"]
     for name, n in rep.photos.items():
         extra = ""
@@ -829,6 +849,8 @@ def summary_lines(rep: MissionReport) -> list[str]:
     # the steps mostly share their assumptions: each is said once
     assumed = dict.fromkeys(a for s in rep.steps for a in s.facts.assumptions)
     lines.extend(f"  assumes {a}" for a in assumed)
+    if rep.sorties is not None:
+        lines += ["  " + t for t in table_lines(rep.sorties)]
     return lines + _findings_lines(rep)
 
 
@@ -843,7 +865,7 @@ def _gsd_text(g: GsdRange | None) -> str:
 def format_report(rep: MissionReport) -> str:
     """The human-readable report of `wiris mission check`."""
     parts = ("fits in one upload)" if rep.parts == 1 else
-             f"{rep.parts} parts of {', '.join(str(n) for n in rep.part_items)} items)")
+             f"{rep.parts} sorties of {', '.join(str(n) for n in rep.part_items)} items)")
     rows = [("plan", rep.plan), ("firmware", f"{rep.firmware} {rep.frame}"),
             ("mission items", f"{rep.mission_items} (limit {rep.item_limit}; " + parts),
             ("path length", f"{rep.path_length_m:.0f} m (climb {rep.climb_m:.0f} m)"),
@@ -875,7 +897,10 @@ def format_report(rep: MissionReport) -> str:
     rows += [(f"sun step {s.step}", _sun_text(s)) for s in rep.sun]
     rows.extend(_ground_rows(rep))
     width = max(len(k) for k, _ in rows)
-    out = [f"{k.ljust(width)}  {v}" for k, v in rows] + _findings_lines(rep)
+    out = [f"{k.ljust(width)}  {v}" for k, v in rows]
+    if rep.sorties is not None:
+        out += table_lines(rep.sorties)
+    out += _findings_lines(rep)
     if not rep.warnings and not rep.errors:
         out.append("no warnings")
     return "\n".join(out)

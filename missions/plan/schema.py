@@ -266,6 +266,12 @@ def _build() -> dict:
                                      "description": "firmware release, e.g. \"4.6\" (ArduPilot) or \"1.15\" (PX4): "
                                                     "NAME.params names parameters as that release does (default: "
                                                     "every name each supported release uses)"},
+                "endurance_min": _num(1, 1440, desc="minutes in the air on one battery at survey speed: a longer "
+                                      "flight is split into sorties (missions.sorties)"),
+                "reserve_pct": _num(0, 90, desc="share of the endurance kept in reserve, % (default 20)"),
+                "turn_radius_m": _num(1, 2000, desc="a plane's or VTOL's turn radius, m (default: from speed "
+                                      "and max_bank_deg)"),
+                "max_bank_deg": _num(5, 60, desc="a plane's or VTOL's bank angle in turns, degrees (default 30)"),
             }, required=("firmware", "frame", "speed_mps"), desc="the aircraft") | {"allOf": _speed_ranges()},
             "home": _obj({"lat": _num(-90, 90, desc=_LAT), "lon": _num(-180, 180, desc=_LON),
                           "alt_amsl_m": _num(-500, 9000, desc="home altitude above mean sea level")},

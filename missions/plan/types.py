@@ -22,6 +22,10 @@ class Vehicle:
     climb_mps: float | None = None       # None: the frame's default (missions.terrain.settings)
     descent_mps: float | None = None
     firmware_version: str | None = None   # e.g. "4.6": NAME.params names parameters as that version does
+    endurance_min: float | None = None          # None: the frame's conservative default (missions.sorties)
+    reserve_pct: float = 20.0
+    turn_radius_m: float | None = None          # planes and VTOLs; None: from speed and max_bank_deg
+    max_bank_deg: float = 30.0
 
 
 @dataclass(frozen=True)

@@ -197,7 +197,7 @@ def test_download_of_an_infinite_value_names_the_item_and_writes_nothing(tmp_pat
     (["mission", "upload", "m.plan", "--type", "fence", "--connect", "udpout:127.0.0.1:9"], 1,
      "m.plan: the file holds no fence items\n  hint: check --type"),
     (["mission", "upload", str(ROOT / "examples" / "waypoint-inspection.yaml"), "--part", "2", "--connect",
-      "udpout:127.0.0.1:9"], 1, "--part 2: the mission has 1 part(s)\n  hint: leave out --part"),
+      "udpout:127.0.0.1:9"], 1, "--sortie 2: the mission has 1 sortie(s)\n  hint: leave out --sortie"),
 ])
 def test_usage_and_input_errors(tmp_path, monkeypatch, args, code, text):
     monkeypatch.chdir(tmp_path)

@@ -402,9 +402,9 @@ def test_corridor_longer_than_a_plan_can_hold_is_refused_before_planning(tmp_pat
 
 
 def test_survey_with_more_photos_than_a_plan_can_hold_is_refused_before_planning(tmp_path):
-    # 4 km x 4 km at 40 m: about 300 000 photos (planning it took 8 s and 290 MB; an 86 km square, 4 GB and more)
-    big = [[50.0, 14.0], [50.0, 14.05584], [50.03597, 14.05584], [50.03597, 14.0]]
-    with pytest.raises(PlanError, match=r"this survey would take about [\d,]+ photos, more than the 100,000") as ei:
+    # 13 km x 13 km at 40 m: about 3 000 000 photos (an area typed in the wrong units is larger still)
+    big = [[50.0, 14.0], [50.0, 14.1815], [50.1168, 14.1815], [50.1168, 14.0]]
+    with pytest.raises(PlanError, match=r"this survey would take about [\d,]+ photos, more than the 2,000,000") as ei:
         build(tmp_path, lambda d: survey(d).update(area=big))
     assert "plan.yaml:" in ei.value.where and "fly higher" in ei.value.hint
 

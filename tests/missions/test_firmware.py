@@ -8,7 +8,7 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as m
 
 from missions.errors import PlanError
-from missions.emit.firmware import ARDUPILOT, PX4, check_items, split_parts
+from missions.emit.firmware import ARDUPILOT, PX4, check_items
 from missions.emit.items import FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem
 
 # Written from shared/reference/autopilots-and-cameras.md §2.2 / §3.1 / §7 and survey-planners §7, by name.
@@ -72,75 +72,6 @@ def _wp(i: int) -> MissionItem:
                        x=500000000 + i * 100, y=140000000, z=40.0)
 
 
-def _trig(d: float) -> MissionItem:
-    return MissionItem(command=cmd("DO_SET_CAM_TRIGG_DIST"), frame=FRAME_MISSION, param1=d, param3=1.0 if d else 0.0)
-
-
-def long_mission(legs: int) -> tuple[MissionItem, ...]:
-    items = [MissionItem(command=cmd("NAV_TAKEOFF"), x=500000000, y=140000000, z=40.0),
-             MissionItem(command=cmd("DO_CHANGE_SPEED"), frame=FRAME_MISSION, param1=1, param2=6, param3=-1)]
-    k = 0
-    for _ in range(legs):
-        items += [_wp(k), _trig(8.0), _wp(k + 1), _wp(k + 2), _trig(0.0)]
-        k += 3
-    items.append(MissionItem(command=cmd("NAV_RETURN_TO_LAUNCH"), frame=FRAME_MISSION))
-    return tuple(items)
-
-
-@pytest.mark.parametrize("limit", [12, 17, 40, 99])
-@pytest.mark.parametrize("prof", [ARDUPILOT, PX4], ids=["ardupilot", "px4"])
-def test_parts_fit_and_resume(limit, prof):
-    items = long_mission(30)
-    parts = split_parts(items, limit, prof)
-    assert len(parts) > 1
-    assert all(len(p) <= limit for p in parts)
-    # every original item appears, in order, across the parts
-    originals = [it for p in parts for it in p if not it.comment.startswith(("resume:", "part end:"))]
-    assert originals == list(items)
-    for prev, nxt in zip(parts, parts[1:]):
-        end = prev[-1]
-        assert end.command == cmd("NAV_LOITER_UNLIM")
-        # ArduPilot refuses NaN in LOITER_UNLIM's params (sanity_check_params): every part must upload
-        assert math.isnan(end.param4) if prof is PX4 else end.param4 == 0.0
-        # the next part starts with the speed, then a waypoint where the previous part waits
-        assert nxt[0].command == cmd("DO_CHANGE_SPEED")
-        assert nxt[1].command == cmd("NAV_WAYPOINT") and (nxt[1].x, nxt[1].y, nxt[1].z) == (end.x, end.y, end.z)
-        # camera trigger state carried across: if the previous part ended with the camera on, the next one turns
-        # it on again (without an extra photo) and the previous one switched it off before waiting
-        trig = [it for it in prev if it.command == cmd("DO_SET_CAM_TRIGG_DIST") and not it.comment.startswith("part")]
-        on = bool(trig) and trig[-1].param1 > 0
-        resumed = [it for it in nxt if it.command == cmd("DO_SET_CAM_TRIGG_DIST") and it.comment.startswith("resume")]
-        assert bool(resumed) == on
-        if on:
-            assert resumed[0].param1 == 8.0 and resumed[0].param3 == 1.0
-            assert prev[-2].command == cmd("DO_SET_CAM_TRIGG_DIST") and prev[-2].param1 == 0.0
-    for part in parts:
-        check_items(part, prof)
-
-
-def test_cuts_fall_between_lines_when_they_can():
-    """A cut inside a line breaks its photo spacing: every part of long_mission (lines of 3 waypoints, camera
-    off between them) ends with the camera already off, so nothing needs resuming."""
-    parts = split_parts(long_mission(30), 17, ARDUPILOT)
-    assert len(parts) > 2
-    for part in parts[1:]:
-        assert not [it for it in part if it.comment.startswith("resume: camera")]
-
-
-def test_a_cut_inside_a_line_resumes_with_a_photo():
-    """One long line (camera on throughout): the cut must fall inside it. The previous part's last photo is up to
-    one trigger distance before the cut, so the next part shoots at once (param3 1) instead of one distance after
-    the resume point (a gap of up to twice the spacing)."""
-    items = (long_mission(0)[:2] + (_trig(8.0),) + tuple(_wp(k) for k in range(40)) + (_trig(0.0),)
-             + long_mission(0)[-1:])
-    parts = split_parts(items, 15, PX4)
-    assert len(parts) > 2
-    for prev, part in zip(parts, parts[1:]):
-        assert prev[-2].command == cmd("DO_SET_CAM_TRIGG_DIST") and prev[-2].param1 == 0.0
-        (resumed,) = [it for it in part if it.comment.startswith("resume: camera")]
-        assert resumed.param1 == 8.0 and resumed.param3 == 1.0
-
-
 def test_ardupilot_nan_params_refused_where_its_upload_refuses_them():
     """AP_Mission::sanity_check_params: NaN only in param4 of WAYPOINT/LAND/TAKEOFF/VTOL_TAKEOFF and params 3-4
     of VTOL_LAND; any other NaN is MAV_MISSION_INVALID_PARAMn and the upload aborts. PX4 takes NaN."""
@@ -153,20 +84,6 @@ def test_ardupilot_nan_params_refused_where_its_upload_refuses_them():
             check_items((item,), ARDUPILOT)
         assert f"param{k} is NaN" in ei.value.message and ei.value.hint
         check_items((item,), PX4)
-
-
-def test_fits_unsplit():
-    items = long_mission(3)
-    assert split_parts(items, len(items), ARDUPILOT) == (items,)
-
-
-def test_split_impossible_names_the_count():
-    items = (_wp(0),) + tuple(MissionItem(command=cmd("DO_SEND_SCRIPT_MESSAGE"), frame=FRAME_MISSION, param1=1)
-                              for _ in range(30)) + (_wp(1),)
-    with pytest.raises(PlanError) as ei:
-        split_parts(items, 20, ARDUPILOT)
-    assert "32 items" in ei.value.message and "20" in ei.value.message
-    assert "vehicle.max_mission_items" in ei.value.hint
 
 
 @pytest.mark.parametrize("x,y", [(2**31, 0), (0, -2**31 - 1), (1.5, 0)])

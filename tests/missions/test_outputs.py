@@ -80,22 +80,22 @@ def test_split_mission_writes_one_file_pair_per_part(tmp_path):
     out = tmp_path / "out"
     write_outputs(c, out)
     for k, part in enumerate(c.parts, start=1):
-        items, _f, _r, _h = read_plan((out / f"split.part{k}.plan").read_text(), "p")
+        items, _f, _r, _h = read_plan((out / f"split.sortie{k}.plan").read_text(), "p")
         assert len(items) == len(part) and all(a.same_on_wire(b) for a, b in zip(items, part))
-        w, _ = read_wpl((out / f"split.part{k}.waypoints").read_text(), "w")
+        w, _ = read_wpl((out / f"split.sortie{k}.waypoints").read_text(), "w")
         assert len(w) == len(part)
-    assert not (out / f"split.part{len(c.parts) + 1}.plan").exists()
+    assert not (out / f"split.sortie{len(c.parts) + 1}.plan").exists()
     # a later compile without a split removes the stale part files (after success only)
     one = compile_plan(small_plan(tmp_path, name="split", limit=700))
     write_outputs(one, out)
-    assert not list(out.glob("split.part*"))
+    assert not list(out.glob("split.sortie*"))
 
 
 def test_a_failing_writer_leaves_the_directory_untouched(small, tmp_path, monkeypatch):
     out = tmp_path / "out"
     out.mkdir()
     (out / "small.plan").write_text("old plan")
-    (out / "small.part2.plan").write_text("old part")
+    (out / "small.sortie2.plan").write_text("old part")
     (out / "notes.txt").write_text("mine")
     before = _snapshot(out)
 
@@ -149,12 +149,12 @@ def test_a_failure_after_the_commit_is_refused_by_readers_and_finished_by_the_ne
     assert ".m.commit" in e.value.hint and "next compile" in e.value.hint
     monkeypatch.setattr(outputs.os, "replace", real)
     assert (out / ".m.commit").is_dir()
-    for fname in ("m.plan", "m.waypoints", "m.part1.plan"):
+    for fname in ("m.plan", "m.waypoints", "m.sortie1.plan"):
         with pytest.raises(PlanError, match="compile of m into this folder was interrupted"):
             (read_plan_file if fname.endswith(".plan") else load_wpl)(out / fname)
     paths = write_outputs(whole, out)                  # the next run: finishes the committed set, then its own
     assert sorted(p.name for p in out.iterdir()) == sorted(p.name for p in paths)
-    assert not list(out.glob("m.part*"))
+    assert not list(out.glob("m.sortie*"))
     read_plan_file(out / "m.plan")
 
 
@@ -237,23 +237,23 @@ def test_stale_parts_are_removed_only_when_the_last_manifest_lists_them_as_regul
     assert len(split.parts) >= 3
     out = tmp_path / "out"
     write_outputs(split, out)
-    (out / "s.part1.plan").unlink()
-    (out / "s.part1.plan").mkdir()                          # the user's folder where a listed part was
-    (out / "s.part1.plan" / "keep.txt").write_text("mine")
-    (out / "s.part2.waypoints").unlink()
-    (out / "s.part2.waypoints").symlink_to(tmp_path / "s.yaml")
-    (out / "s.part9.plan").write_text("a part no manifest lists")   # e.g. left by an older wiris-tools
+    (out / "s.sortie1.plan").unlink()
+    (out / "s.sortie1.plan").mkdir()                          # the user's folder where a listed part was
+    (out / "s.sortie1.plan" / "keep.txt").write_text("mine")
+    (out / "s.sortie2.waypoints").unlink()
+    (out / "s.sortie2.waypoints").symlink_to(tmp_path / "s.yaml")
+    (out / "s.sortie9.plan").write_text("a part no manifest lists")   # e.g. left by an older wiris-tools
     (out / ".s.photos.tmp").mkdir()                         # hidden, but not a name a compile's mkdtemp makes
     write_outputs(whole, out)
     assert (out / ".s.photos.tmp").is_dir()
-    left = sorted(p.name for p in out.glob("s.part*"))
-    assert left == ["s.part1.plan", "s.part2.waypoints", "s.part9.plan"]
-    assert (out / "s.part1.plan" / "keep.txt").read_text() == "mine"
-    assert (out / "s.part9.plan").read_text() == "a part no manifest lists"
+    left = sorted(p.name for p in out.glob("s.sortie*"))
+    assert left == ["s.sortie1.plan", "s.sortie2.waypoints", "s.sortie9.plan"]
+    assert (out / "s.sortie1.plan" / "keep.txt").read_text() == "mine"
+    assert (out / "s.sortie9.plan").read_text() == "a part no manifest lists"
     assert (tmp_path / "s.yaml").exists()
     # no reader takes the part the last compile does not list
     with pytest.raises(PlanError, match=r"not a file of the last compile of s \(s.manifest.json does not list it\)"):
-        read_plan_file(out / "s.part9.plan")
+        read_plan_file(out / "s.sortie9.plan")
 
 
 def test_an_output_that_is_an_input_of_the_plan_is_refused(tmp_path):
@@ -302,10 +302,10 @@ def test_readers_take_a_hand_edited_compiled_file_and_refuse_an_unlisted_part(sm
     from wiris_tools.camera_client import load_setup
     load_setup(out / "small.setup.json")
     # a part file the last compile did not write (an earlier, longer compile's) is never flown
-    (out / "small.part3.plan").write_bytes((out / "small.plan").read_bytes())
+    (out / "small.sortie3.plan").write_bytes((out / "small.plan").read_bytes())
     with pytest.raises(PlanError, match="not a file of the last compile of small") as e:
-        read_plan_file(out / "small.part3.plan")
-    assert e.value.where == str(out / "small.part3.plan") and e.value.hint
+        read_plan_file(out / "small.sortie3.plan")
+    assert e.value.where == str(out / "small.sortie3.plan") and e.value.hint
     # a file no manifest speaks for (QGroundControl's own .plan next to it) is read as before
     (out / "mine.plan").write_bytes((out / "small.plan").read_bytes())
     read_plan_file(out / "mine.plan")

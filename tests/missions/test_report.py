@@ -41,7 +41,7 @@ def test_the_report_is_a_frozen_value_and_its_json_keeps_the_documented_order():
     assert list(doc) == ["plan", "name", "firmware", "frame", "mission_items", "item_limit", "parts", "part_items",
                          "photos", "path_length_m", "climb_m", "flight_time_s", "flight_time_qgc_s",
                          "max_altitude_m", "area_m2", "gsd_cm", "coverage", "overlap", "areas", "warnings", "errors",
-                         "speed_mps", "sun", "steps", "ground"]
+                         "speed_mps", "sun", "steps", "ground", "endurance", "sorties", "sorties_union"]
     assert doc["ground"] == "ground assumed flat at home elevation" and "terrain" not in doc
     assert list(doc["areas"][0]) == ["step", "kind", "area_m2", "altitude_m", "trigger", "requested", "coverage",
                                      "overlap", "photos", "outside_m", "over_gaps_m", "over_gaps_camera_m",

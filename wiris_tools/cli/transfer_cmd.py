@@ -73,8 +73,9 @@ def _progress(label: str, quiet: bool):
                    "WPL file as Mission Planner saves one)")
 @click.option("--verify", is_flag=True,
               help="download again after the upload and compare each item as the vehicle's firmware keeps it")
-@click.option("--part", type=click.IntRange(1), default=None,
-              help="for a capture plan split at the vehicle's item limit: the part to upload")
+@click.option("--sortie", "--part", "part", type=click.IntRange(1), default=None,
+              help="for a capture plan flown in sorties (longer than a battery or the item limit): the sortie "
+                   "to upload (a compiled NAME.sortieN.plan uploads as it is)")
 @click.option("--firmware", type=click.Choice(["ardupilot", "px4"]), default=None,
               help="for a capture plan: compile for this firmware instead of the vehicle's")
 @click.option("--force", is_flag=True,
@@ -83,7 +84,8 @@ def _progress(label: str, quiet: bool):
 def upload(file: str, kind: str, verify: bool, part: int | None, firmware: str | None, force: bool, url: str,
            signing_key: str | None, target_system: int | None, target_component: int, timeout: float,
            as_json: bool) -> None:
-    """Upload FILE (.plan, .waypoints or a capture plan .yaml) to the vehicle at --connect.
+    """Upload FILE (.plan, .waypoints, a sortie's NAME.sortieN.plan or a capture plan .yaml) to the vehicle at
+    --connect.
 
     A .plan made for ArduPilot or PX4 (its firmwareType) is refused by a vehicle whose HEARTBEAT reports the
     other (--force uploads it anyway); a capture plan is compiled for the vehicle's firmware."""
