@@ -240,11 +240,16 @@ def _code(table: dict[str, int], value: str | int | None, what: str) -> int:
         raise PlanError(f"unknown {what} {value!r}", hint=f"use one of: {', '.join(sorted(table))}") from None
 
 
-def _mission_items(items: list[MissionItem], patterns, payloads, corridor_scan: bool) -> list[dict[str, Any]]:
+def _mission_items(items: list[MissionItem], patterns, payloads, corridor_scan: bool, firmware: str | int | None,
+                   speed: float | None) -> list[dict[str, Any]]:
     if not patterns:
         return [_simple_item(it, i + 1) for i, it in enumerate(items)]
     from missions.formats.qgc_complex import mission_items_json
-    return mission_items_json(items, patterns, payloads, _simple_item, corridor_scan=corridor_scan)
+    from missions.measure.flight import fired_spacing_m
+
+    fw = "px4" if firmware in ("px4", FIRMWARE_TYPES.get("px4")) else "ardupilot"
+    return mission_items_json(items, patterns, payloads, _simple_item, corridor_scan=corridor_scan,
+                              spacing=lambda d: fired_spacing_m(fw, d, speed or 0.0))
 
 
 def plan_document(items, home: Home | None, *, firmware: str | int | None, vehicle: str | int | None,
@@ -267,7 +272,7 @@ def plan_document(items, home: Home | None, *, firmware: str | int | None, vehic
         "firmwareType": _code(FIRMWARE_TYPES, firmware, "firmware"),
         "globalPlanAltitudeMode": alt_mode,
         "hoverSpeed": _num(float(hover_speed if hover_speed is not None else QGC_DEFAULT_HOVER_SPEED)),
-        "items": _mission_items(items, patterns, payloads, corridor_scan),
+        "items": _mission_items(items, patterns, payloads, corridor_scan, firmware, cruise_speed),
         "plannedHomePosition": [_num(float(lat)), _num(float(lon)), _num(float(alt))],
         "vehicleType": _code(VEHICLE_TYPES, vehicle, "vehicle type"),
         "version": 2,

@@ -66,10 +66,11 @@ SimpleItemWriter = Callable[[MissionItem, int], dict]
 
 def mission_items_json(items: Sequence[MissionItem], patterns: Iterable[TransectPattern],
                        payloads: Iterable[PayloadInfo], simple_item: SimpleItemWriter, *,
-                       corridor_scan: bool = False) -> list[dict]:
+                       corridor_scan: bool = False, spacing: Callable[[float], float] = lambda d: d) -> list[dict]:
     """The .plan's mission.items for `items`: SimpleItems, and one ComplexItem per pattern (a corridor only with
     `corridor_scan`). `simple_item(item, jump_id)` writes one SimpleItem (planfile's); doJumpId counts every
-    flattened item from 1, as QGC numbers them."""
+    flattened item from 1, as QGC numbers them. `spacing(d)` is the spacing the firmware's distance trigger flies
+    for a commanded d (CameraShots counts what it fires)."""
     optics = {p.name: p for p in payloads}
     chosen = sorted((p for p in patterns if _writable(p, items, corridor_scan)), key=lambda p: p.items[0])
     out: list[dict] = []
@@ -78,7 +79,7 @@ def mission_items_json(items: Sequence[MissionItem], patterns: Iterable[Transect
         start, end = pat.items
         out.extend(simple_item(items[k], k + 1) for k in range(i, start))
         inner = [_inner_item(simple_item(items[k], k + 1)) for k in range(start, end)]
-        out.append(_complex_item(pat, items[start:end], inner, optics.get(pat.payload)))
+        out.append(_complex_item(pat, items[start:end], inner, optics.get(pat.payload), spacing))
         i = end
     out.extend(simple_item(items[k], k + 1) for k in range(i, len(items)))
     return out
@@ -101,10 +102,10 @@ def _inner_item(simple: dict) -> dict:
 
 
 def _complex_item(p: TransectPattern, items: Sequence[MissionItem], inner: list[dict],
-                  optics: PayloadInfo | None) -> dict[str, Any]:
+                  optics: PayloadInfo | None, spacing: Callable[[float], float]) -> dict[str, Any]:
     transect = {
         "CameraCalc": camera_calc(p, optics, any(it.command in _CAMERA_COMMANDS for it in items)),
-        "CameraShots": camera_shots(items, p.trigger_distance_m),
+        "CameraShots": camera_shots(items, spacing) if p.trigger_distance_m > 0 else 0,
         "CameraTriggerInTurnAround": False,
         "HoverAndCapture": p.hover,
         "Items": inner,
@@ -146,27 +147,27 @@ def camera_calc(p: TransectPattern, optics: PayloadInfo | None, triggered: bool 
     return calc
 
 
-def camera_shots(items: Sequence[MissionItem], trigger_m: float) -> int:
+def camera_shots(items: Sequence[MissionItem], spacing: Callable[[float], float] = lambda d: d) -> int:
     """The photos the pattern's items take: one per IMAGE_START_CAPTURE, and along each distance-triggered stretch
-    one at its start and one per trigger distance flown (DO_SET_CAM_TRIGG_DIST param3 = 1 shoots at once)."""
+    one at its start (DO_SET_CAM_TRIGG_DIST param3 = 1 shoots at once) and one per `spacing(param1)` flown."""
     shots = 0
-    on = False
+    step = 0.0                      # the spacing of the trigger now on; 0: off
     flown = 0.0
     last: MissionItem | None = None
     for it in items:
         if it.command == mavlink.MAV_CMD_IMAGE_START_CAPTURE:
             shots += 1
         elif it.command == mavlink.MAV_CMD_DO_SET_CAM_TRIGG_DIST:
-            if on and trigger_m > 0:
-                shots += int(flown // trigger_m)
-            on, flown = it.param1 > 0, 0.0
-            shots += 1 if on and it.param3 == 1 else 0
+            if step > 0:
+                shots += int(flown // step)
+            step, flown = (spacing(it.param1) if it.param1 > 0 else 0.0), 0.0
+            shots += 1 if step > 0 and it.param3 == 1 else 0
         elif it.frame != FRAME_MISSION:
-            if on and last is not None:
+            if step > 0 and last is not None:
                 flown += great_circle_m(last.lat, last.lon, it.lat, it.lon)
             last = it
-    if on and trigger_m > 0:
-        shots += int(flown // trigger_m)
+    if step > 0:
+        shots += int(flown // step)
     return shots
 
 

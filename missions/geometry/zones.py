@@ -47,8 +47,10 @@ from missions.plan.types import CorridorStep, Plan, SurveyStep
 DEFAULT_ZONE_MARGIN_M = 2.0
 # The camera comes on this far past the first position whose photo keeps clear of the zones: a DO item after a
 # waypoint runs when the waypoint is accepted, up to WPNAV_RADIUS (ArduCopter's default 2 m) before it (the same
-# allowance as the exit margin a leg's last photo is kept by).
-RESUME_MARGIN_M = DEFAULT_EXIT_MARGIN_M
+# allowance as the exit margin a leg's last photo is kept by; PX4's NAV_ACC_RAD is 2 m too), plus the travel of
+# one 50 ms trigger check at survey speed (PX4's camera_trigger and ArduPilot's camera library shoot at the first
+# check past their mark, missions.measure.flight): 0.5 m holds up to 10 m/s.
+RESUME_MARGIN_M = DEFAULT_EXIT_MARGIN_M + 0.5
 # A transit is routed around zones within this of its straight line (farther ones cannot be in the way of the
 # shortest path round the near ones by much, and a smaller graph keeps routing fast).
 _TRANSIT_CORRIDOR_M = 2_000.0

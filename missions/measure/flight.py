@@ -508,10 +508,7 @@ class _Flight:
         comes up to one check's travel late and the next is measured from there: the spacing is `d` rounded up
         to whole 50 Hz steps of travel at the cruise speed (measured in SITL: powerline-corridor at 6 m/s,
         d = 6.872 m -> 6.96 m, 870 photos taken where exact spacing predicts 882)."""
-        if not self.ardupilot or self.speed <= 0:
-            return d
-        step = self.speed / AP_CAMERA_UPDATE_HZ
-        return math.ceil(d / step - 1e-9) * step
+        return ardupilot_trigger_spacing_m(d, self.speed) if self.ardupilot else d
 
     def image_start(self, i: int, it: MissionItem) -> None:
         vi = self.last_vertex
@@ -804,6 +801,22 @@ def _photos(compiled: Compiled, verts: Sequence[Vertex], times: np.ndarray, flig
     lat, lon = proj.to_latlon(arr[:, 0], arr[:, 1])
     return [Photo(s.x, s.y, float(la), float(lo), s.alt_m, s.heading_deg, s.payloads, s.span, s.cause, s.time_s,
                   s.item) for s, la, lo in zip(shots, lat.tolist(), lon.tolist())]
+
+
+def ardupilot_trigger_spacing_m(distance_m: float, speed_mps: float) -> float:
+    """The spacing ArduPilot's distance trigger flies for DO_SET_CAM_TRIGG_DIST `distance_m` at `speed_mps`: the
+    distance rounded up to whole steps of travel between its AP_CAMERA_UPDATE_HZ checks (Simulation's model)."""
+    if speed_mps <= 0:
+        return distance_m
+    step = speed_mps / AP_CAMERA_UPDATE_HZ
+    return math.ceil(distance_m / step - 1e-9) * step
+
+
+def fired_spacing_m(firmware: str, distance_m: float, speed_mps: float) -> float:
+    """The spacing `firmware`'s distance trigger flies for a commanded `distance_m` at `speed_mps`."""
+    if firmware == "px4":
+        return px4_trigger_spacing_m(distance_m, speed_mps)
+    return ardupilot_trigger_spacing_m(distance_m, speed_mps)
 
 
 def px4_trigger_spacing_m(distance_m: float, speed_mps: float) -> float:
