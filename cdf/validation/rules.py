@@ -72,6 +72,11 @@ RULES: tuple[Rule, ...] = (
          "The XML declaration exists and declares UTF-8.",
          "The examples declare UTF-8; GCSs decode descriptions as UTF-8.",
          "§C33"),
+    Rule("CDF008", "not-utf8", W, E, E,
+         "The bytes are UTF-8 (a UTF-8 byte-order mark is fine): not UTF-16 or UTF-32.",
+         "MAVSDK's tinyxml2 reads bytes as UTF-8 only and rejects a UTF-16 file at line 1 (measured on "
+         "tests/data/cdf/e90_camera_utf16.xml); MAVProxy detects the encoding and loads it, so does QGC's QDom.",
+         "§4.2, tests/data/cdf/README.md"),
     # --- structure and values (mostly found by mavlinkcamera.xsd) --------------------------------------
     Rule("CDF100", "schema", W, W, E,
          "Any other violation of mavlinkcamera.xsd (structure, attribute lexical types).",
@@ -212,10 +217,12 @@ RULES: tuple[Rule, ...] = (
          "QGC's FactMetaData accepts ElapsedSeconds; MAVSDK rejects the file (unknown type), MAVProxy rejects it too.",
          "§3.2 (5), §4.2"),
     # --- cross-references and semantics ----------------------------------------------------------------
-    Rule("CDF200", "misplaced-element", W, E, E,
+    Rule("CDF200", "misplaced-element", W, W, E,
          "<exclusions> is a direct child of <option>, <updates> of <parameter>, <parameterranges> of <option>; "
          "no nested <exclusions>.",
-         "MAVSDK reads direct children only and silently loses them; QGC searches recursively.",
+         "MAVSDK and MAVProxy read direct children only: they load the file with every parameter and silently "
+         "lose the misplaced element (measured on tests/data/cdf/e90_camera_exclusions_beside_options.xml); "
+         "QGC searches recursively.",
          "§C21, §C22, §4.3"),
     Rule("CDF201", "exclude-unknown", W, W, W,
          "Each <exclude> names an existing parameter.",
@@ -315,7 +322,8 @@ def render_markdown() -> str:
         "a test fails when this file and the table differ. Rule ids are stable and never reused.",
         "",
         "Profiles (`wiris cdf validate --profile`): **qgc** = what QGroundControl's parser needs; **mavsdk** =",
-        "what MAVSDK 4.1.0 needs without dropping anything (a parameter it silently skips is an error);",
+        "what MAVSDK 4.1.0 needs without dropping anything (a file it rejects or a parameter it silently",
+        "skips is an error; what it loads but silently loses, such as a misplaced exclusion, a warning);",
         "**strict** (default) = both, plus what MAVProxy's parser rejects and the interoperability warnings.",
         "A file is valid in a profile when it has no finding of severity `error` there; `-` = not reported.",
         "Sources: `ref` points at ../shared/reference/camera-definition-files.md (§C = its rule list,",

@@ -153,7 +153,7 @@ CASES = [
                  '</parameter>'), "X", {"mavsdk", "strict"}),
     ("CDF200", p('<parameter name="X" type="uint8" default="0"><description>d</description><options>'
                  '<option name="a" value="0"><exclusions><exclusions><exclude>WW_LAYOUT</exclude></exclusions>'
-                 '</exclusions></option></options></parameter>'), "X", {"mavsdk", "strict"}),
+                 '</exclusions></option></options></parameter>'), "X", {"strict"}),
     ("CDF201", p('<parameter name="X" type="uint8" default="0"><description>d</description><options>'
                  '<option name="a" value="0"><exclusions><exclude>NOPE</exclude></exclusions></option></options>'
                  '</parameter>'), "X", set()),
@@ -187,6 +187,8 @@ CASES = [
     ("CDF214", doc(GOOD_PARAMS, definition='<definition version="1"><model>a/b</model><vendor>v</vendor></definition>'),
      None, set()),
     ("CDF007", doc(GOOD_PARAMS, head='<?xml version="1.0" encoding="ISO-8859-1"?>\n'), None, set()),
+    ("CDF008", doc(GOOD_PARAMS, head='<?xml version="1.0" encoding="UTF-16"?>\n').decode().encode("utf-16"), None,
+     {"mavsdk", "strict"}),
 ]
 
 
