@@ -231,7 +231,7 @@ def mavproxy_load_definition(xml_bytes: bytes) -> MavproxyResult:
 # ---- corpus agreement: the real parsers vs the validator's profiles ----------------------------------------
 
 # Rules whose finding means "MAVSDK silently skips this parameter" (reference §4.3, measured §D).
-MAVSDK_DROP_RULES = frozenset({"CDF112", "CDF113", "CDF119", "CDF123", "CDF127", "CDF203"})
+MAVSDK_DROP_RULES = frozenset({"CDF112", "CDF113", "CDF116", "CDF119", "CDF123", "CDF127", "CDF203"})
 
 
 @dataclass(frozen=True)

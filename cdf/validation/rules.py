@@ -77,6 +77,11 @@ RULES: tuple[Rule, ...] = (
          "MAVSDK's tinyxml2 reads bytes as UTF-8 only and rejects a UTF-16 file at line 1 (measured on "
          "tests/data/cdf/e90_camera_utf16.xml); MAVProxy detects the encoding and loads it, so does QGC's QDom.",
          "§4.2, tests/data/cdf/README.md"),
+    Rule("CDF009", "encoding-declared-wrong", E, W, E,
+         "The encoding the XML declaration names is the one the bytes are in (UTF-8 bytes declared UTF-16).",
+         "MAVProxy (expat) believes the declaration and rejects the file, and so does QGC's QDom (code reading, "
+         "not run); MAVSDK's tinyxml2 ignores it and loads the UTF-8 (measured). The rules run on the UTF-8.",
+         "§4.2, bench/cdf_mutants.py"),
     # --- structure and values (mostly found by mavlinkcamera.xsd) --------------------------------------
     Rule("CDF100", "schema", W, W, E,
          "Any other violation of mavlinkcamera.xsd (structure, attribute lexical types).",

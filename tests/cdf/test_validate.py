@@ -189,6 +189,7 @@ CASES = [
     ("CDF007", doc(GOOD_PARAMS, head='<?xml version="1.0" encoding="ISO-8859-1"?>\n'), None, set()),
     ("CDF008", doc(GOOD_PARAMS, head='<?xml version="1.0" encoding="UTF-16"?>\n').decode().encode("utf-16"), None,
      {"mavsdk", "strict"}),
+    ("CDF009", doc(GOOD_PARAMS, head='<?xml version="1.0" encoding="UTF-16"?>\n'), None, {"qgc", "strict"}),
 ]
 
 

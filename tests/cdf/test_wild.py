@@ -53,6 +53,26 @@ def test_utf8_with_a_byte_order_mark_is_not_wide():
     assert validate_bytes(data, "x.xml", "mavsdk").rules("error") == set()
 
 
+def declared_utf16() -> bytes:
+    """The original's UTF-8 bytes with a declaration that says UTF-16 (an editor's wrong guess)."""
+    return ORIGINAL.read_bytes().replace(b'encoding="UTF-8"', b'encoding="UTF-16"', 1)
+
+
+def test_utf8_bytes_declared_utf16_are_checked_as_mavsdk_reads_them():
+    data = declared_utf16()
+    mavsdk = validate_bytes(data, "x.xml", "mavsdk")
+    assert mavsdk.valid and [f.severity for f in mavsdk.findings if f.rule == "CDF009"] == ["warning"]
+    assert validate_bytes(data, "x.xml", "strict").rules("error") == {"CDF009"}
+    for profile in ("qgc", "mavsdk", "strict"):  # every other rule ran on the file
+        rest = {f for f in findings(data, profile) if f[0] not in ("CDF009", "CDF007")}
+        assert rest == findings(ORIGINAL.read_bytes(), profile), profile
+
+
+def test_a_broken_file_with_a_wrong_declaration_is_still_not_well_formed():
+    data = b'<?xml version="1.0" encoding="UTF-16"?>\n<mavlinkcamera><definition></mavlinkcamera>'
+    assert [f.rule for f in validate_bytes(data, "x.xml", "mavsdk").findings] == ["CDF004"]
+
+
 def test_exclusions_beside_options_warn_in_mavsdk_and_fail_strict():
     assert errors(BESIDE, "mavsdk") == set()
     assert errors(BESIDE, "strict") == {"CDF200"}
@@ -65,9 +85,9 @@ def test_exclusions_beside_options_warn_in_mavsdk_and_fail_strict():
 @pytest.mark.peer
 @pytest.mark.slow
 def test_real_parsers_on_the_wild_files(tmp_path):
-    original, utf16, beside = peers.mavsdk_load_definitions(
-        [ORIGINAL.read_bytes(), UTF16.read_bytes(), BESIDE.read_bytes()], tmp_path, workers=3, wait_s=30.0,
-        job_timeout_s=90.0)
+    original, utf16, beside, declared = peers.mavsdk_load_definitions(
+        [ORIGINAL.read_bytes(), UTF16.read_bytes(), BESIDE.read_bytes(), declared_utf16()], tmp_path, workers=2,
+        wait_s=30.0, job_timeout_s=90.0)
     assert original.accepted and original.dropped == (), original.log[-800:]
     # MAVSDK: the UTF-16 file is rejected at its first line ...
     assert utf16.outcome == "rejected" and "tinyxml2" in utf16.log, utf16.log[-800:]
@@ -75,6 +95,9 @@ def test_real_parsers_on_the_wild_files(tmp_path):
     assert beside.accepted and beside.dropped == (), beside.log[-800:]
     assert {"CAM_ISO", "CAM_SHUTTERSPD"} <= set(beside.settings) and not {"CAM_ISO", "CAM_SHUTTERSPD"} & set(
         original.settings)
+    # UTF-8 declared as UTF-16: MAVSDK ignores the declaration and loads everything; MAVProxy rejects it
+    assert declared.accepted and declared.dropped == () and declared.settings == original.settings, declared.log[-800:]
+    assert not peers.mavproxy_load_definition(declared_utf16()).accepted
     # MAVProxy loads both; it too loses the misplaced exclusions
     for path in (UTF16, BESIDE):
         assert peers.mavproxy_load_definition(path.read_bytes()).accepted, path
