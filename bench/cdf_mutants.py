@@ -286,7 +286,10 @@ def run_mavsdk(mutants: list[Mutant], workers: int, cache_path: Path | None) -> 
             cache[keys[i]] = _result_json(r)
         if cache_path is not None:
             cache_path.write_text(json.dumps(cache))
-    return [_result_from_json(cache[k]) for k in keys]
+    # file_parameters from the current harness (it reads the file as MAVSDK does), not from the cache
+    return [dataclasses.replace(_result_from_json(cache[k]),
+                                file_parameters=peers._file_parameter_names(peers.plain_xml(m.data)))
+            for k, m in zip(keys, mutants)]
 
 
 def _result_json(r: peers.MavsdkResult) -> dict:

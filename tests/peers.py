@@ -75,9 +75,11 @@ def plain_xml(data: bytes) -> bytes:
 def _file_parameter_names(data: bytes) -> tuple[str, ...]:
     from lxml import etree
 
-    try:
-        root = etree.fromstring(data, etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False))
-    except etree.XMLSyntaxError:
+    from cdf.xmlsafe import parse_xml
+
+    # the validator's loader: it also reads UTF-8 declared as another encoding, as MAVSDK does
+    root, _problems = parse_xml(data, "peer.xml")
+    if root is None:
         return ()
     return tuple(p.get("name") for p in root.iter("parameter") if p.get("name"))
 

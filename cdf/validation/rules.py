@@ -148,12 +148,14 @@ RULES: tuple[Rule, ...] = (
          "MAVSDK's camera plugin logs 'Unknown type for param' for uint16 and never tracks value changes (measured).",
          "§D"),
     Rule("CDF116", "name-invalid", E, E, E,
-         "name is 1-16 printable ASCII characters.",
-         "PARAM_EXT param_id is char[16]: QGC truncates, MAVSDK never requests a longer name, MAVProxy rejects it.",
+         "name is at most 16 bytes long (UTF-8).",
+         "PARAM_EXT param_id is char[16]: QGC truncates, MAVSDK never requests a longer name (it drops the "
+         "parameter, measured), MAVProxy rejects it.",
          "§C7, common.xml PARAM_EXT_*"),
-    Rule("CDF117", "name-duplicate", E, E, E,
+    Rule("CDF117", "name-duplicate", E, W, E,
          "Parameter names are unique.",
-         "QGC drops the second definition, MAVProxy rejects the file, MAVSDK keeps an arbitrary one.",
+         "QGC drops the second definition, MAVProxy rejects the file, MAVSDK loads it and keeps one of them "
+         "(measured in bench/cdf_mutants.py: no rejection, no dropped name).",
          "§C7, §3.3"),
     Rule("CDF118", "name-style", I, I, I,
          "Names use [A-Z0-9_] (CAM_ prefix recommended).",
@@ -221,6 +223,11 @@ RULES: tuple[Rule, ...] = (
          "No QGC-only types (elapsedSeconds).",
          "QGC's FactMetaData accepts ElapsedSeconds; MAVSDK rejects the file (unknown type), MAVProxy rejects it too.",
          "§3.2 (5), §4.2"),
+    Rule("CDF134", "name-charset", E, W, E,
+         "A name of at most 16 bytes is 1-16 printable ASCII characters (not empty, no accents or controls).",
+         "MAVProxy rejects the file and QGC matches names by text; MAVSDK loads the file and answers the "
+         "parameter (measured in bench/cdf_mutants.py).",
+         "§C7, MAVProxy Parameter.__init__"),
     # --- cross-references and semantics ----------------------------------------------------------------
     Rule("CDF200", "misplaced-element", W, W, E,
          "<exclusions> is a direct child of <option>, <updates> of <parameter>, <parameterranges> of <option>; "

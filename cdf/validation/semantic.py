@@ -246,16 +246,19 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
 
 
 def _check_name(param: _Parameter, seen: dict) -> Iterator[Hit]:
-    """Name and type present (CDF109), the name fit for PARAM_EXT (CDF116, CDF118) and unique (CDF117)."""
+    """Name and type present (CDF109), the name fit for PARAM_EXT (CDF116, CDF134, CDF118) and unique (CDF117)."""
     name, line, ptype = param.name, param.line, param.attrs.get("type")
     if name is None or ptype is None:
         yield Hit("CDF109", line, name, f"<parameter> has no {_missing(name=name, type=ptype)} "
                                         "(QGC and MAVSDK reject the file)")
     if name is None:
         return
-    if not _NAME_OK.fullmatch(name):
-        yield Hit("CDF116", line, name, f"name {name!r} is not 1-16 printable ASCII characters "
-                                        "(PARAM_EXT param_id is char[16])")
+    if len(name.encode("utf-8")) > 16:
+        yield Hit("CDF116", line, name, f"name {name!r} is longer than 16 bytes (PARAM_EXT param_id is char[16]; "
+                                        "MAVSDK never asks the camera for it)")
+    elif not _NAME_OK.fullmatch(name):
+        yield Hit("CDF134", line, name, f"name {name!r} is not 1-16 printable ASCII characters "
+                                        "(MAVProxy rejects the file; use [A-Z0-9_])")
     elif not _NAME_STYLE.fullmatch(name):
         yield Hit("CDF118", line, name, f"name {name!r} uses characters outside [A-Z0-9_]")
     if name in seen:

@@ -111,8 +111,10 @@ CASES = [
      "X", set()),
     ("CDF116", p('<parameter name="WW_A_VERY_LONG_NAME" type="uint8" default="0" min="0" max="3">'
                  '<description>d</description></parameter>'), "WW_A_VERY_LONG_NAME", {"qgc", "mavsdk", "strict"}),
+    ("CDF134", p('<parameter name="WW_É" type="uint8" default="0" min="0" max="3">'
+                 '<description>d</description></parameter>'), "WW_É", {"qgc", "strict"}),
     ("CDF117", p('<parameter name="WW_LAYOUT" type="uint8" default="0" min="0" max="3"><description>d</description>'
-                 '</parameter>'), "WW_LAYOUT", {"qgc", "mavsdk", "strict"}),
+                 '</parameter>'), "WW_LAYOUT", {"qgc", "strict"}),
     ("CDF118", p('<parameter name="video-size" type="uint8" default="0" min="0" max="3"><description>d</description>'
                  '</parameter>'), "video-size", set()),
     ("CDF119", p('<parameter name="X" type="uint8" min="0" max="3"><description>d</description></parameter>'), "X",
