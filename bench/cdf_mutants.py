@@ -382,12 +382,21 @@ def main() -> None:
         n = judged[key]
         print(f"| {what} | {n} | {agree[key]} | {agree[key] / n:.3f} |" if n else f"| {what} | 0 | 0 | - |")
     print()
-    print(f"{len(classes)} disagreement classes")
+    explained = [k for k in classes if _explained(*k)]
+    print(f"{len(classes)} disagreement classes, {len(explained)} of them explained in cdf/schema/RULES.md "
+          "(its last table)")
     for (direction, kinds, errs), rows in sorted(classes.items(), key=lambda kv: -len(kv[1])):
-        print(f"- [{len(rows)}] {direction}; faults {'+'.join(kinds)}; errors {','.join(errs) or '-'}")
+        mark = " [RULES.md]" if _explained(direction, kinds, errs) else ""
+        print(f"- [{len(rows)}]{mark} {direction}; faults {'+'.join(kinds)}; errors {','.join(errs) or '-'}")
         for r in rows[: args.show]:
             print(f"    {r[:400]}")
     print(f"\n{time.monotonic() - t0:.0f} s")
+
+
+def _explained(direction: str, kinds: tuple[str, ...], errs: tuple[str, ...]) -> bool:
+    """Whether a class is one RULES.md's disagreement table explains: an integer MAVSDK's std::stoi reads a
+    prefix of (CDF120 alone, on a file MAVSDK loads completely)."""
+    return direction.startswith("mavsdk profile errors") and errs == ("CDF120",) and "bad-value" in kinds
 
 
 def _why(ms: peers.MavsdkResult) -> str:
