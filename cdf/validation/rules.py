@@ -338,6 +338,10 @@ DISAGREEMENTS: tuple[Disagreement, ...] = (
                  "kept on purpose: the parameter MAVSDK shows is not the file's (another option value, another "
                  "range), so a user sets what the file never meant; the same rule catches `abc`, which crashes "
                  "MAVSDK"),
+    Disagreement("a duplicated parameter whose one copy is broken (CDF117 with CDF123 on one copy)",
+                 "keeps the good copy and drops nothing",
+                 "error (the broken copy's drop rule)",
+                 "which copy MAVSDK keeps is not specified; the file is ambiguous, fix both findings"),
 )
 
 
