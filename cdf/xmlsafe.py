@@ -20,6 +20,7 @@ from __future__ import annotations
 import functools
 import http.client
 import lzma
+import re
 import socket
 import threading
 import time
@@ -222,6 +223,8 @@ def parse_xml(data: bytes, name: str):
                                       line),)
         if "entity" in msg.lower() and b"<!DOCTYPE" in data[:4096]:
             return None, (LoadProblem("CDF005", f"DTD entities are not allowed ({msg})", line),)
+        if _declares_other_encoding(data):
+            return _parse_as_utf8(data, name, msg, line)
         return None, (LoadProblem("CDF004", f"not well-formed XML: {msg}", line),)
     except ValueError as err:  # e.g. a str with an encoding declaration; bytes never get here
         return None, (LoadProblem("CDF004", f"not parseable: {err}"),)
@@ -235,6 +238,32 @@ def parse_xml(data: bytes, name: str):
         return None, (*problems, LoadProblem("CDF006", f"more than {MAX_ELEMENTS} elements; real definitions have "
                                                        "under 900 (schema validation time grows with the count)"))
     return root, tuple(problems)
+
+
+_DECLARED_ENCODING = re.compile(rb"^(?:\xef\xbb\xbf)?\s*<\?xml[^>]*encoding\s*=\s*[\"']([A-Za-z0-9._-]+)[\"'][^>]*\?>")
+
+
+def _declares_other_encoding(data: bytes) -> bool:
+    """8-bit bytes (not UTF-16/32) whose XML declaration names an encoding other than UTF-8."""
+    m = _DECLARED_ENCODING.match(data[:300])
+    return m is not None and m.group(1).upper().replace(b"_", b"-") not in (b"UTF-8", b"UTF8")
+
+
+def _parse_as_utf8(data: bytes, name: str, msg: str, line: int | None):
+    """A file whose declaration names an encoding its bytes are not in (UTF-8 bytes saying UTF-16) fails in
+    lxml, expat and QDom; MAVSDK's tinyxml2 ignores declarations and reads UTF-8. When the bytes parse as
+    UTF-8 the rules run on the file as MAVSDK sees it, with CDF009 for the declaration."""
+    m = _DECLARED_ENCODING.match(data[:300])
+    assert m is not None
+    as_utf8 = data[:m.start(1)] + b"UTF-8" + data[m.end(1):]
+    if _DECLARED_ENCODING.match(as_utf8[:300]) is None:
+        return None, (LoadProblem("CDF004", f"not well-formed XML: {msg}", line),)
+    root, problems = parse_xml(as_utf8, name)
+    if root is None:
+        return None, (LoadProblem("CDF004", f"not well-formed XML: {msg}", line),)
+    wrong = LoadProblem("CDF009", f"the XML declaration names {m.group(1).decode()}, but the bytes are not in it "
+                                  f"({msg}); declare encoding=\"UTF-8\"", 1)
+    return root, (wrong, *problems)
 
 
 TOO_DEEP = LoadProblem("CDF006", f"elements nest more than {MAX_DEPTH} deep")

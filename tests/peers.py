@@ -75,9 +75,11 @@ def plain_xml(data: bytes) -> bytes:
 def _file_parameter_names(data: bytes) -> tuple[str, ...]:
     from lxml import etree
 
-    try:
-        root = etree.fromstring(data, etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False))
-    except etree.XMLSyntaxError:
+    from cdf.xmlsafe import parse_xml
+
+    # the validator's loader: it also reads UTF-8 declared as another encoding, as MAVSDK does
+    root, _problems = parse_xml(data, "peer.xml")
+    if root is None:
         return ()
     return tuple(p.get("name") for p in root.iter("parameter") if p.get("name"))
 
@@ -231,7 +233,7 @@ def mavproxy_load_definition(xml_bytes: bytes) -> MavproxyResult:
 # ---- corpus agreement: the real parsers vs the validator's profiles ----------------------------------------
 
 # Rules whose finding means "MAVSDK silently skips this parameter" (reference §4.3, measured §D).
-MAVSDK_DROP_RULES = frozenset({"CDF112", "CDF113", "CDF119", "CDF123", "CDF127", "CDF203"})
+MAVSDK_DROP_RULES = frozenset({"CDF112", "CDF113", "CDF116", "CDF119", "CDF123", "CDF127", "CDF203"})
 
 
 @dataclass(frozen=True)

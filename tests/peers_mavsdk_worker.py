@@ -17,6 +17,7 @@ from __future__ import annotations
 import http.server
 import json
 import os
+import re
 import struct
 import sys
 import threading
@@ -43,6 +44,9 @@ MARK = "@@RESULT "
 
 def _file_params(data: bytes) -> list[tuple[str, str, bytes]]:
     """(name, type, 128-byte wire value of the default) for every parameter we can encode."""
+    # MAVSDK reads UTF-8 whatever the declaration says: so does the camera (UTF-8 declared as UTF-16)
+    data = re.sub(rb'^(\s*<\?xml[^>]*encoding\s*=\s*["\'])[A-Za-z0-9._-]+', rb"\1UTF-8", data, count=1) \
+        if not data.startswith((b"\xff\xfe", b"\xfe\xff")) else data
     try:
         root = etree.fromstring(data, etree.XMLParser(resolve_entities=False, no_network=True,
                                                      load_dtd=False, recover=True))

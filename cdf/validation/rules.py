@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from typing import Literal
+from typing import Literal, NamedTuple
 
 Severity = Literal["error", "warning", "info"]
 PROFILES = ("qgc", "mavsdk", "strict")
@@ -72,6 +72,16 @@ RULES: tuple[Rule, ...] = (
          "The XML declaration exists and declares UTF-8.",
          "The examples declare UTF-8; GCSs decode descriptions as UTF-8.",
          "§C33"),
+    Rule("CDF008", "not-utf8", W, E, E,
+         "The bytes are UTF-8 (a UTF-8 byte-order mark is fine): not UTF-16 or UTF-32.",
+         "MAVSDK's tinyxml2 reads bytes as UTF-8 only and rejects a UTF-16 file at line 1 (measured on "
+         "tests/data/cdf/e90_camera_utf16.xml); MAVProxy detects the encoding and loads it, so does QGC's QDom.",
+         "§4.2, tests/data/cdf/README.md"),
+    Rule("CDF009", "encoding-declared-wrong", E, W, E,
+         "The encoding the XML declaration names is the one the bytes are in (UTF-8 bytes declared UTF-16).",
+         "MAVProxy (expat) believes the declaration and rejects the file, and so does QGC's QDom (code reading, "
+         "not run); MAVSDK's tinyxml2 ignores it and loads the UTF-8 (measured). The rules run on the UTF-8.",
+         "§4.2, bench/cdf_mutants.py"),
     # --- structure and values (mostly found by mavlinkcamera.xsd) --------------------------------------
     Rule("CDF100", "schema", W, W, E,
          "Any other violation of mavlinkcamera.xsd (structure, attribute lexical types).",
@@ -138,12 +148,14 @@ RULES: tuple[Rule, ...] = (
          "MAVSDK's camera plugin logs 'Unknown type for param' for uint16 and never tracks value changes (measured).",
          "§D"),
     Rule("CDF116", "name-invalid", E, E, E,
-         "name is 1-16 printable ASCII characters.",
-         "PARAM_EXT param_id is char[16]: QGC truncates, MAVSDK never requests a longer name, MAVProxy rejects it.",
+         "name is at most 16 bytes long (UTF-8).",
+         "PARAM_EXT param_id is char[16]: QGC truncates, MAVSDK never requests a longer name (it drops the "
+         "parameter, measured), MAVProxy rejects it.",
          "§C7, common.xml PARAM_EXT_*"),
-    Rule("CDF117", "name-duplicate", E, E, E,
+    Rule("CDF117", "name-duplicate", E, W, E,
          "Parameter names are unique.",
-         "QGC drops the second definition, MAVProxy rejects the file, MAVSDK keeps an arbitrary one.",
+         "QGC drops the second definition, MAVProxy rejects the file, MAVSDK loads it and keeps one of them "
+         "(measured in bench/cdf_mutants.py: no rejection, no dropped name).",
          "§C7, §3.3"),
     Rule("CDF118", "name-style", I, I, I,
          "Names use [A-Z0-9_] (CAM_ prefix recommended).",
@@ -211,11 +223,18 @@ RULES: tuple[Rule, ...] = (
          "No QGC-only types (elapsedSeconds).",
          "QGC's FactMetaData accepts ElapsedSeconds; MAVSDK rejects the file (unknown type), MAVProxy rejects it too.",
          "§3.2 (5), §4.2"),
+    Rule("CDF134", "name-charset", E, W, E,
+         "A name of at most 16 bytes is 1-16 printable ASCII characters (not empty, no accents or controls).",
+         "MAVProxy rejects the file and QGC matches names by text; MAVSDK loads the file and answers the "
+         "parameter (measured in bench/cdf_mutants.py).",
+         "§C7, MAVProxy Parameter.__init__"),
     # --- cross-references and semantics ----------------------------------------------------------------
-    Rule("CDF200", "misplaced-element", W, E, E,
+    Rule("CDF200", "misplaced-element", W, W, E,
          "<exclusions> is a direct child of <option>, <updates> of <parameter>, <parameterranges> of <option>; "
          "no nested <exclusions>.",
-         "MAVSDK reads direct children only and silently loses them; QGC searches recursively.",
+         "MAVSDK and MAVProxy read direct children only: they load the file with every parameter and silently "
+         "lose the misplaced element (measured on tests/data/cdf/e90_camera_exclusions_beside_options.xml); "
+         "QGC searches recursively.",
          "§C21, §C22, §4.3"),
     Rule("CDF201", "exclude-unknown", W, W, W,
          "Each <exclude> names an existing parameter.",
@@ -302,6 +321,30 @@ RULES: tuple[Rule, ...] = (
 RULES_BY_ID: dict[str, Rule] = {r.id: r for r in RULES}
 
 
+class Disagreement(NamedTuple):
+    """A class of mutants where the mavsdk profile's verdict is not what real MAVSDK did, and why."""
+
+    faults: str
+    mavsdk_does: str
+    profile_says: str
+    why: str
+
+
+# Every class bench/cdf_mutants.py still reports after the fixes it led to (the fixes are in the rule rows).
+DISAGREEMENTS: tuple[Disagreement, ...] = (
+    Disagreement("a number MAVSDK reads a prefix of: `1e3`, `1.5`, `0x10` as an integer value (CDF120)",
+                 "loads the parameter with std::stoi's prefix (1e3 -> 1, 0x10 -> 0) and drops nothing",
+                 "error",
+                 "kept on purpose: the parameter MAVSDK shows is not the file's (another option value, another "
+                 "range), so a user sets what the file never meant; the same rule catches `abc`, which crashes "
+                 "MAVSDK"),
+    Disagreement("a duplicated parameter whose one copy is broken (CDF117 with CDF123 on one copy)",
+                 "keeps the good copy and drops nothing",
+                 "error (the broken copy's drop rule)",
+                 "which copy MAVSDK keeps is not specified; the file is ambiguous, fix both findings"),
+)
+
+
 def rule(rule_id: str) -> Rule:
     return RULES_BY_ID[rule_id]
 
@@ -315,7 +358,8 @@ def render_markdown() -> str:
         "a test fails when this file and the table differ. Rule ids are stable and never reused.",
         "",
         "Profiles (`wiris cdf validate --profile`): **qgc** = what QGroundControl's parser needs; **mavsdk** =",
-        "what MAVSDK 4.1.0 needs without dropping anything (a parameter it silently skips is an error);",
+        "what MAVSDK 4.1.0 needs without dropping anything (a file it rejects or a parameter it silently",
+        "skips is an error; what it loads but silently loses, such as a misplaced exclusion, a warning);",
         "**strict** (default) = both, plus what MAVProxy's parser rejects and the interoperability warnings.",
         "A file is valid in a profile when it has no finding of severity `error` there; `-` = not reported.",
         "Sources: `ref` points at ../shared/reference/camera-definition-files.md (§C = its rule list,",
@@ -330,6 +374,12 @@ def render_markdown() -> str:
                  r.strict or "-", r.checks, r.why, r.ref]
         # element names in backticks, or Markdown renders them as (invisible) HTML tags
         out.append("| " + " | ".join(re.sub(r"(<[^<>|]+>)", r"`\1`", c).replace("|", "\\|") for c in cells) + " |")
+    out += ["", "## Where the mavsdk profile and real MAVSDK still disagree", "",
+            "Measured by `bench/cdf_mutants.py` (seeded single- and double-fault mutants of the corpus, the",
+            "wild files of tests/data/cdf and the generated definitions, through MAVSDK 4.1.0 and MAVProxy).",
+            "", "| faults | MAVSDK does | mavsdk profile | why |", "|---|---|---|---|"]
+    for d in DISAGREEMENTS:
+        out.append("| " + " | ".join(re.sub(r"(<[^<>|]+>)", r"`\1`", c).replace("|", "\\|") for c in d) + " |")
     return "\n".join(out) + "\n"
 
 

@@ -132,7 +132,26 @@ def check_document(root, data: bytes) -> Iterator[Hit]:
     yield from _check_vocabulary(root)
 
 
+# How a UTF-16 or UTF-32 document starts: a byte-order mark, or "<" with its NUL bytes (XML 1.0 §F.1).
+_WIDE_STARTS = {b"\xff\xfe\x00\x00": "UTF-32", b"\x00\x00\xfe\xff": "UTF-32", b"\x3c\x00\x00\x00": "UTF-32",
+                b"\x00\x00\x00\x3c": "UTF-32", b"\xff\xfe": "UTF-16", b"\xfe\xff": "UTF-16",
+                b"\x3c\x00": "UTF-16", b"\x00\x3c": "UTF-16"}
+
+
+def wide_encoding(data: bytes) -> str | None:
+    """"UTF-16" or "UTF-32" when the document is stored in one of them, else None (UTF-8 or 8-bit)."""
+    for start, name in _WIDE_STARTS.items():  # longest first: a UTF-32LE mark begins like UTF-16LE's
+        if data.startswith(start):
+            return name
+    return None
+
+
 def _check_encoding(data: bytes) -> Iterator[Hit]:
+    wide = wide_encoding(data)
+    if wide is not None:
+        yield Hit("CDF008", 1, None, f"the file is stored as {wide}; MAVSDK reads UTF-8 only and rejects it "
+                                     'at line 1: save it as UTF-8 with <?xml version="1.0" encoding="UTF-8"?>')
+        return
     head = data[:200].lstrip(b"\xef\xbb\xbf")
     if not head.lstrip().startswith(b"<?xml"):
         yield Hit("CDF007", 1, None, 'no XML declaration; start with <?xml version="1.0" encoding="UTF-8"?>')
@@ -227,16 +246,19 @@ def _check_parameter(p, params: _Params, seen: dict) -> Iterator[Hit]:
 
 
 def _check_name(param: _Parameter, seen: dict) -> Iterator[Hit]:
-    """Name and type present (CDF109), the name fit for PARAM_EXT (CDF116, CDF118) and unique (CDF117)."""
+    """Name and type present (CDF109), the name fit for PARAM_EXT (CDF116, CDF134, CDF118) and unique (CDF117)."""
     name, line, ptype = param.name, param.line, param.attrs.get("type")
     if name is None or ptype is None:
         yield Hit("CDF109", line, name, f"<parameter> has no {_missing(name=name, type=ptype)} "
                                         "(QGC and MAVSDK reject the file)")
     if name is None:
         return
-    if not _NAME_OK.fullmatch(name):
-        yield Hit("CDF116", line, name, f"name {name!r} is not 1-16 printable ASCII characters "
-                                        "(PARAM_EXT param_id is char[16])")
+    if len(name.encode("utf-8")) > 16:
+        yield Hit("CDF116", line, name, f"name {name!r} is longer than 16 bytes (PARAM_EXT param_id is char[16]; "
+                                        "MAVSDK never asks the camera for it)")
+    elif not _NAME_OK.fullmatch(name):
+        yield Hit("CDF134", line, name, f"name {name!r} is not 1-16 printable ASCII characters "
+                                        "(MAVProxy rejects the file; use [A-Z0-9_])")
     elif not _NAME_STYLE.fullmatch(name):
         yield Hit("CDF118", line, name, f"name {name!r} uses characters outside [A-Z0-9_]")
     if name in seen:

@@ -112,8 +112,10 @@ CASES = [
      "X", set()),
     ("CDF116", p('<parameter name="WW_A_VERY_LONG_NAME" type="uint8" default="0" min="0" max="3">'
                  '<description>d</description></parameter>'), "WW_A_VERY_LONG_NAME", {"qgc", "mavsdk", "strict"}),
+    ("CDF134", p('<parameter name="WW_É" type="uint8" default="0" min="0" max="3">'
+                 '<description>d</description></parameter>'), "WW_É", {"qgc", "strict"}),
     ("CDF117", p('<parameter name="WW_LAYOUT" type="uint8" default="0" min="0" max="3"><description>d</description>'
-                 '</parameter>'), "WW_LAYOUT", {"qgc", "mavsdk", "strict"}),
+                 '</parameter>'), "WW_LAYOUT", {"qgc", "strict"}),
     ("CDF118", p('<parameter name="video-size" type="uint8" default="0" min="0" max="3"><description>d</description>'
                  '</parameter>'), "video-size", set()),
     ("CDF119", p('<parameter name="X" type="uint8" min="0" max="3"><description>d</description></parameter>'), "X",
@@ -154,7 +156,7 @@ CASES = [
                  '</parameter>'), "X", {"mavsdk", "strict"}),
     ("CDF200", p('<parameter name="X" type="uint8" default="0"><description>d</description><options>'
                  '<option name="a" value="0"><exclusions><exclusions><exclude>WW_LAYOUT</exclude></exclusions>'
-                 '</exclusions></option></options></parameter>'), "X", {"mavsdk", "strict"}),
+                 '</exclusions></option></options></parameter>'), "X", {"strict"}),
     ("CDF201", p('<parameter name="X" type="uint8" default="0"><description>d</description><options>'
                  '<option name="a" value="0"><exclusions><exclude>NOPE</exclude></exclusions></option></options>'
                  '</parameter>'), "X", set()),
@@ -188,6 +190,9 @@ CASES = [
     ("CDF214", doc(GOOD_PARAMS, definition='<definition version="1"><model>a/b</model><vendor>v</vendor></definition>'),
      None, set()),
     ("CDF007", doc(GOOD_PARAMS, head='<?xml version="1.0" encoding="ISO-8859-1"?>\n'), None, set()),
+    ("CDF008", doc(GOOD_PARAMS, head='<?xml version="1.0" encoding="UTF-16"?>\n').decode().encode("utf-16"), None,
+     {"mavsdk", "strict"}),
+    ("CDF009", doc(GOOD_PARAMS, head='<?xml version="1.0" encoding="UTF-16"?>\n'), None, {"qgc", "strict"}),
 ]
 
 
