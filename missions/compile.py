@@ -44,7 +44,7 @@ from missions.geometry.area import Area
 from missions.geometry.corridor import CorridorPlan, plan_corridor
 from missions.geometry.footprint import Footprint
 from missions.geometry.geo import MAX_EXTENT_M, LocalProjection
-from missions.geometry.survey import SurveyPlan, plan_survey
+from missions.geometry.survey import DEFAULT_EXIT_MARGIN_M, SurveyPlan, plan_survey
 from missions.geometry.zones import (RESUME_MARGIN_M, CameraPoint, StepZones, TransitRouter, Zone, ZoneRouter, area_clear_of,
                                      capture_reaches, grown_union, keep_path_out, keep_photos_out, path_inside,
                                      place_zones, plan_zones, zones_near)
@@ -609,7 +609,7 @@ def _track_clear_of_zones(c: _Compile, step: SurveyStep | CorridorStep, lines: _
             # the camera comes back on RESUME_MARGIN_M past the zone's reach, for a copter's 2 m early acceptance and
             # one trigger check; a fixed-wing accepts a waypoint much earlier (ArduPlane's WP_RADIUS is 90 m by default)
             plane = (" A fixed-wing accepts a waypoint up to its acceptance radius early (ArduPlane WP_RADIUS, PX4 "
-                     f"NAV_ACC_RAD): set it to at most {RESUME_MARGIN_M - 0.5:g} m for this mission, or the camera comes "
+                     f"NAV_ACC_RAD): set it to at most {DEFAULT_EXIT_MARGIN_M:g} m for this mission, or the camera comes "
                      "back on before the zone is behind it.") if c.plan.vehicle.frame != "copter" else ""
             c.warn("zone_camera_off", f"{kind} at {here}: the camera is off over {cam.stretches_off} stretch(es) "
                    "of its lines where a footprint would reach a no-photo or exclude zone (DO_SET_CAM_TRIGG_DIST 0, "
