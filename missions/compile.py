@@ -26,6 +26,8 @@ from pathlib import Path
 import numpy as np
 from typing import Any, Callable, NamedTuple
 
+from pymavlink.dialects.v20 import common as mavlink
+
 from cdf.catalogue import catalogue
 from missions.compiled import (AreaInfo, CaptureSize, Compiled, PayloadInfo, PlanWarning, SetupStep, StepFacts,
                                TransectPattern)
@@ -210,7 +212,30 @@ def _resolve_payloads(plan: Plan, prof: FirmwareProfile, state: _State) -> _Payl
             state.warnings.extend(warn)
         except PlanError as e:
             unknown[p.name] = e
-    return _Payloads(cameras, {name: i + 1 for i, name in enumerate(wiris)}, known, unknown)
+    return _Payloads(cameras, _camera_instances(plan, prof, wiris), known, unknown)
+
+
+def _camera_instances(plan: Plan, prof: FirmwareProfile, wiris: list[str]) -> dict[str, int]:
+    """Each WIRIS payload's ArduPilot camera instance (CAMn). ArduPilot's MAVLinkCamV2 backend looks for
+    instance n at component 100 + n - 1 only (AP_Camera_MAVLinkCamV2::find_camera), so the instance follows
+    from the component id; a camera at a component no instance looks at would never be found and would take
+    no photo, silently: refused. PX4 addresses cameras by component id (the numbers are only an order)."""
+    if prof.camera_target != "instance":
+        return {name: i + 1 for i, name in enumerate(wiris)}
+    out: dict[str, int] = {}
+    for name in wiris:
+        component = plan.payload(name).component_id
+        instance = component - mavlink.MAV_COMP_ID_CAMERA + 1
+        if not 1 <= instance <= prof.max_camera_instances:
+            last = mavlink.MAV_COMP_ID_CAMERA + prof.max_camera_instances - 1
+            raise PlanError(f"{prof.title} would never find {name} at component {component}: its MAVLinkCamV2 "
+                            f"backend looks for camera instance n at component 100 + n - 1 only, and it has "
+                            f"CAM1..CAM{prof.max_camera_instances} (components 100..{last})",
+                            where=plan.where("payloads", name, "component_id"),
+                            hint=f"set the camera's MAVLink id (camera menu) to one of 100..{last} and "
+                                 "component_id to the same")
+        out[name] = instance
+    return out
 
 
 def _emitter(plan: Plan, prof: FirmwareProfile, payloads: _Payloads, speed_mps: float) -> Emitter:
@@ -702,7 +727,8 @@ def _params(c: _Compile, emitted: Emitted) -> tuple[Param, ...]:
     try:
         return autopilot_params(c.profile, c.plan.payloads, c.payloads.cameras, c.payloads.optics,
                                 c.payloads.instances, needs_lua=emitted.needs_lua,
-                                triggers={a.trigger for a in c.state.areas})
+                                triggers={a.trigger for a in c.state.areas},
+                                version=c.plan.vehicle.firmware_version)
     except PlanError as e:
         raise _relocate(e, c.plan.where("mission")) from None
 

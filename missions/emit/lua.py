@@ -12,8 +12,9 @@ layout below, also printed in the script). Params not set travel as "unset" bits
 script fills NaN = "keep" (Workswell manual §6.3) — no NaN on the mission wire, where .plan JSON and WPL
 files cannot carry it reliably.
 
-Requires ArduPilot 4.5+ (the scripting `mavlink` binding) with SCR_ENABLE=1 and the AP_Scripting
-MAVLink modules on the SD card (the script header says which files).
+Requires ArduPilot 4.5+ (the scripting `mavlink` binding) with SCR_ENABLE=1. The script carries a small codec
+for the three messages it handles, so it runs on stock firmware without AP_Scripting's MAVLink modules on the
+SD card (it uses them when they are there).
 """
 
 from __future__ import annotations

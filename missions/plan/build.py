@@ -43,7 +43,7 @@ def build_plan(data: dict, resolved: Resolved, path: str, base_dir: Path, locati
         version=int(data["version"]), name=data.get("name") or _default_name(path),
         vehicle=Vehicle(v["firmware"], v["frame"], None if v["speed_mps"] == "auto" else float(v["speed_mps"]),
                         v.get("max_mission_items"), max_speed_mps=_float_or_none(v, "max_speed_mps"),
-                        max_altitude_m=_float_or_none(v, "max_altitude_m")),
+                        max_altitude_m=_float_or_none(v, "max_altitude_m"), firmware_version=_version_or_none(v)),
         home=Home(float(h["lat"]), float(h["lon"]), float(h["alt_amsl_m"])),
         payloads=payloads, mission=tuple(steps), path=path, base_dir=str(base_dir), notes=tuple(resolved.notes),
         timing=_timing(data), locations=locations, fence_margin_m=_fence_margin(data),
@@ -86,9 +86,14 @@ def _payload(name: str, p: dict, camera: Any, component_id: int) -> Payload:
     settings = p.get("settings") or {}
     return Payload(
         name=name, camera=camera.id, imager=p.get("imager"), lens_mm=_float_or_none(p, "lens_mm"),
-        component_id=component_id, component_given="component_id" in p,
+        component_id=component_id, component_given="component_id" in p, autopilot_serial=p.get("autopilot_serial"),
         landscape=p.get("orientation", "landscape") == "landscape",
         settings=_as_written(camera, settings), values=_wire_values(camera, settings))
+
+
+def _version_or_none(vehicle: Mapping[str, Any]) -> str | None:
+    v = vehicle.get("firmware_version")
+    return None if v is None else str(v)
 
 
 def _float_or_none(body: Mapping[str, Any], key: str) -> float | None:

@@ -187,6 +187,9 @@ PAYLOAD = _obj({
                      "description": "MAVLink component id 100..105 (RedEdge is fixed at 100)",
                      "x-hint": "a camera's component id is 100 to 105 (MAV_COMP_ID_CAMERA..CAMERA6), the one set "
                                "in the camera's menu; a RedEdge answers only on 100"},
+    "autopilot_serial": _num(1, 9, integer=True,
+                             desc="the autopilot serial port the camera is wired to: ArduPilot SERIALn, PX4 "
+                                  "TELEM n, 1..4 (default: TELEM2, then the next free port)"),
     "orientation": {"enum": ["landscape", "portrait"], "default": "landscape",
                     "description": "landscape: the long image side across the flight line"},
     "settings": SETTINGS,
@@ -235,6 +238,10 @@ def _build() -> dict:
                                             f"without it no step may fly above {MAX_AGL_M:g} m",
                                        hint=f"a permit's ceiling above home, {MIN_ALTITUDE_M:g} to "
                                             f"{MAX_ALTITUDE_M:g} m"),
+                "firmware_version": {"type": ["string", "number"], "pattern": r"^[0-9]+\.[0-9]+(\.[0-9]+)?$",
+                                     "description": "firmware release, e.g. \"4.6\" (ArduPilot) or \"1.15\" (PX4): "
+                                                    "NAME.params names parameters as that release does (default: "
+                                                    "every name each supported release uses)"},
             }, required=("firmware", "frame", "speed_mps"), desc="the aircraft") | {"allOf": _speed_ranges()},
             "home": _obj({"lat": _num(-90, 90, desc=_LAT), "lon": _num(-180, 180, desc=_LON),
                           "alt_amsl_m": _num(-500, 9000, desc="home altitude above mean sea level")},

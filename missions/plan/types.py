@@ -19,6 +19,7 @@ class Vehicle:
     max_mission_items: int | None = None
     max_speed_mps: float | None = None
     max_altitude_m: float | None = None     # a permit's ceiling above home; None: MAX_AGL_M (120 m) holds
+    firmware_version: str | None = None   # e.g. "4.6": NAME.params names parameters as that version does
 
 
 @dataclass(frozen=True)
@@ -35,6 +36,7 @@ class Payload:
     imager: str | None = None                      # None: the camera's first imager with known optics
     lens_mm: float | None = None
     component_id: int = 100
+    autopilot_serial: int | None = None            # the autopilot serial port it is wired to (None: the default)
     component_given: bool = True                   # False: chosen by the loader (missions.plan.meaning)
     landscape: bool = True
     settings: tuple[tuple[str, Any], ...] = ()     # as written in the plan

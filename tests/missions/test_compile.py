@@ -200,13 +200,18 @@ def waypoint_capture(doc):
                                            "capture": "thermal"}})
 
 
-@pytest.mark.parametrize("fw,target", [("ardupilot", 1), ("px4", 101)])
+# the plan's WIRIS is at component 101: ArduPilot's MAVLinkCamV2 finds it only as CAM2 (100 + 2 - 1), and the
+# mission's IMAGE_START_CAPTURE p1 names that instance; PX4 names the component
+@pytest.mark.parametrize("fw,target", [("ardupilot", 2), ("px4", 101)])
 def test_waypoint_capture_target_per_firmware(tmp_path, fw, target):
     c = build(tmp_path, waypoint_capture, firmware=fw)
     (cap,) = [it for it in c.items if it.command == m.MAV_CMD_IMAGE_START_CAPTURE]
     assert cap.param1 == target and cap.param3 == 1
     k = c.items.index(cap)
     assert c.items[k - 1].param1 == 3
+    # the report re-flies that capture as the firmware aims it: CAM2 is the WIRIS at 101, not "the 2nd camera"
+    from missions.measure.flight import simulate
+    assert [p.payloads for p in simulate(c).photos if p.cause == k] == [("thermal",)]
 
 
 def with_rededge(doc, comp=None):
@@ -234,9 +239,11 @@ def test_rededge_alongside_gets_overlap_mode_and_port(tmp_path):
     params = {n: v for n, v, _ in c.params}
     # SRn is the n-th MAVLink channel, not SERIALn (ArduPilot #28646): with SERIAL0-2 MAVLink and SERIAL3 the GPS,
     # SERIAL4 is channel 3; SR4 would be a channel that does not exist, and the RedEdge would get no GPS
-    assert params["SERIAL4_PROTOCOL"] == 1 and params["SR3_EXT_STAT"] > 0 and params["CAM1_TYPE"] == 6
+    assert params["SERIAL4_PROTOCOL"] == 1 and params["SR3_EXT_STAT"] > 0 and params["MAV4_EXT_STAT"] > 0
     assert params["SR2_POSITION"] > 0 and not any(n.startswith("SR4_") for n in params)
-    assert "CAM2_TYPE" not in params          # the RedEdge is not an AP_Camera instance
+    # the WIRIS left component 100 to the RedEdge: at 101 ArduPilot finds it only as CAM2, and CAM1 goes off so
+    # that CAM2 is the primary camera distance triggering fires; the RedEdge is not an AP_Camera instance
+    assert params["CAM2_TYPE"] == 6 and params["CAM1_TYPE"] == 0 and "CAM3_TYPE" not in params
 
 
 def test_px4_has_two_mavlink_instances_for_cameras(tmp_path):
@@ -444,8 +451,50 @@ def test_ardupilot_params_file_format(tmp_path):
     from missions.emit.params import format_params
     c = build(tmp_path)
     lines = format_params(c).splitlines()
-    assert "CAM1_TYPE,6" in lines and "SERIAL2_PROTOCOL,2" in lines and "SERIAL2_BAUD,57" in lines
+    assert "CAM2_TYPE,6" in lines and "SERIAL2_PROTOCOL,2" in lines and "SERIAL2_BAUD,57" in lines
     assert all(l.startswith("#") or "," in l for l in lines)
+
+
+@pytest.mark.parametrize("version,names", [(None, {"SR2_POSITION", "MAV3_POSITION"}), ("4.5", {"SR2_POSITION"}),
+                                           ("4.6", {"SR2_POSITION"}), ("4.7", {"MAV3_POSITION"}),
+                                           (4.7, {"MAV3_POSITION"})])
+def test_ardupilot_stream_rates_named_as_each_release_names_them(tmp_path, version, names):
+    # 4.5 and 4.6 name channel n's stream rates SRn_, 4.7 MAV(n+1)_: a file with only SR2_POSITION gives a 4.7
+    # camera no GLOBAL_POSITION_INT and every image is tagged 0,0. Without a release both go in, each commented.
+    def ch(doc):
+        if version is not None:
+            doc["vehicle"]["firmware_version"] = version
+    c = build(tmp_path, ch)
+    got = {n for n, v, _ in c.params if n.endswith("_POSITION")}
+    assert got == names
+    why = {n: w for n, _, w in c.params}
+    assert all(("4.7+" in why[n]) == n.startswith("MAV") for n in names)
+
+
+def test_autopilot_serial_names_the_port_and_its_channel(tmp_path):
+    def ch(doc):
+        doc["payloads"]["thermal"]["autopilot_serial"] = 1
+    params = {n: v for n, v, _ in build(tmp_path, ch).params}
+    assert params["SERIAL1_PROTOCOL"] == 2 and params["SR1_POSITION"] == 5 and params["MAV2_POSITION"] == 5
+    assert "SERIAL2_PROTOCOL" not in params
+
+
+def test_autopilot_serial_names_the_px4_telem_port(tmp_path):
+    def ch(doc):
+        doc["payloads"]["thermal"]["autopilot_serial"] = 3
+    params = {n: v for n, v, _ in build(tmp_path, ch, firmware="px4").params}
+    assert params["MAV_1_CONFIG"] == 103 and params["SER_TEL3_BAUD"] == 57600 and "SER_TEL2_BAUD" not in params
+
+
+def test_a_wiris_no_ardupilot_camera_instance_looks_for_is_refused(tmp_path):
+    # MAVLinkCamV2 looks for CAMn at component 100 + n - 1 only, and ArduPilot has CAM1 and CAM2: a WIRIS at
+    # 102 would never be found and take no photo, silently
+    def ch(doc):
+        doc["payloads"]["thermal"]["component_id"] = 102
+    with pytest.raises(PlanError) as ei:
+        build(tmp_path, ch)
+    assert "100 + n - 1" in ei.value.message and "102" in ei.value.message and "component_id" in ei.value.hint
+    assert build(tmp_path, ch, firmware="px4").items     # PX4 addresses the component itself
 
 
 def test_px4_fixture_plan():
@@ -504,7 +553,9 @@ def test_rededge_overlap_mode_covers_every_survey_in_its_integers(tmp_path):
 
 
 def two_wiris(doc):
-    doc["payloads"]["vis"] = {"camera": "wiris-security", "component_id": 102}
+    # 100 and 101: the components ArduPilot's CAM1 and CAM2 look for
+    doc["payloads"]["thermal"]["component_id"] = 100
+    doc["payloads"]["vis"] = {"camera": "wiris-security", "component_id": 101}
     survey(doc)["payloads"] = ["thermal", "vis"]
 
 

@@ -93,12 +93,16 @@ def test_photos_follow_the_distance_trigger():
     c = handmade()
     sim = simulate(c)
     trig = c.areas[0].trigger_distance_m
-    # consecutive photos of one leg are exactly one trigger distance apart
+    # consecutive photos of one leg are one trigger distance apart as ArduPilot fires it: its 50 Hz check
+    # shoots at the first step of travel at or past the distance (ArduPilot SITL: 870 photos where the exact
+    # distance predicts 882 on powerline-corridor), so the spacing is the distance rounded up to whole steps
+    step = c.speed_mps / 50
     by_span: dict[int, list] = {}
     for p in sim.photos:
         by_span.setdefault(p.span, []).append(p)
     gaps = [math.hypot(b.x - a.x, b.y - a.y) for ps in by_span.values() for a, b in zip(ps, ps[1:])]
-    assert gaps and max(gaps) == pytest.approx(trig, rel=1e-6)
+    assert trig < math.ceil(trig / step) * step < trig + step
+    assert gaps and max(gaps) == pytest.approx(math.ceil(trig / step) * step, rel=1e-6)
     assert min(gaps) >= 0.0
     assert all(p.alt_m == pytest.approx(40.0) for p in sim.photos)
 

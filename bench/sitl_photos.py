@@ -1,0 +1,73 @@
+"""Photos the real firmware takes against the report's prediction, per bundled example: each example compiled
+for ArduPilot, NAME.params loaded as written into ArduPilot SITL, flown in AUTO with the WIRIS emulator on
+SERIAL2 (CAMn_TYPE as NAME.params sets it, or --cam-type), and the emulator's photos compared with the report.
+
+    python bench/sitl_photos.py [--speedup 40] [--cam-type 5|6] [EXAMPLE.yaml ...]
+
+Needs ArduPilot SITL ($WIRIS_SITL_DIR or ../shared/sitl). Prints one row per example and payload.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from click.testing import CliRunner  # noqa: E402
+
+from missions.compile import compile_plan  # noqa: E402
+from missions.plan.load import load_plan  # noqa: E402
+from wiris_tools.cli import cli  # noqa: E402
+from wiris_tools.sitl import find_sitl_dir, missing_sitl_reason  # noqa: E402
+from wiris_tools.sitl.flight import fly_compiled  # noqa: E402
+from wiris_tools.sitl.photos import check_photos  # noqa: E402
+
+
+def fly_example(sitl_dir: Path, plan: Path, scratch: Path, speedup: float, cam_type: int | None) -> list[str]:
+    out = scratch / plan.stem
+    res = CliRunner().invoke(cli, ["mission", "compile", str(plan), "--firmware", "ardupilot", "-o", str(out)])
+    if res.exit_code != 0:
+        return [f"{plan.stem:22s} compile failed: {res.output.strip()[:80]}"]
+    compiled = compile_plan(plan, firmware="ardupilot")
+    payload = next(p for p in load_plan(plan).payloads if p.camera.startswith("wiris"))
+    name, component = payload.name, payload.component_id
+    t0 = time.monotonic()
+    with fly_compiled(sitl_dir, out, compiled.name, component=component, cam_type=cam_type, speedup=speedup,
+                      home=compiled.home, workdir=scratch / f"{plan.stem}-sitl") as flight:
+        caps = [(p.position.lat / 1e7, p.position.lon / 1e7, p.position.relative_alt / 1e3) for p in flight.photos]
+    wall = time.monotonic() - t0
+    c = check_photos(compiled, name, caps)
+    return [f"{plan.stem:22s} {name:9s} {c.predicted:9d} {c.captured:8d} {c.worst_offset_m:9.2f} {c.median_offset_m:8.2f} "
+            f"{c.coverage_predicted * 100:9.2f} {c.coverage_captured * 100:9.2f} {'yes' if c.count_ok else 'NO':>5s} "
+            f"{wall:7.1f}"]
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("plans", nargs="*", type=Path)
+    ap.add_argument("--speedup", type=float, default=40.0)
+    ap.add_argument("--cam-type", type=int, choices=(5, 6), default=None)
+    args = ap.parse_args()
+    sitl_dir = find_sitl_dir(near=ROOT)
+    if sitl_dir is None:
+        print(missing_sitl_reason())
+        return 1
+    plans = args.plans or sorted((ROOT / "examples").glob("*.yaml"))
+    print(f"ArduPilot SITL ({sitl_dir}), speed-up {args.speedup:g}, CAMn_TYPE "
+          f"{args.cam_type or 'as NAME.params sets it'}")
+    print(f"{'example':22s} {'payload':9s} {'predicted':>9s} {'captured':>8s} {'worst m':>9s} {'median m':>8s} "
+          f"{'cov pred%':>9s} {'cov got%':>9s} {'count':>5s} {'wall s':>7s}")
+    with tempfile.TemporaryDirectory(prefix="wiris-sitl-photos-") as scratch:
+        for plan in plans:
+            for row in fly_example(sitl_dir, plan, Path(scratch), args.speedup, args.cam_type):
+                print(row, flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
