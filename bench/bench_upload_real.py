@@ -17,9 +17,11 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import subprocess
 import sys
 import tempfile
+from dataclasses import replace
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -31,6 +33,7 @@ import mission_peers  # noqa: E402
 from bench_upload import BAUD, LATENCY_S, lower_bound_s, mission  # noqa: E402
 from missions.formats.planfile import write_plan  # noqa: E402
 from relay import Relay  # noqa: E402
+from wiris_tools.readback import compare_items  # noqa: E402
 from wiris_tools.transfer import home_item  # noqa: E402
 
 LOSSES = (0.0, 0.05, 0.20)
@@ -65,13 +68,29 @@ class MavsdkVehicle:
     def __init__(self, scratch: Path) -> None:
         self.scratch = scratch
 
-    def run(self, upload, loss: float, seed: int) -> tuple[float | None, str]:
+    def run(self, upload, loss: float, seed: int, sent) -> tuple[float | None, str]:
         server = mission_peers.MavsdkServer(self.scratch)
         try:
             with Relay(server.port, loss=loss, seed=seed, baud=BAUD, latency_s=LATENCY_S) as relay:
-                return upload(relay.port)
+                seconds, status = upload(relay.port)
+            return (seconds, status) if status != "ok" else (seconds, self.check(server, sent))
         finally:
             server.close()
+
+    @staticmethod
+    def check(server, sent) -> str:
+        """What the server reports it received, against what was sent ("ok" when they agree)."""
+        got = server.incoming(timeout=5)
+        if got is None:
+            return "WRONG: the server reported no incoming mission"
+        result, items = got
+        if len(items) != len(sent):
+            return f"WRONG: the server holds {len(items)} items ({result}), {len(sent)} were sent"
+        try:
+            compare_items(sent, items)
+        except Exception as err:  # noqa: BLE001 - a bench reports, it does not stop
+            return f"WRONG: {err}".splitlines()[0]
+        return "ok"
 
     def close(self) -> None:
         pass
@@ -89,7 +108,7 @@ class SitlVehicle:
                                SitlOptions(speedup=1, camera_port=self.relay.vehicle_side))
         self.sitl.wait_ready(timeout=120)
 
-    def run(self, upload, loss: float, seed: int) -> tuple[float | None, str]:
+    def run(self, upload, loss: float, seed: int, sent) -> tuple[float | None, str]:
         # The SITL sends to a fixed port: keep the relay's sockets, restart its loss stream and clocks.
         from relay import _Direction
         import random
@@ -126,6 +145,9 @@ def main() -> None:
             vehicle = MavsdkVehicle(scratch) if name == "mavsdk" else SitlVehicle()
             try:
                 body = mission(a.items)
+                if vehicle.home_row:
+                    # ArduPilot refuses IMAGE_START_CAPTURE with a NaN param4 (INVALID_PARAM4): send 0 there
+                    body = [replace(it, param4=0.0) if math.isnan(it.param4) else it for it in body]
                 wire = [home_item(None)] + body if vehicle.home_row else body
                 plan = scratch / "bench.plan"
                 plan.write_text(write_plan(body, None, firmware="ardupilot" if vehicle.home_row else "px4",
@@ -133,9 +155,11 @@ def main() -> None:
                 bound = lower_bound_s(wire, rate, LATENCY_S)
                 for loss in LOSSES:
                     seed = a.seed + int(loss * 100)
-                    t_ours, s_ours = vehicle.run(lambda port: ours(plan, port), loss, seed)
-                    t_sdk, s_sdk = vehicle.run(lambda port: theirs(wire, port, scratch), loss, seed)
+                    t_ours, s_ours = vehicle.run(lambda port: ours(plan, port), loss, seed, wire)
+                    t_sdk, s_sdk = vehicle.run(lambda port: theirs(wire, port, scratch), loss, seed, wire)
                     for who, s in (("ours", s_ours), ("mavsdk", s_sdk)):
+                        if s.startswith("WRONG"):
+                            t_ours, t_sdk = (None, t_sdk) if who == "ours" else (t_ours, None)
                         if s != "ok":
                             notes.append(f"{vehicle.name}, {loss:.0%}, {who}: {s}")
                     rb = None if t_ours is None else t_ours / bound
