@@ -21,6 +21,7 @@ import math
 import subprocess
 import sys
 import tempfile
+import time
 from dataclasses import replace
 from pathlib import Path
 
@@ -36,7 +37,7 @@ from relay import Relay  # noqa: E402
 from wiris_tools.readback import compare_items  # noqa: E402
 from wiris_tools.transfer import home_item  # noqa: E402
 
-LOSSES = (0.0, 0.05, 0.20)
+SITL_UPLOAD_TIMEOUT_S = 10.0
 
 
 def ours(plan: Path, relay_port: int) -> tuple[float | None, str]:
@@ -117,7 +118,12 @@ class SitlVehicle:
         r.up = _Direction(random.Random(f"{seed}-up"))
         r.down = _Direction(random.Random(f"{seed}-down"))
         r.gcs_peer = None
-        return upload(r.port)
+        seconds, status = upload(r.port)
+        if status != "ok":
+            # ArduPilot answers DENIED to a new MISSION_COUNT while a failed upload is still "receiving", until
+            # its own upload timeout (8 s, MissionItemProtocol.cpp) gives up: the next run waits that out.
+            time.sleep(SITL_UPLOAD_TIMEOUT_S)
+        return seconds, status
 
     def close(self) -> None:
         self.sitl.close()
@@ -133,6 +139,7 @@ def main() -> None:
     ap.add_argument("--servers", default="mavsdk,sitl")
     ap.add_argument("--items", type=int, default=100)
     ap.add_argument("--seed", type=int, default=25)
+    ap.add_argument("--losses", default="0,5,20", help="loss levels in percent")
     a = ap.parse_args()
     rate = BAUD / 10.0
     print(f"# relay: {BAUD} baud 8N1 = {rate:.0f} B/s each way, {LATENCY_S * 1000:.0f} ms each way, seed {a.seed}")
@@ -153,7 +160,7 @@ def main() -> None:
                 plan.write_text(write_plan(body, None, firmware="ardupilot" if vehicle.home_row else "px4",
                                            vehicle="copter"))
                 bound = lower_bound_s(wire, rate, LATENCY_S)
-                for loss in LOSSES:
+                for loss in [float(p) / 100 for p in a.losses.split(",")]:
                     seed = a.seed + int(loss * 100)
                     t_ours, s_ours = vehicle.run(lambda port: ours(plan, port), loss, seed, wire)
                     t_sdk, s_sdk = vehicle.run(lambda port: theirs(wire, port, scratch), loss, seed, wire)
