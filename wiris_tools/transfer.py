@@ -24,7 +24,9 @@ Timing (all in `Timeouts`; the defaults are the spec's or tighter):
     item 0 again. After sending item k we expect the request for k+1 within one round trip. When it
     is overdue (RTO from a smoothed RTT measured on this link, RFC 6298 style, never above
     `ack_s`, doubling on each resend) we resend item k at once instead of waiting for the
-    vehicle's own re-request timer (1 s on ArduPilot): that is the fast retransmit. Duplicated
+    vehicle's own re-request timer (1 s on ArduPilot): that is the fast retransmit. From the second
+    resend on, item k+1 goes out unasked after it: a vehicle whose request for k+1 was lost ignores a
+    repeated k without a word (MAVSDK's MissionRawServer, PX4) until its own timer. Duplicated
     requests within half an RTT of our last answer are not answered twice.
   * Download requests one item at a time (PX4 insists on order) and re-requests after the RTO,
     capped at `item_s` = 250 ms, `retries` times per item. Only the item asked for is accepted, so
@@ -531,12 +533,25 @@ class _Upload:
         else:
             # Fast retransmit: the vehicle's next request is overdue.
             self.send_item(self.last_item)
+            self.push_next_after_silence()
             wait = min(self.rto() * (2 ** self.tries), t.ack_s)
             if self.tries >= t.retries and self.last_item == self.count - 1:
                 # After the last try of the last item the vehicle gets the spec's whole ack timeout: an
                 # ArduPilot that defers its ACCEPTED (see on_ack) must not lose to our fast retransmits.
                 wait = t.ack_s
             self.deadline = now + wait
+
+    def push_next_after_silence(self) -> None:
+        """After a resend of the last item got no answer at all, send the next item too, unasked. A vehicle
+        that already has the last item (its request for the next one was lost) ignores the repeat without a
+        word - MAVSDK's MissionRawServer and PX4 do; ArduPilot at least NACKs it, see on_ack - and asks again
+        only at its own timer (about 1 s on MAVSDK's server): the next item is what it waits for. A vehicle
+        that lacked the last item gets it first, and the next one is then either what it asks for anyway or a
+        repeat it drops."""
+        nxt = self.last_item + 1
+        if self.tries >= 2 and nxt < self.count and self.last_item == self.requested_max:
+            self.send_item(nxt)
+            self.retransmitted.add(nxt)  # no RTT sample from an unsolicited item
 
     def explain_partial(self, err: LinkError) -> None:
         """Say what a failed upload left on an ArduPilot vehicle. ArduPilot cuts its mission and its rally
