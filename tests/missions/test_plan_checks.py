@@ -185,7 +185,7 @@ payloads:
     lens_mm: 13
     component_id: 1
     settings: {range_mode: manuel}
-  other: {camera: wiris-pro, lens_mm: 13, component_id: 102}
+  other: {camera: wiris-pro, lens_mm: 13, component_id: 101}   # ArduPilot finds CAM2 at 101 (102 would be refused)
 mission:
   - takeoff: {alt_m: 40}
   - survey:
