@@ -28,6 +28,7 @@ mission:
       altitude_m: 100
       overlap: {front: 60, side: 50}
       trigger: distance
+      blur_px: 2          # 20 m/s smears the 13 mm WIRIS's 13 cm pixel by 1.5 px (missions.thermal)
   - rtl: {}
 """
 
