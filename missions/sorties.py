@@ -538,7 +538,9 @@ def in_sorties(plan, compiled: Compiled) -> Compiled:
             "longer_than_battery", f"the flight takes {whole.flight_time_s / 60:.1f} min, longer than one battery "
             f"of a {v.frame} as assumed without vehicle.endurance_min ({endurance.minutes:g} min less "
             f"{endurance.reserve_pct:g} % reserve); give vehicle.endurance_min to fly it as sorties"))
-    budget = Budget(None if endurance.assumed else endurance.usable_s, compiled.item_limit)
+    # ArduPilot stores home as item 0 of every mission it takes, so a sortie leaves it one row of the limit
+    rows = compiled.item_limit - (1 if compiled.firmware == "ardupilot" else 0)
+    budget = Budget(None if endurance.assumed else endurance.usable_s, rows)
     where = plan.where("vehicle", "endurance_min") if v.endurance_min is not None else plan.where("mission")
     sorties = split_sorties(compiled, budget, where, whole)
     if not sorties:
