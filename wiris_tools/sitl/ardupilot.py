@@ -28,6 +28,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from wiris_tools.errors import CommandRefused, LinkError, NoAnswer
 from wiris_tools.link import Link
+from wiris_tools.sitl.monitor import MonitorRecord
 from wiris_tools.sitl import SitlOptions
 
 FIRST_INSTANCE = 10            # leave 0..9 to people starting SITL by hand
@@ -84,7 +85,7 @@ class _InstanceLock:
         os.close(self._fd)
 
 
-class ArduPilotSitl:
+class ArduPilotSitl(MonitorRecord):
     """One ArduPilot SITL process (see the package docstring for the interface)."""
 
     firmware = "ardupilot"
@@ -170,24 +171,6 @@ class ArduPilotSitl:
         link = self.link
         link.send(link.mav.request_data_stream_encode(self.target_system, 1, mavlink2.MAV_DATA_STREAM_ALL,
                                                       MONITOR_STREAM_HZ, 1))
-
-    def _record(self, msg) -> None:
-        with self._tlog_lock:
-            if not self._tlog_file.closed:
-                self._tlog_file.write(int(time.time() * 1e6).to_bytes(8, "big") + msg.get_msgbuf())
-        if msg.get_type() == "STATUSTEXT":
-            self._statustext.append(msg.text)
-            del self._statustext[:-200]
-
-    @property
-    def link(self) -> Link:
-        if self._link is None:
-            raise LinkError("the SITL monitor link is closed", hint="a bug in the test or tool using the harness")
-        return self._link
-
-    @property
-    def statustext(self) -> list[str]:
-        return list(self._statustext)
 
     # -- readiness ---------------------------------------------------------------------------------
     def wait_ready(self, timeout: float = 60.0) -> None:

@@ -35,6 +35,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from wiris_tools.errors import CommandRefused, LinkError, NoAnswer
 from wiris_tools.link import Link
+from wiris_tools.sitl.monitor import MonitorRecord
 from wiris_tools.sitl import SitlOptions
 
 FIRST_INSTANCE = 1             # 0 is the instance people start by hand
@@ -132,7 +133,7 @@ def _int_of_float(value: float) -> int:
     return struct.unpack("<i", struct.pack("<f", value))[0]
 
 
-class Px4Sitl:
+class Px4Sitl(MonitorRecord):
     """One PX4 SITL process with SIH (see the package docstring for the interface)."""
 
     firmware = "px4"
@@ -229,24 +230,6 @@ class Px4Sitl:
             interval = 1e6 / KEEP_STREAMS[name] if name in KEEP_STREAMS else -1
             link.send(link.mav.command_long_encode(self.target_system, 1, mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL,
                                                    0, msg_id, interval, 0, 0, 0, 0, 0))
-
-    def _record(self, msg) -> None:
-        with self._tlog_lock:
-            if not self._tlog_file.closed:
-                self._tlog_file.write(int(time.time() * 1e6).to_bytes(8, "big") + msg.get_msgbuf())
-        if msg.get_type() == "STATUSTEXT":
-            self._statustext.append(msg.text)
-            del self._statustext[:-200]
-
-    @property
-    def link(self) -> Link:
-        if self._link is None:
-            raise LinkError("the SITL monitor link is closed", hint="a bug in the test or tool using the harness")
-        return self._link
-
-    @property
-    def statustext(self) -> list[str]:
-        return list(self._statustext)
 
     # -- readiness ---------------------------------------------------------------------------------
     def wait_ready(self, timeout: float = 60.0) -> None:
