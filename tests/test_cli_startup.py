@@ -9,6 +9,9 @@ import time
 import tomllib
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).parent))
+from cli_child import CHILD_ENV, wait_stopped  # noqa: E402
+
 HEAVY = ("pymavlink", "lxml", "shapely", "pyproj", "xmlschema", "mavsdk", "jsonschema", "PIL")
 
 
@@ -50,7 +53,7 @@ def _start(script: Path, *args: str, sigint=signal.SIG_DFL) -> subprocess.Popen:
     # SIGINT at its default in the child, as a terminal starts it (a test run started as a background job
     # hands its children SIGINT ignored, and Python then installs no handler)
     return subprocess.Popen([sys.executable, str(script), *(args or ["--help"])], stdout=subprocess.DEVNULL,
-                            stderr=subprocess.PIPE, text=True, preexec_fn=lambda: signal.signal(signal.SIGINT, sigint))
+                            stderr=subprocess.PIPE, text=True, env=CHILD_ENV, preexec_fn=lambda: signal.signal(signal.SIGINT, sigint))
 
 
 _FRAME = re.compile(r'File "([^"]+)", line (\d+), in (\S+)')
@@ -116,7 +119,7 @@ def test_sigint_ignored_at_start_stays_ignored(tmp_path):
         assert conn.getresponse().status == 404   # still serving after the Ctrl-C
         conn.close()
         proc.send_signal(signal.SIGTERM)
-        assert proc.wait(30) == 0 and "stopped" in proc.stderr.read()
+        assert wait_stopped(proc) == 0 and "stopped" in proc.stderr.read()
     finally:
         if proc.poll() is None:
             proc.kill()
