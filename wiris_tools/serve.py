@@ -45,7 +45,7 @@ import time
 import urllib.parse
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import Callable, NamedTuple
 
 from cdf.paths import require_directory
 from wiris_tools.errors import LinkError
@@ -354,6 +354,24 @@ class BundleHandler(http.server.BaseHTTPRequestHandler):
         return False
 
 
+class Refusal(NamedTuple):
+    why: str
+
+
+class Slot:
+    """One connection's place in Slots. Given back once, whoever gives it back first: the connection's thread
+    when it ends, or the accepting thread when starting that thread failed. (A Ctrl-C can land in
+    Thread.start after the thread has already served its request and given the slot back; a second give-back
+    then raised KeyError, which the server logged as an internal error -- swallowing the Ctrl-C.)"""
+
+    def __init__(self, slots: "Slots", client: str) -> None:
+        self._slots, self.client = slots, client
+        self._held = True
+
+    def give_back(self) -> None:
+        self._slots._release(self)
+
+
 class Slots:
     """Connections served at once: at most `total`, and at most `per_client` from one client address, so
     that one client (64 slow connections, say) cannot take every slot and have everyone else refused."""
@@ -364,24 +382,32 @@ class Slots:
         self._in_use = 0
         self._by_client: dict[str, int] = {}
 
-    def take(self, client: str) -> str | None:
-        """Take a slot for `client`: None, or why there is none."""
+    def take(self, client: str) -> Slot | Refusal:
+        """A slot for `client`, or why there is none."""
         with self._lock:
             if self._in_use >= self.total:
-                return f"over the limit of {self.total} connections"
+                return Refusal(f"over the limit of {self.total} connections")
             held = self._by_client.get(client, 0)
             if held >= self.per_client:
-                return f"over the limit of {self.per_client} connections from one address"
+                return Refusal(f"over the limit of {self.per_client} connections from one address")
             self._in_use += 1
             self._by_client[client] = held + 1
-            return None
+            return Slot(self, client)
 
-    def give_back(self, client: str) -> None:
+    @property
+    def in_use(self) -> int:
         with self._lock:
+            return self._in_use
+
+    def _release(self, slot: Slot) -> None:
+        with self._lock:
+            if not slot._held:
+                return
+            slot._held = False
             self._in_use -= 1
-            held = self._by_client.pop(client) - 1
+            held = self._by_client.pop(slot.client) - 1
             if held:
-                self._by_client[client] = held
+                self._by_client[slot.client] = held
 
 
 class BundleServer(http.server.ThreadingHTTPServer):
@@ -395,21 +421,23 @@ class BundleServer(http.server.ThreadingHTTPServer):
         self._slots = Slots(self.max_connections, self.max_per_client)
 
     def process_request(self, request, client_address) -> None:
-        refusal = self._slots.take(client_address[0])
-        if refusal is not None:
-            self._refuse(request, client_address, refusal)
+        slot = self._slots.take(client_address[0])
+        if isinstance(slot, Refusal):
+            self._refuse(request, client_address, slot.why)
             return
+        thread = threading.Thread(target=self._serve_connection, args=(request, client_address, slot),
+                                  daemon=True)
         try:
-            super().process_request(request, client_address)   # starts the thread that gives the slot back
+            thread.start()
         except BaseException:
-            self._slots.give_back(client_address[0])
+            slot.give_back()   # no thread to give it back (or it already did: a slot is given back once)
             raise
 
-    def process_request_thread(self, request, client_address) -> None:
+    def _serve_connection(self, request, client_address, slot: Slot) -> None:
         try:
-            super().process_request_thread(request, client_address)
+            self.process_request_thread(request, client_address)   # socketserver's: handle, then close
         finally:
-            self._slots.give_back(client_address[0])
+            slot.give_back()
 
     def _refuse(self, request, client_address, why: str) -> None:
         """503 to a connection over a cap, without reading its request or starting a thread (the unread

@@ -223,6 +223,59 @@ def test_connections_over_the_cap_get_503_and_the_slot_comes_back(bundle):
         held.pop().close()
 
 
+def test_a_ctrl_c_landing_in_thread_start_stops_the_server(bundle, monkeypatch):
+    """Under load the connection's thread can serve its request and give its slot back before Thread.start
+    returns in the accepting thread; a Ctrl-C landing then must stop the server. (It was lost: the slot was
+    given back a second time, the KeyError replaced the KeyboardInterrupt, and socketserver logged it as an
+    internal error and went on serving: `wiris cdf serve` ignored the Ctrl-C.)"""
+    srv = make_server(bundle, "127.0.0.1", 0, log=(lines := []).append)
+    ended: list[BaseException | None] = []
+
+    def serve() -> None:
+        try:
+            srv.serve_forever(poll_interval=0.05)
+            ended.append(None)
+        except BaseException as err:  # noqa: BLE001 (the test wants whatever ended it)
+            ended.append(err)
+
+    runner = threading.Thread(target=serve, daemon=True)
+    runner.start()
+
+    class InterruptedAfterServing(threading.Thread):
+        def start(self) -> None:
+            super().start()
+            self.join(10)              # the connection is served and its slot given back...
+            raise KeyboardInterrupt    # ...and then the Ctrl-C lands in the accepting thread
+
+    monkeypatch.setattr(threading, "Thread", InterruptedAfterServing)
+    try:
+        status, _, _ = request(srv, "GET", f"/cdf/{PRO}")
+        runner.join(10)
+    finally:
+        monkeypatch.undo()
+        if runner.is_alive():
+            srv.shutdown()
+        srv.server_close()
+    assert status == 200
+    assert len(ended) == 1 and isinstance(ended[0], KeyboardInterrupt), (ended, lines)
+    assert srv._slots.in_use == 0 and not any("internal error" in line for line in lines), lines
+
+
+def test_a_slot_is_given_back_once():
+    from wiris_tools.serve import Refusal, Slots
+
+    slots = Slots(total=2, per_client=1)
+    first = slots.take("10.0.0.1")
+    assert slots.take("10.0.0.1") == Refusal("over the limit of 1 connections from one address")
+    first.give_back()
+    first.give_back()                       # the second give-back changes nothing
+    assert slots.in_use == 0
+    again, other = slots.take("10.0.0.1"), slots.take("10.0.0.2")
+    assert slots.in_use == 2 and slots.take("10.0.0.3") == Refusal("over the limit of 2 connections")
+    again.give_back(), other.give_back()
+    assert slots.in_use == 0
+
+
 def _closed_by_server(sock: socket.socket, wait_s: float) -> bool:
     """Whether the server has closed `sock`, waiting at most `wait_s` for it to say so."""
     import select
