@@ -1,25 +1,28 @@
 """The audit of a flight against its compiled plan, measured from what was captured (not from the plan):
-each photo's footprint at its logged position, height above home, heading, pitch and roll, with the project's
+each photo's footprint at its logged position, height above ground, heading, pitch and roll, with the project's
 footprint and coverage code (missions.measure.coverage); coverage, minimum overlaps, photos missing against
 the plan's prediction (missions.measure.flight), photos inside the plan's exclusion zones, gaps, and where
 the flight left the plan.
 
     audit = audit_flight(compiled, read_log("flight.tlog"))
     audit.steps[0].coverage, audit.steps[0].gaps, audit.flight.left_plan, audit.to_json()
+
+Height above ground: a plan with a `terrain:` DEM measures each photo over the DEM as its report does
+(missions.terrain.reflight): the camera's altitude (the plan's home elevation plus the logged height above
+home) less the ground below it, and the footprint where the image's rays meet the DEM, so a photo over a
+rising slope covers less than one at the same height above home. Without a DEM the ground is flat at home's
+elevation and the footprint is a rectangle at the logged height above home.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Any, NamedTuple, Sequence
 
 import numpy as np
 
 from missions.compiled import AreaInfo, Compiled, PayloadInfo
-from missions.geometry.footprint import Footprint
-from missions.geometry.triggers import PhotoPoint
-from missions.measure.coverage import footprint_polygons, min_front_overlap, min_side_overlap
 from missions.measure.report import COVERAGE_TARGET, _zones, area_geometry
 from wiris_tools.audit.logs import FlightLog, Shot
 from wiris_tools.errors import LinkError
@@ -49,6 +52,31 @@ class Gap:
                              "coordinates": [[[lon, lat] for lat, lon in ring] for ring in self.rings]}}
 
 
+class _GroundShot(NamedTuple):
+    """A captured photo as missions.terrain.reflight reads one: its centre (simulation metres), height above
+    home, heading, the stretch it belongs to, and no mission item (its height is above home, not terrain)."""
+
+    x: float
+    y: float
+    alt_m: float
+    heading_deg: float
+    span: int
+    item: int = -1
+
+
+@dataclass(frozen=True)
+class HeightsAboveGround:
+    """The captured photos' heights above the ground below them, from the DEM or above home (flat ground)."""
+
+    source: str                    # "dem" | "home" (flat ground at home's elevation)
+    min_m: float | None
+    max_m: float | None
+
+    def to_json(self) -> dict:
+        r = lambda v: None if v is None else round(v, 2)   # noqa: E731
+        return {"source": self.source, "min_m": r(self.min_m), "max_m": r(self.max_m)}
+
+
 @dataclass(frozen=True)
 class Footprints:
     """The captured footprints of one payload over one step, in the audit's projection (shapely polygons)."""
@@ -76,6 +104,7 @@ class StepAudit:
     photos_in_zones: int
     gaps: tuple[Gap, ...]
     footprints: Footprints | None = None
+    heights: HeightsAboveGround | None = None
 
     @property
     def gap_m2(self) -> float:
@@ -88,7 +117,8 @@ class StepAudit:
                 "planned_coverage": round(self.planned_coverage, 5),
                 "overlap": {"front_min": _r(self.front_min), "side_min": _r(self.side_min),
                             "front_requested": self.requested_front, "side_requested": self.requested_side},
-                "photos_in_zones": self.photos_in_zones, "gaps": len(self.gaps), "gap_m2": round(self.gap_m2, 1)}
+                "photos_in_zones": self.photos_in_zones, "gaps": len(self.gaps), "gap_m2": round(self.gap_m2, 1),
+                "height_above_ground": None if self.heights is None else self.heights.to_json()}
 
 
 @dataclass(frozen=True)
@@ -97,7 +127,7 @@ class FlightAudit:
 
     modes: tuple[str, ...]             # the mode sequence while armed
     sorties: int                       # armed periods (more than one: landed and flew again, e.g. a battery swap)
-    last_item: int | None              # the highest mission item reached (None: the log has no mission progress)
+    last_item: int | None              # the highest mission item reached, counted from 1 (None: no mission progress)
     mission_items: int                 # the plan's
     left_plan: tuple[str, ...]         # what took the vehicle off its plan, as sentences
 
@@ -185,15 +215,22 @@ def _tilted_centres(xy: np.ndarray, alt: np.ndarray, heading: np.ndarray, pitch:
     return xy + d * ahead[:, None] + n * right[:, None]
 
 
+class _Measured(NamedTuple):
+    covered: Any                       # the union of the footprints (shapely)
+    centres: np.ndarray                # where each photo's optical axis meets the ground, projection metres
+    front_min: float | None
+    side_min: float | None
+    heights: HeightsAboveGround
+
+
 def _footprints(shots: Sequence[Shot], proj: Any, info: PayloadInfo, fallback_alt_m: float,
-                fallback_heading: np.ndarray, mount: str) -> tuple[Any, np.ndarray, list[PhotoPoint], dict[float, list[int]]]:
-    """Footprint polygons of the shots, their centres, PhotoPoints and the altitude groups (metres above home,
-    to 0.1 m) for the overlap measures."""
-    import shapely
+                fallback_heading: np.ndarray, mount: str, over_dem: Any = None) -> _Measured:
+    """The shots' footprints, their union and minimum overlaps: over the DEM when `over_dem` is (compiled,
+    sim) of a plan with one, else on flat ground at home's elevation."""
     lat = np.array([s.pose.lat for s in shots])
     lon = np.array([s.pose.lon for s in shots])
     x, y = proj.to_xy(lat, lon)
-    xy = np.column_stack([np.asarray(x, float), np.asarray(y, float)])
+    xy = np.column_stack([np.asarray(x, float), np.asarray(y, float)]).reshape(-1, 2)
     alt = np.array([s.pose.alt_rel_m if s.pose.alt_rel_m is not None else fallback_alt_m for s in shots], float)
     heading = np.array([s.pose.heading_deg if s.pose.heading_deg is not None else fallback_heading[k]
                         for k, s in enumerate(shots)], float)
@@ -202,16 +239,45 @@ def _footprints(shots: Sequence[Shot], proj: Any, info: PayloadInfo, fallback_al
     pitch = np.array([(s.pose.pitch_deg or 0.0) if tilt else 0.0 for s in shots], float)
     roll = np.array([(s.pose.roll_deg or 0.0) if tilt else 0.0 for s in shots], float)
     centres = _tilted_centres(xy, alt, heading, pitch, roll)
-    line = _lines(heading)
-    polys, groups = [], {}
-    for k in range(len(shots)):
-        if alt[k] > 0:
-            groups.setdefault(round(float(alt[k]), 1), []).append(k)
-    for a, ks in groups.items():
-        polys.append(footprint_polygons(centres[ks], np.radians(heading[ks]), Footprint(*info.footprint_m(a))))
-    points = [PhotoPoint(float(centres[k, 0]), float(centres[k, 1]), float(heading[k]), int(line[k]))
-              for k in range(len(shots))]
-    return (shapely.union_all(np.concatenate(polys)) if polys else shapely.Polygon()), centres, points, groups
+    shots_xy = [_GroundShot(float(centres[k, 0]), float(centres[k, 1]), float(alt[k]), float(heading[k]), int(span))
+                for k, span in enumerate(_lines(heading))]
+    if over_dem is not None:
+        from missions.terrain.reflight import ground_photos
+        gp, source = ground_photos(*over_dem, shots_xy, info), "dem"
+    else:
+        gp, source = _flat_ground(centres, alt, heading, info), "home"
+    return _measure(shots_xy, gp, source, info)
+
+
+def _flat_ground(centres: np.ndarray, alt: np.ndarray, heading: np.ndarray, info: PayloadInfo) -> Any:
+    """Footprints on flat ground at home's elevation: each photo's rectangle at its own height above home, as
+    missions.terrain.reflight's GroundPhotos (outline in its ring order), so one set of overlap measures serves
+    both grounds."""
+    import shapely
+    from missions.terrain.reflight import _RING, GroundPhotos
+    h = np.radians(heading)
+    d = np.column_stack([np.sin(h), np.cos(h)])
+    nrm = np.column_stack([np.cos(h), -np.sin(h)])
+    across, along = info.footprint_m(1.0)
+    u = (d[:, None, :] * (_RING[None, :, 0:1] * along / 2) + nrm[:, None, :] * (_RING[None, :, 1:2] * across / 2))
+    ring = centres[:, None, :] + u * np.maximum(alt, 0.0)[:, None, None]
+    closed = np.concatenate([ring, ring[:, :1]], axis=1)
+    return GroundPhotos(alt.astype(float), ring, shapely.polygons(closed) if len(alt) else np.zeros(0, object))
+
+
+def _measure(shots: Sequence[_GroundShot], gp: Any, source: str, info: PayloadInfo) -> _Measured:
+    """Union and minimum overlaps of the footprints of photos taken above the ground (missions.terrain.reflight:
+    front between consecutive photos of a line, side to the nearest photo of another line)."""
+    import shapely
+    from missions.terrain import reflight
+    centres = np.array([(p.x, p.y) for p in shots], float).reshape(-1, 2)
+    up = np.flatnonzero(gp.hag_m > 0) if len(shots) else np.zeros(0, int)
+    covered = shapely.union_all(gp.polygons[up]) if len(up) else shapely.Polygon()
+    hag = gp.hag_m[np.isfinite(gp.hag_m)] if len(shots) else np.zeros(0)
+    return _Measured(covered, centres, reflight.min_front_overlap(shots, gp, up),
+                     reflight.min_side_overlap(shots, gp, up, info),
+                     HeightsAboveGround(source, float(hag.min()) if len(hag) else None,
+                                        float(hag.max()) if len(hag) else None))
 
 
 def _gaps(geom: Any, covered: Any, proj: Any) -> tuple[Gap, ...]:
@@ -239,7 +305,7 @@ def _predicted_heading(sim_xy: np.ndarray, sim_heading: np.ndarray, xy: np.ndarr
 
 
 def _audit_step(area: AreaInfo, name: str, info: PayloadInfo, shots: Sequence[Shot], sim: Any,
-                planned_cov: float, mount: str) -> StepAudit:
+                planned_cov: float, mount: str, over_dem: Any = None) -> StepAudit:
     import shapely
     proj = sim.projection
     geom = area_geometry(area.area, proj)
@@ -257,13 +323,9 @@ def _audit_step(area: AreaInfo, name: str, info: PayloadInfo, shots: Sequence[Sh
     mine = [shots[k] for k in near]
     fallback = _predicted_heading(np.array([(p.x, p.y) for p in all_pred], float).reshape(-1, 2),
                                   np.array([p.heading_deg for p in all_pred], float), raw_xy[near])
-    covered, centres, points, groups = _footprints(mine, proj, info, area.altitude_m, fallback, mount)
+    measured = _footprints(mine, proj, info, area.altitude_m, fallback, mount, over_dem)
+    covered, centres = measured.covered, measured.centres
     cov = float(shapely.intersection(geom, covered).area / geom.area) if mine and geom.area > 0 else 0.0
-    fronts, sides = [], []
-    for a, ks in groups.items():
-        fp = Footprint(*info.footprint_m(a))
-        fronts.append(min_front_overlap([points[k] for k in ks], fp))
-        sides.append(min_side_overlap([points[k] for k in ks], fp))
     trig = area.trigger_distance_m or info.footprint_m(area.altitude_m)[1]
     missing = 0
     if len(pred_xy):
@@ -276,17 +338,18 @@ def _audit_step(area: AreaInfo, name: str, info: PayloadInfo, shots: Sequence[Sh
     if not zones.is_empty and len(centres):
         in_zones = int(shapely.contains_xy(zones, centres[:, 0], centres[:, 1]).sum())
     return StepAudit(area.step, area.kind, name, float(geom.area), area.altitude_m, len(predicted), len(mine),
-                     missing, cov, planned_cov, min((f for f in fronts if f is not None), default=None),
-                     min((s for s in sides if s is not None), default=None), area.front_overlap,
+                     missing, cov, planned_cov, measured.front_min, measured.side_min, area.front_overlap,
                      area.side_overlap, in_zones, _gaps(geom, covered, proj),
-                     Footprints(covered, centres))
+                     Footprints(covered, centres), measured.heights)
 
 
 def _flight(compiled: Compiled, log: FlightLog) -> FlightAudit:
     armed_modes = [m for m in log.modes if m.armed]
     sorties = sum(1 for a, b in zip([False] + [m.armed for m in log.modes], [m.armed for m in log.modes])
                   if b and not a)
-    seq = [s for _, s in log.mission_seq]
+    # ArduPilot numbers the uploaded items from 1 (home is its item 0), PX4 from 0: counted from 1 here
+    first = 0 if compiled.firmware == "px4" else 1
+    seq = [s - first + 1 for _, s in log.mission_seq]
     last = max(seq) if seq else None
     n = len(compiled.items)
     left: list[str] = []
@@ -354,7 +417,8 @@ def audit_flight(compiled: Compiled, log: FlightLog, plan_path: str = "", mount:
         for name in area.payloads:
             planned_cov = next((r.coverage.get(name, float("nan")) for r in rep.areas if r.step == area.step),
                                float("nan"))
-            steps.append(_audit_step(area, name, compiled.payload(name), shots, sim, planned_cov, mount))
+            steps.append(_audit_step(area, name, compiled.payload(name), shots, sim, planned_cov, mount,
+                                     (compiled, sim) if compiled.terrain is not None else None))
     notes = list(log.notes)
     if source == "triggers":
         notes.append("no capture acknowledgements in the log: footprints are the autopilot's triggers, whether "
@@ -364,6 +428,13 @@ def audit_flight(compiled: Compiled, log: FlightLog, plan_path: str = "", mount:
                  len(trig) if trig else None, len(log.captures) if log.captures else None, failed,
                  *(_pair(trig, captures) if trig and captures else ((), ())),
                  tuple(steps), _flight(compiled, log), tuple(notes))
+
+
+def _heights_text(h: HeightsAboveGround | None) -> str:
+    if h is None or h.min_m is None:
+        return ""
+    where = "above the DEM" if h.source == "dem" else "above home (flat ground)"
+    return f"; height {h.min_m:.1f}-{h.max_m:.1f} m {where}"
 
 
 def gap_geojson(audit: Audit) -> dict:
@@ -388,7 +459,8 @@ def format_audit(audit: Audit) -> str:
                      f"missing {s.missing_planned}; coverage {pct(s.coverage)} (plan {pct(s.planned_coverage)}); "
                      f"front min {pct(s.front_min)} / {100 * s.requested_front:.0f} %, side min {pct(s.side_min)} "
                      f"/ {100 * s.requested_side:.0f} %; gaps {len(s.gaps)} ({s.gap_m2:.0f} m²)"
-                     + (f"; {s.photos_in_zones} photo(s) in no-photo zones" if s.photos_in_zones else ""))
+                     + (f"; {s.photos_in_zones} photo(s) in no-photo zones" if s.photos_in_zones else "")
+                     + _heights_text(s.heights))
     f = audit.flight
     lines.append(f"  flight: modes {' > '.join(f.modes) or 'unknown'}; last item "
                  f"{'unknown' if f.last_item is None else f.last_item} of {f.mission_items}")
