@@ -44,6 +44,9 @@ class Shot:
     seq: int | None             # image index / trigger number as logged
     source: str                 # the message it came from: CAMERA_IMAGE_CAPTURED, CAMERA_FEEDBACK, CAM, TRIG, ...
     ok: bool = True             # the camera reported success (CAMERA_IMAGE_CAPTURED.capture_result)
+    # the pose's heading, pitch and roll are the camera's own (its image's gimbal angles: pitch is the tilt from
+    # straight down), not the airframe's: they place the footprint whatever the mount
+    oriented: bool = False
 
 
 @dataclass(frozen=True)

@@ -234,10 +234,11 @@ def _footprints(shots: Sequence[Shot], proj: Any, info: PayloadInfo, fallback_al
     alt = np.array([s.pose.alt_rel_m if s.pose.alt_rel_m is not None else fallback_alt_m for s in shots], float)
     heading = np.array([s.pose.heading_deg if s.pose.heading_deg is not None else fallback_heading[k]
                         for k, s in enumerate(shots)], float)
-    # a gimbal holds the camera at nadir whatever the airframe does; a fixed mount tilts with it
-    tilt = mount == "fixed"
-    pitch = np.array([(s.pose.pitch_deg or 0.0) if tilt else 0.0 for s in shots], float)
-    roll = np.array([(s.pose.roll_deg or 0.0) if tilt else 0.0 for s in shots], float)
+    # a gimbal holds the camera at nadir whatever the airframe does; a fixed mount tilts with it; an image's own
+    # gimbal angles say where that camera looked
+    tilt = [mount == "fixed" or s.oriented for s in shots]
+    pitch = np.array([(s.pose.pitch_deg or 0.0) if tilt[k] else 0.0 for k, s in enumerate(shots)], float)
+    roll = np.array([(s.pose.roll_deg or 0.0) if tilt[k] else 0.0 for k, s in enumerate(shots)], float)
     centres = _tilted_centres(xy, alt, heading, pitch, roll)
     shots_xy = [_GroundShot(float(centres[k, 0]), float(centres[k, 1]), float(alt[k]), float(heading[k]), int(span))
                 for k, span in enumerate(_lines(heading))]
@@ -392,15 +393,24 @@ def _check_same_flight(compiled: Compiled, log: FlightLog, shots: Sequence[Shot]
 MOUNTS = ("gimbal", "fixed")
 
 
-def audit_flight(compiled: Compiled, log: FlightLog, plan_path: str = "", mount: str = "gimbal") -> Audit:
+def audit_flight(compiled: Compiled, log: FlightLog, plan_path: str = "", mount: str = "gimbal",
+                 images: Sequence[Any] | None = None) -> Audit:
     """The audit of `log` against `compiled`. Raises LinkError where nothing can be said (no photo record at
     all, another flight's log). `mount`: "gimbal" (the camera looks at nadir, the footprint turns with the
-    heading only) or "fixed" (to the airframe: its logged pitch and roll move the footprint)."""
+    heading only) or "fixed" (to the airframe: its logged pitch and roll move the footprint). `images`
+    (wiris_tools.audit.images.ImageFile, the flight's folder): matched to the captures; a matched image's
+    gimbal angles place its photo's footprint instead of the log's attitude."""
     from missions.measure.flight import simulate
     from missions.measure.report import report
 
-    captures = [s for s in log.captures if s.ok]
-    failed = sum(1 for s in log.captures if not s.ok)
+    all_captures, matched, oriented = list(log.captures), None, 0
+    if images is not None:
+        from wiris_tools.audit.images import match_images, oriented_by_images
+        matched = match_images(images, all_captures)
+        all_captures = oriented_by_images(all_captures, images, matched)
+        oriented = sum(1 for s in all_captures if s.oriented)
+    captures = [s for s in all_captures if s.ok]
+    failed = sum(1 for s in all_captures if not s.ok)
     if captures:
         shots, source = captures, "captures"
     elif log.triggers:
@@ -420,6 +430,8 @@ def audit_flight(compiled: Compiled, log: FlightLog, plan_path: str = "", mount:
             steps.append(_audit_step(area, name, compiled.payload(name), shots, sim, planned_cov, mount,
                                      (compiled, sim) if compiled.terrain is not None else None))
     notes = list(log.notes)
+    if oriented:
+        notes.append(f"{oriented} photo(s) placed by their image's gimbal angles (XMP) instead of the log's attitude")
     if source == "triggers":
         notes.append("no capture acknowledgements in the log: footprints are the autopilot's triggers, whether "
                      "the camera took them is unknown")
@@ -427,7 +439,7 @@ def audit_flight(compiled: Compiled, log: FlightLog, plan_path: str = "", mount:
     return Audit(plan_path or compiled.name, log.path, log.kind, source,
                  len(trig) if trig else None, len(log.captures) if log.captures else None, failed,
                  *(_pair(trig, captures) if trig and captures else ((), ())),
-                 tuple(steps), _flight(compiled, log), tuple(notes))
+                 tuple(steps), _flight(compiled, log), tuple(notes), matched)
 
 
 def _heights_text(h: HeightsAboveGround | None) -> str:

@@ -123,7 +123,7 @@ def preview_cmd(plan: str, out: str, firmware: str | None, tiles: str | None, at
 @click.option("--json", "as_json", is_flag=True, help="print the audit as JSON")
 @click.option("--images", "images_dir", type=click.Path(file_okay=False),
               help="the folder of the flight's JPEGs: matched to the captures by the number in their names or by "
-                   "EXIF time")
+                   "EXIF time; their XMP gimbal angles (DJI's or Pix4D's tags) place their footprints")
 @click.option("--mount", type=click.Choice(["gimbal", "fixed"]), default="gimbal", show_default=True,
               help="gimbal: the camera looks straight down; fixed: the airframe's logged pitch and roll tilt it")
 @click.option("--firmware", type=click.Choice(["ardupilot", "px4"]), help="override the plan's vehicle.firmware")
@@ -138,12 +138,11 @@ def audit_cmd(plan: str, log: str, out_dir: str | None, as_json: bool, images_di
     compiled = _compile(plan, firmware)
     with _located(plan):
         flight_log = read_log(log)
-        result = audit_flight(compiled, flight_log, plan, mount=mount)
+        images = None
         if images_dir:
-            import dataclasses
-
-            from wiris_tools.audit.images import match_images, read_folder
-            result = dataclasses.replace(result, images=match_images(read_folder(images_dir), flight_log.captures))
+            from wiris_tools.audit.images import read_folder
+            images = read_folder(images_dir)
+        result = audit_flight(compiled, flight_log, plan, mount=mount, images=images)
         paths = []
         if out_dir:
             from wiris_tools.audit.outputs import write_audit
