@@ -143,8 +143,10 @@ def read_folder(folder: str | Path) -> list[ImageFile]:
 
 
 def match_images(images: Sequence[ImageFile], captures: Sequence[Shot]) -> ImageMatch:
-    """Images against the log's captures, by sequence when every image has a number and the captures theirs."""
-    if images and all(i.seq is not None for i in images) and all(c.seq is not None for c in captures):
+    """Images against the log's captures, by sequence when every image has a number and the captures theirs,
+    each once (several logs of one flight may each count from 0); else by time."""
+    seqs = [c.seq for c in captures]
+    if images and all(i.seq is not None for i in images) and None not in seqs and len(set(seqs)) == len(seqs):
         have = {i.seq for i in images}
         logged = {c.seq for c in captures}
         image_of = {i.seq: k for k, i in enumerate(images)}

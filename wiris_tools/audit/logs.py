@@ -47,6 +47,7 @@ class Shot:
     # the pose's heading, pitch and roll are the camera's own (its image's gimbal angles: pitch is the tilt from
     # straight down), not the airframe's: they place the footprint whatever the mount
     oriented: bool = False
+    flight: int = 0             # which of several logs audited together it came from (their lines stay apart)
 
 
 @dataclass(frozen=True)

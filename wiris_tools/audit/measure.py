@@ -195,12 +195,13 @@ def _pair(triggers: Sequence[Shot], captures: Sequence[Shot]) -> tuple[tuple[int
     return tuple(lone_triggers), tuple(lone_captures)
 
 
-def _lines(headings: np.ndarray) -> np.ndarray:
-    """A line number per photo: a new line where the heading turns more than LINE_TURN_DEG."""
+def _lines(headings: np.ndarray, flights: np.ndarray) -> np.ndarray:
+    """A line number per photo: a new line where the heading turns more than LINE_TURN_DEG, and where the
+    photos of another flight (log) begin."""
     if len(headings) == 0:
         return np.zeros(0, int)
     turn = np.degrees(np.abs(np.angle(np.exp(1j * np.radians(np.diff(headings))))))
-    return np.concatenate([[0], np.cumsum(turn > LINE_TURN_DEG)]).astype(int)
+    return np.concatenate([[0], np.cumsum((turn > LINE_TURN_DEG) | (np.diff(flights) != 0))]).astype(int)
 
 
 def _tilted_centres(xy: np.ndarray, alt: np.ndarray, heading: np.ndarray, pitch: np.ndarray,
@@ -241,7 +242,7 @@ def _footprints(shots: Sequence[Shot], proj: Any, info: PayloadInfo, fallback_al
     roll = np.array([(s.pose.roll_deg or 0.0) if tilt[k] else 0.0 for k, s in enumerate(shots)], float)
     centres = _tilted_centres(xy, alt, heading, pitch, roll)
     shots_xy = [_GroundShot(float(centres[k, 0]), float(centres[k, 1]), float(alt[k]), float(heading[k]), int(span))
-                for k, span in enumerate(_lines(heading))]
+                for k, span in enumerate(_lines(heading, np.array([s.flight for s in shots], int)))]
     if over_dem is not None:
         from missions.terrain.reflight import ground_photos
         gp, source = ground_photos(*over_dem, shots_xy, info), "dem"
@@ -306,12 +307,16 @@ def _predicted_heading(sim_xy: np.ndarray, sim_heading: np.ndarray, xy: np.ndarr
 
 
 def _audit_step(area: AreaInfo, name: str, info: PayloadInfo, shots: Sequence[Shot], sim: Any,
-                planned_cov: float, mount: str, over_dem: Any = None) -> StepAudit:
+                planned_cov: float, mount: str, over_dem: Any = None,
+                expected: Sequence[Any] | None = None) -> StepAudit:
+    """`expected`: the photos this flight was to take, in the whole mission's terms (a sortie's); None: all the
+    plan's."""
     import shapely
     proj = sim.projection
     geom = area_geometry(area.area, proj)
     zones = _zones(area.area, proj)
-    predicted = [p for p in sim.photos if name in p.payloads
+    photos = sim.photos if expected is None else expected
+    predicted = [p for p in photos if name in p.payloads
                  and (area.items is None or area.items[0] <= p.item < area.items[1])]
     pred_xy = np.array([(p.x, p.y) for p in predicted], float).reshape(-1, 2)
     all_pred = [p for p in sim.photos if name in p.payloads]
@@ -344,7 +349,8 @@ def _audit_step(area: AreaInfo, name: str, info: PayloadInfo, shots: Sequence[Sh
                      Footprints(covered, centres), measured.heights)
 
 
-def _flight(compiled: Compiled, log: FlightLog) -> FlightAudit:
+def _flight(compiled: Compiled, log: FlightLog, items: int | None = None) -> FlightAudit:
+    """`items`: how many mission items the flight flew (a sortie's); None: the whole mission's."""
     armed_modes = [m for m in log.modes if m.armed]
     sorties = sum(1 for a, b in zip([False] + [m.armed for m in log.modes], [m.armed for m in log.modes])
                   if b and not a)
@@ -352,7 +358,7 @@ def _flight(compiled: Compiled, log: FlightLog) -> FlightAudit:
     first = 0 if compiled.firmware == "px4" else 1
     seq = [s - first + 1 for _, s in log.mission_seq]
     last = max(seq) if seq else None
-    n = len(compiled.items)
+    n = len(compiled.items) if items is None else items
     left: list[str] = []
     names = []
     for m in armed_modes:
@@ -378,6 +384,14 @@ def _flight(compiled: Compiled, log: FlightLog) -> FlightAudit:
     return FlightAudit(tuple(names), sorties, last, n, tuple(left))
 
 
+def sortie_photos(compiled: Compiled, sortie: Any) -> list:
+    """The photos a sortie's own re-flight takes, in the whole mission's terms (items mapped through its origin)."""
+    from missions.measure.flight import simulate
+    from missions.sorties import as_sortie, union_photos
+    sim = sortie.flight if sortie.flight is not None else simulate(as_sortie(compiled, sortie.items))
+    return union_photos(compiled, [sortie], [sim])
+
+
 def _check_same_flight(compiled: Compiled, log: FlightLog, shots: Sequence[Shot]) -> None:
     from missions.geometry.geo import great_circle_m
     lat, lon, _ = compiled.home
@@ -394,12 +408,14 @@ MOUNTS = ("gimbal", "fixed")
 
 
 def audit_flight(compiled: Compiled, log: FlightLog, plan_path: str = "", mount: str = "gimbal",
-                 images: Sequence[Any] | None = None) -> Audit:
+                 images: Sequence[Any] | None = None, sortie: Any = None) -> Audit:
     """The audit of `log` against `compiled`. Raises LinkError where nothing can be said (no photo record at
     all, another flight's log). `mount`: "gimbal" (the camera looks at nadir, the footprint turns with the
     heading only) or "fixed" (to the airframe: its logged pitch and roll move the footprint). `images`
     (wiris_tools.audit.images.ImageFile, the flight's folder): matched to the captures; a matched image's
-    gimbal angles place its photo's footprint instead of the log's attitude."""
+    gimbal angles place its photo's footprint instead of the log's attitude. `sortie` (missions.sorties.Sortie):
+    the log flew that sortie only: the photos missing are counted against its re-flight, the mission's progress
+    against its items; coverage stays that of the plan's whole areas."""
     from missions.measure.flight import simulate
     from missions.measure.report import report
 
@@ -422,13 +438,14 @@ def audit_flight(compiled: Compiled, log: FlightLog, plan_path: str = "", mount:
     _check_same_flight(compiled, log, shots)
     sim = simulate(compiled)
     rep = report(compiled, sim)
+    expected = None if sortie is None else sortie_photos(compiled, sortie)
     steps = []
     for area in compiled.areas:
         for name in area.payloads:
-            planned_cov = next((r.coverage.get(name, float("nan")) for r in rep.areas if r.step == area.step),
-                               float("nan"))
+            planned_cov = float("nan") if sortie is not None else next(
+                (r.coverage.get(name, float("nan")) for r in rep.areas if r.step == area.step), float("nan"))
             steps.append(_audit_step(area, name, compiled.payload(name), shots, sim, planned_cov, mount,
-                                     (compiled, sim) if compiled.terrain is not None else None))
+                                     (compiled, sim) if compiled.terrain is not None else None, expected))
     notes = list(log.notes)
     if oriented:
         notes.append(f"{oriented} photo(s) placed by their image's gimbal angles (XMP) instead of the log's attitude")
@@ -439,7 +456,8 @@ def audit_flight(compiled: Compiled, log: FlightLog, plan_path: str = "", mount:
     return Audit(plan_path or compiled.name, log.path, log.kind, source,
                  len(trig) if trig else None, len(log.captures) if log.captures else None, failed,
                  *(_pair(trig, captures) if trig and captures else ((), ())),
-                 tuple(steps), _flight(compiled, log), tuple(notes), matched)
+                 tuple(steps), _flight(compiled, log, None if sortie is None else len(sortie.items)),
+                 tuple(notes), matched)
 
 
 def _heights_text(h: HeightsAboveGround | None) -> str:
@@ -454,7 +472,8 @@ def gap_geojson(audit: Audit) -> dict:
     return {"type": "FeatureCollection", "features": feats}
 
 
-def format_audit(audit: Audit) -> str:
+def format_audit(audit: Audit, verdict: bool = True) -> str:
+    """The audit as text; `verdict`: end with whether the plan's areas are covered (a sortie alone is not)."""
     def pct(v: float | None) -> str:
         return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{100 * v:.1f} %"
     lines = [f"audit of {audit.log} ({audit.log_kind}) against {audit.plan}",
@@ -483,5 +502,6 @@ def format_audit(audit: Audit) -> str:
                      f"{len(im.without_log_entry)} without a log entry, {len(im.captured_without_image)} "
                      "captured but not in the folder")
     lines += [f"  note: {n}" for n in audit.notes]
-    lines.append("  complete" if audit.complete else "  INCOMPLETE: fly the refly plan")
+    if verdict:
+        lines.append("  complete" if audit.complete else "  INCOMPLETE: fly the refly plan")
     return "\n".join(lines)
