@@ -8,21 +8,13 @@ import json
 import pytest
 from click.testing import CliRunner
 
-import sitl_plans
 from audit_logs import Faults, write_tlog
+from audit_sorties import write_sortie_plan
 from missions.compile import compile_plan
 from missions.sorties import as_sortie
 from wiris_tools.audit.flights import audit_flights, format_multi
 from wiris_tools.audit.logs import read_log
 from wiris_tools.cli import cli
-
-ENDURANCE_MIN = 5.0       # the 4.7 min survey does not fit one battery with a 20 % reserve: two sorties
-
-
-def write_sortie_plan(directory):
-    path = sitl_plans.write_plan(directory, "survey")
-    path.write_text(path.read_text().replace("speed_mps: 5", f"speed_mps: 5, endurance_min: {ENDURANCE_MIN}"))
-    return path
 
 
 @pytest.fixture(scope="module")

@@ -136,7 +136,8 @@ def format_multi(multi: MultiAudit) -> str:
     head = (f"audit of {len(multi.flights)} flights against {multi.plan}"
             + (f" (planned as {multi.sorties_planned} sorties)" if multi.sorties_planned else ""))
     lines = [head]
-    for k, f in enumerate(multi.flights, 1):
+    order = sorted(enumerate(multi.flights, 1), key=lambda kf: (kf[1].sortie is None, kf[1].sortie or 0, kf[0]))
+    for k, f in order:                   # in the plan's sortie order, whatever order the logs came in
         label = f"sortie {f.sortie}" if f.sortie is not None else f"flight {k}"
         first, *rest = format_audit(f.audit, verdict=False).split("\n")
         lines += [f"{label}: {first.removeprefix('audit of ')}", *rest]

@@ -1,6 +1,6 @@
 """The audit of a flight against its compiled plan, measured from what was captured (not from the plan):
-each photo's footprint at its logged position, height above ground, heading, pitch and roll, with the project's
-footprint and coverage code (missions.measure.coverage); coverage, minimum overlaps, photos missing against
+each photo's footprint at its logged position, height above ground, heading, pitch and roll, measured with the
+report's footprint and overlap code (missions.terrain.reflight); coverage, minimum overlaps, photos missing against
 the plan's prediction (missions.measure.flight), photos inside the plan's exclusion zones, gaps, and where
 the flight left the plan.
 
