@@ -44,9 +44,15 @@ def _rtl_after(flight, requests: int, stop: threading.Event) -> None:
 
 
 def fly(sitl_dir, work: Path, plan: Path, faults: CaptureFaults = CaptureFaults(), rtl_after: int | None = None,
-        speedup: float = 20.0) -> Flown:
+        speedup: float = 20.0, sortie: int | None = None) -> Flown:
+    """Fly `plan` (with `sortie`: its NAME.sortieN.plan, on a freshly started SITL as after a battery swap)."""
+    import shutil
     out = work / "out"
     compile_to(plan, out)
+    name = plan.stem if sortie is None else f"{plan.stem}.sortie{sortie}"
+    for ext in (".params", ".lua"):      # a sortie flies with the plan's parameters and camera bridge
+        if sortie is not None and (out / f"{plan.stem}{ext}").exists():
+            shutil.copy(out / f"{plan.stem}{ext}", out / f"{name}{ext}")
     stop = threading.Event()
 
     def before(flight) -> None:
@@ -56,7 +62,7 @@ def fly(sitl_dir, work: Path, plan: Path, faults: CaptureFaults = CaptureFaults(
             threading.Thread(target=_rtl_after, args=(flight, rtl_after, stop), daemon=True).start()
 
     try:
-        with fly_compiled(sitl_dir, out, plan.stem, cam_type=6, workdir=work / "sitl", speedup=speedup,
+        with fly_compiled(sitl_dir, out, name, cam_type=6, workdir=work / "sitl", speedup=speedup,
                           before_flight=before) as flight:
             with flight.emulator.lock:
                 requests = flight.emulator.state.capture_requests
@@ -65,4 +71,4 @@ def fly(sitl_dir, work: Path, plan: Path, faults: CaptureFaults = CaptureFaults(
     finally:
         stop.set()
     dropped = tuple(k for k in range(1, requests + 1) if faults.drops(k))
-    return Flown(plan.stem, requests, taken, dropped, tlog, bins)
+    return Flown(name, requests, taken, dropped, tlog, bins)

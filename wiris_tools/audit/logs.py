@@ -44,6 +44,10 @@ class Shot:
     seq: int | None             # image index / trigger number as logged
     source: str                 # the message it came from: CAMERA_IMAGE_CAPTURED, CAMERA_FEEDBACK, CAM, TRIG, ...
     ok: bool = True             # the camera reported success (CAMERA_IMAGE_CAPTURED.capture_result)
+    # the pose's heading, pitch and roll are the camera's own (its image's gimbal angles: pitch is the tilt from
+    # straight down), not the airframe's: they place the footprint whatever the mount
+    oriented: bool = False
+    flight: int = 0             # which of several logs audited together it came from (their lines stay apart)
 
 
 @dataclass(frozen=True)
@@ -305,9 +309,7 @@ def _read_ulog(path: Path) -> FlightLog:
             ypr = _yaw_pitch_roll([a[f"q[{i}]"][k] for i in range(4)])
             if ypr:
                 att.add(float(a["timestamp"][k]) / 1e6, *ypr)
-    home_alt = None
-    if "home_position" in topics and len(topics["home_position"]["alt"]):
-        home_alt = float(topics["home_position"]["alt"][0])
+    home_alt = _home_alt(topics)
     track: list[Pose] = []
     if "vehicle_global_position" in topics:
         g = topics["vehicle_global_position"]
@@ -320,8 +322,7 @@ def _read_ulog(path: Path) -> FlightLog:
         for k in range(len(c["timestamp"])):
             ypr = _yaw_pitch_roll([c[f"q[{i}]"][k] for i in range(4)])
             pose = Pose(float(c["timestamp"][k]) / 1e6, float(c["lat"][k]), float(c["lon"][k]),
-                        float(c["ground_distance"][k]) if np.isfinite(c["ground_distance"][k]) else None,
-                        *(ypr or (None, None, None)))
+                        _capture_alt_rel(c, k, home_alt), *(ypr or (None, None, None)))
             captures.append(Shot(_with_attitude(pose, att), int(c["seq"][k]), "camera_capture",
                                  ok=int(c["result"][k]) == 1))
     triggers: list[Shot] = []
@@ -353,6 +354,30 @@ def _read_ulog(path: Path) -> FlightLog:
         notes.append("the ULog is damaged or truncated: what follows the damage is lost")
     return FlightLog(str(path), "ulog", tuple(_dedupe(captures)), tuple(_dedupe(triggers)), tuple(track),
                      tuple(modes), tuple(seqs), tuple(notes))
+
+
+def _home_alt(topics: dict) -> float | None:
+    """Home's AMSL altitude as it was at take-off: PX4 sets home again when it arms, so the last home_position
+    published by the first arming (a second later at most), else the first one logged."""
+    import numpy as np
+    h = topics.get("home_position")
+    if h is None or not len(h["alt"]):
+        return None
+    s = topics.get("vehicle_status")
+    armed = np.flatnonzero(s["arming_state"] == 2) if s is not None else np.zeros(0, int)
+    if not len(armed):
+        return float(h["alt"][0])
+    before = np.flatnonzero(h["timestamp"] <= s["timestamp"][armed[0]] + 1_000_000)
+    return float(h["alt"][before[-1] if len(before) else 0])
+
+
+def _capture_alt_rel(c: Any, k: int, home_alt: float | None) -> float | None:
+    """camera_capture's height above home: its AMSL altitude less home's; without a home, its ground_distance
+    (a range finder's, or the estimator's height above ground) is the nearest thing the log holds."""
+    import numpy as np
+    if home_alt is not None and np.isfinite(c["alt"][k]):
+        return float(c["alt"][k]) - home_alt
+    return float(c["ground_distance"][k]) if np.isfinite(c["ground_distance"][k]) else None
 
 
 def _pose_at(track: Sequence[Pose], t: float) -> Pose | None:

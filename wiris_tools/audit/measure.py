@@ -1,25 +1,28 @@
 """The audit of a flight against its compiled plan, measured from what was captured (not from the plan):
-each photo's footprint at its logged position, height above home, heading, pitch and roll, with the project's
-footprint and coverage code (missions.measure.coverage); coverage, minimum overlaps, photos missing against
+each photo's footprint at its logged position, height above ground, heading, pitch and roll, measured with the
+report's footprint and overlap code (missions.terrain.reflight); coverage, minimum overlaps, photos missing against
 the plan's prediction (missions.measure.flight), photos inside the plan's exclusion zones, gaps, and where
 the flight left the plan.
 
     audit = audit_flight(compiled, read_log("flight.tlog"))
     audit.steps[0].coverage, audit.steps[0].gaps, audit.flight.left_plan, audit.to_json()
+
+Height above ground: a plan with a `terrain:` DEM measures each photo over the DEM as its report does
+(missions.terrain.reflight): the camera's altitude (the plan's home elevation plus the logged height above
+home) less the ground below it, and the footprint where the image's rays meet the DEM, so a photo over a
+rising slope covers less than one at the same height above home. Without a DEM the ground is flat at home's
+elevation and the footprint is a rectangle at the logged height above home.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Any, NamedTuple, Sequence
 
 import numpy as np
 
 from missions.compiled import AreaInfo, Compiled, PayloadInfo
-from missions.geometry.footprint import Footprint
-from missions.geometry.triggers import PhotoPoint
-from missions.measure.coverage import footprint_polygons, min_front_overlap, min_side_overlap
 from missions.measure.report import COVERAGE_TARGET, _zones, area_geometry
 from wiris_tools.audit.logs import FlightLog, Shot
 from wiris_tools.errors import LinkError
@@ -49,6 +52,31 @@ class Gap:
                              "coordinates": [[[lon, lat] for lat, lon in ring] for ring in self.rings]}}
 
 
+class _GroundShot(NamedTuple):
+    """A captured photo as missions.terrain.reflight reads one: its centre (simulation metres), height above
+    home, heading, the stretch it belongs to, and no mission item (its height is above home, not terrain)."""
+
+    x: float
+    y: float
+    alt_m: float
+    heading_deg: float
+    span: int
+    item: int = -1
+
+
+@dataclass(frozen=True)
+class HeightsAboveGround:
+    """The captured photos' heights above the ground below them, from the DEM or above home (flat ground)."""
+
+    source: str                    # "dem" | "home" (flat ground at home's elevation)
+    min_m: float | None
+    max_m: float | None
+
+    def to_json(self) -> dict:
+        r = lambda v: None if v is None else round(v, 2)   # noqa: E731
+        return {"source": self.source, "min_m": r(self.min_m), "max_m": r(self.max_m)}
+
+
 @dataclass(frozen=True)
 class Footprints:
     """The captured footprints of one payload over one step, in the audit's projection (shapely polygons)."""
@@ -76,6 +104,7 @@ class StepAudit:
     photos_in_zones: int
     gaps: tuple[Gap, ...]
     footprints: Footprints | None = None
+    heights: HeightsAboveGround | None = None
 
     @property
     def gap_m2(self) -> float:
@@ -88,7 +117,8 @@ class StepAudit:
                 "planned_coverage": round(self.planned_coverage, 5),
                 "overlap": {"front_min": _r(self.front_min), "side_min": _r(self.side_min),
                             "front_requested": self.requested_front, "side_requested": self.requested_side},
-                "photos_in_zones": self.photos_in_zones, "gaps": len(self.gaps), "gap_m2": round(self.gap_m2, 1)}
+                "photos_in_zones": self.photos_in_zones, "gaps": len(self.gaps), "gap_m2": round(self.gap_m2, 1),
+                "height_above_ground": None if self.heights is None else self.heights.to_json()}
 
 
 @dataclass(frozen=True)
@@ -97,7 +127,7 @@ class FlightAudit:
 
     modes: tuple[str, ...]             # the mode sequence while armed
     sorties: int                       # armed periods (more than one: landed and flew again, e.g. a battery swap)
-    last_item: int | None              # the highest mission item reached (None: the log has no mission progress)
+    last_item: int | None              # the highest mission item reached, counted from 1 (None: no mission progress)
     mission_items: int                 # the plan's
     left_plan: tuple[str, ...]         # what took the vehicle off its plan, as sentences
 
@@ -165,12 +195,13 @@ def _pair(triggers: Sequence[Shot], captures: Sequence[Shot]) -> tuple[tuple[int
     return tuple(lone_triggers), tuple(lone_captures)
 
 
-def _lines(headings: np.ndarray) -> np.ndarray:
-    """A line number per photo: a new line where the heading turns more than LINE_TURN_DEG."""
+def _lines(headings: np.ndarray, flights: np.ndarray) -> np.ndarray:
+    """A line number per photo: a new line where the heading turns more than LINE_TURN_DEG, and where the
+    photos of another flight (log) begin."""
     if len(headings) == 0:
         return np.zeros(0, int)
     turn = np.degrees(np.abs(np.angle(np.exp(1j * np.radians(np.diff(headings))))))
-    return np.concatenate([[0], np.cumsum(turn > LINE_TURN_DEG)]).astype(int)
+    return np.concatenate([[0], np.cumsum((turn > LINE_TURN_DEG) | (np.diff(flights) != 0))]).astype(int)
 
 
 def _tilted_centres(xy: np.ndarray, alt: np.ndarray, heading: np.ndarray, pitch: np.ndarray,
@@ -185,33 +216,70 @@ def _tilted_centres(xy: np.ndarray, alt: np.ndarray, heading: np.ndarray, pitch:
     return xy + d * ahead[:, None] + n * right[:, None]
 
 
+class _Measured(NamedTuple):
+    covered: Any                       # the union of the footprints (shapely)
+    centres: np.ndarray                # where each photo's optical axis meets the ground, projection metres
+    front_min: float | None
+    side_min: float | None
+    heights: HeightsAboveGround
+
+
 def _footprints(shots: Sequence[Shot], proj: Any, info: PayloadInfo, fallback_alt_m: float,
-                fallback_heading: np.ndarray, mount: str) -> tuple[Any, np.ndarray, list[PhotoPoint], dict[float, list[int]]]:
-    """Footprint polygons of the shots, their centres, PhotoPoints and the altitude groups (metres above home,
-    to 0.1 m) for the overlap measures."""
-    import shapely
+                fallback_heading: np.ndarray, mount: str, over_dem: Any = None) -> _Measured:
+    """The shots' footprints, their union and minimum overlaps: over the DEM when `over_dem` is (compiled,
+    sim) of a plan with one, else on flat ground at home's elevation."""
     lat = np.array([s.pose.lat for s in shots])
     lon = np.array([s.pose.lon for s in shots])
     x, y = proj.to_xy(lat, lon)
-    xy = np.column_stack([np.asarray(x, float), np.asarray(y, float)])
+    xy = np.column_stack([np.asarray(x, float), np.asarray(y, float)]).reshape(-1, 2)
     alt = np.array([s.pose.alt_rel_m if s.pose.alt_rel_m is not None else fallback_alt_m for s in shots], float)
     heading = np.array([s.pose.heading_deg if s.pose.heading_deg is not None else fallback_heading[k]
                         for k, s in enumerate(shots)], float)
-    # a gimbal holds the camera at nadir whatever the airframe does; a fixed mount tilts with it
-    tilt = mount == "fixed"
-    pitch = np.array([(s.pose.pitch_deg or 0.0) if tilt else 0.0 for s in shots], float)
-    roll = np.array([(s.pose.roll_deg or 0.0) if tilt else 0.0 for s in shots], float)
+    # a gimbal holds the camera at nadir whatever the airframe does; a fixed mount tilts with it; an image's own
+    # gimbal angles say where that camera looked
+    tilt = [mount == "fixed" or s.oriented for s in shots]
+    pitch = np.array([(s.pose.pitch_deg or 0.0) if tilt[k] else 0.0 for k, s in enumerate(shots)], float)
+    roll = np.array([(s.pose.roll_deg or 0.0) if tilt[k] else 0.0 for k, s in enumerate(shots)], float)
     centres = _tilted_centres(xy, alt, heading, pitch, roll)
-    line = _lines(heading)
-    polys, groups = [], {}
-    for k in range(len(shots)):
-        if alt[k] > 0:
-            groups.setdefault(round(float(alt[k]), 1), []).append(k)
-    for a, ks in groups.items():
-        polys.append(footprint_polygons(centres[ks], np.radians(heading[ks]), Footprint(*info.footprint_m(a))))
-    points = [PhotoPoint(float(centres[k, 0]), float(centres[k, 1]), float(heading[k]), int(line[k]))
-              for k in range(len(shots))]
-    return (shapely.union_all(np.concatenate(polys)) if polys else shapely.Polygon()), centres, points, groups
+    shots_xy = [_GroundShot(float(centres[k, 0]), float(centres[k, 1]), float(alt[k]), float(heading[k]), int(span))
+                for k, span in enumerate(_lines(heading, np.array([s.flight for s in shots], int)))]
+    if over_dem is not None:
+        from missions.terrain.reflight import ground_photos
+        gp, source = ground_photos(*over_dem, shots_xy, info), "dem"
+    else:
+        gp, source = _flat_ground(centres, alt, heading, info), "home"
+    return _measure(shots_xy, gp, source, info)
+
+
+def _flat_ground(centres: np.ndarray, alt: np.ndarray, heading: np.ndarray, info: PayloadInfo) -> Any:
+    """Footprints on flat ground at home's elevation: each photo's rectangle at its own height above home, as
+    missions.terrain.reflight's GroundPhotos (outline in its ring order), so one set of overlap measures serves
+    both grounds."""
+    import shapely
+    from missions.terrain.reflight import _RING, GroundPhotos
+    h = np.radians(heading)
+    d = np.column_stack([np.sin(h), np.cos(h)])
+    nrm = np.column_stack([np.cos(h), -np.sin(h)])
+    across, along = info.footprint_m(1.0)
+    u = (d[:, None, :] * (_RING[None, :, 0:1] * along / 2) + nrm[:, None, :] * (_RING[None, :, 1:2] * across / 2))
+    ring = centres[:, None, :] + u * np.maximum(alt, 0.0)[:, None, None]
+    closed = np.concatenate([ring, ring[:, :1]], axis=1)
+    return GroundPhotos(alt.astype(float), ring, shapely.polygons(closed) if len(alt) else np.zeros(0, object))
+
+
+def _measure(shots: Sequence[_GroundShot], gp: Any, source: str, info: PayloadInfo) -> _Measured:
+    """Union and minimum overlaps of the footprints of photos taken above the ground (missions.terrain.reflight:
+    front between consecutive photos of a line, side to the nearest photo of another line)."""
+    import shapely
+    from missions.terrain import reflight
+    centres = np.array([(p.x, p.y) for p in shots], float).reshape(-1, 2)
+    up = np.flatnonzero(gp.hag_m > 0) if len(shots) else np.zeros(0, int)
+    covered = shapely.union_all(gp.polygons[up]) if len(up) else shapely.Polygon()
+    hag = gp.hag_m[np.isfinite(gp.hag_m)] if len(shots) else np.zeros(0)
+    return _Measured(covered, centres, reflight.min_front_overlap(shots, gp, up),
+                     reflight.min_side_overlap(shots, gp, up, info),
+                     HeightsAboveGround(source, float(hag.min()) if len(hag) else None,
+                                        float(hag.max()) if len(hag) else None))
 
 
 def _gaps(geom: Any, covered: Any, proj: Any) -> tuple[Gap, ...]:
@@ -239,12 +307,16 @@ def _predicted_heading(sim_xy: np.ndarray, sim_heading: np.ndarray, xy: np.ndarr
 
 
 def _audit_step(area: AreaInfo, name: str, info: PayloadInfo, shots: Sequence[Shot], sim: Any,
-                planned_cov: float, mount: str) -> StepAudit:
+                planned_cov: float, mount: str, over_dem: Any = None,
+                expected: Sequence[Any] | None = None) -> StepAudit:
+    """`expected`: the photos this flight was to take, in the whole mission's terms (a sortie's); None: all the
+    plan's."""
     import shapely
     proj = sim.projection
     geom = area_geometry(area.area, proj)
     zones = _zones(area.area, proj)
-    predicted = [p for p in sim.photos if name in p.payloads
+    photos = sim.photos if expected is None else expected
+    predicted = [p for p in photos if name in p.payloads
                  and (area.items is None or area.items[0] <= p.item < area.items[1])]
     pred_xy = np.array([(p.x, p.y) for p in predicted], float).reshape(-1, 2)
     all_pred = [p for p in sim.photos if name in p.payloads]
@@ -257,13 +329,9 @@ def _audit_step(area: AreaInfo, name: str, info: PayloadInfo, shots: Sequence[Sh
     mine = [shots[k] for k in near]
     fallback = _predicted_heading(np.array([(p.x, p.y) for p in all_pred], float).reshape(-1, 2),
                                   np.array([p.heading_deg for p in all_pred], float), raw_xy[near])
-    covered, centres, points, groups = _footprints(mine, proj, info, area.altitude_m, fallback, mount)
+    measured = _footprints(mine, proj, info, area.altitude_m, fallback, mount, over_dem)
+    covered, centres = measured.covered, measured.centres
     cov = float(shapely.intersection(geom, covered).area / geom.area) if mine and geom.area > 0 else 0.0
-    fronts, sides = [], []
-    for a, ks in groups.items():
-        fp = Footprint(*info.footprint_m(a))
-        fronts.append(min_front_overlap([points[k] for k in ks], fp))
-        sides.append(min_side_overlap([points[k] for k in ks], fp))
     trig = area.trigger_distance_m or info.footprint_m(area.altitude_m)[1]
     missing = 0
     if len(pred_xy):
@@ -276,19 +344,21 @@ def _audit_step(area: AreaInfo, name: str, info: PayloadInfo, shots: Sequence[Sh
     if not zones.is_empty and len(centres):
         in_zones = int(shapely.contains_xy(zones, centres[:, 0], centres[:, 1]).sum())
     return StepAudit(area.step, area.kind, name, float(geom.area), area.altitude_m, len(predicted), len(mine),
-                     missing, cov, planned_cov, min((f for f in fronts if f is not None), default=None),
-                     min((s for s in sides if s is not None), default=None), area.front_overlap,
+                     missing, cov, planned_cov, measured.front_min, measured.side_min, area.front_overlap,
                      area.side_overlap, in_zones, _gaps(geom, covered, proj),
-                     Footprints(covered, centres))
+                     Footprints(covered, centres), measured.heights)
 
 
-def _flight(compiled: Compiled, log: FlightLog) -> FlightAudit:
+def _flight(compiled: Compiled, log: FlightLog, items: int | None = None) -> FlightAudit:
+    """`items`: how many mission items the flight flew (a sortie's); None: the whole mission's."""
     armed_modes = [m for m in log.modes if m.armed]
     sorties = sum(1 for a, b in zip([False] + [m.armed for m in log.modes], [m.armed for m in log.modes])
                   if b and not a)
-    seq = [s for _, s in log.mission_seq]
+    # ArduPilot numbers the uploaded items from 1 (home is its item 0), PX4 from 0: counted from 1 here
+    first = 0 if compiled.firmware == "px4" else 1
+    seq = [s - first + 1 for _, s in log.mission_seq]
     last = max(seq) if seq else None
-    n = len(compiled.items)
+    n = len(compiled.items) if items is None else items
     left: list[str] = []
     names = []
     for m in armed_modes:
@@ -314,6 +384,14 @@ def _flight(compiled: Compiled, log: FlightLog) -> FlightAudit:
     return FlightAudit(tuple(names), sorties, last, n, tuple(left))
 
 
+def sortie_photos(compiled: Compiled, sortie: Any) -> list:
+    """The photos a sortie's own re-flight takes, in the whole mission's terms (items mapped through its origin)."""
+    from missions.measure.flight import simulate
+    from missions.sorties import as_sortie, union_photos
+    sim = sortie.flight if sortie.flight is not None else simulate(as_sortie(compiled, sortie.items))
+    return union_photos(compiled, [sortie], [sim])
+
+
 def _check_same_flight(compiled: Compiled, log: FlightLog, shots: Sequence[Shot]) -> None:
     from missions.geometry.geo import great_circle_m
     lat, lon, _ = compiled.home
@@ -329,15 +407,26 @@ def _check_same_flight(compiled: Compiled, log: FlightLog, shots: Sequence[Shot]
 MOUNTS = ("gimbal", "fixed")
 
 
-def audit_flight(compiled: Compiled, log: FlightLog, plan_path: str = "", mount: str = "gimbal") -> Audit:
+def audit_flight(compiled: Compiled, log: FlightLog, plan_path: str = "", mount: str = "gimbal",
+                 images: Sequence[Any] | None = None, sortie: Any = None) -> Audit:
     """The audit of `log` against `compiled`. Raises LinkError where nothing can be said (no photo record at
     all, another flight's log). `mount`: "gimbal" (the camera looks at nadir, the footprint turns with the
-    heading only) or "fixed" (to the airframe: its logged pitch and roll move the footprint)."""
+    heading only) or "fixed" (to the airframe: its logged pitch and roll move the footprint). `images`
+    (wiris_tools.audit.images.ImageFile, the flight's folder): matched to the captures; a matched image's
+    gimbal angles place its photo's footprint instead of the log's attitude. `sortie` (missions.sorties.Sortie):
+    the log flew that sortie only: the photos missing are counted against its re-flight, the mission's progress
+    against its items; coverage stays that of the plan's whole areas."""
     from missions.measure.flight import simulate
     from missions.measure.report import report
 
-    captures = [s for s in log.captures if s.ok]
-    failed = sum(1 for s in log.captures if not s.ok)
+    all_captures, matched, oriented = list(log.captures), None, 0
+    if images is not None:
+        from wiris_tools.audit.images import match_images, oriented_by_images
+        matched = match_images(images, all_captures)
+        all_captures = oriented_by_images(all_captures, images, matched)
+        oriented = sum(1 for s in all_captures if s.oriented)
+    captures = [s for s in all_captures if s.ok]
+    failed = sum(1 for s in all_captures if not s.ok)
     if captures:
         shots, source = captures, "captures"
     elif log.triggers:
@@ -349,13 +438,17 @@ def audit_flight(compiled: Compiled, log: FlightLog, plan_path: str = "", mount:
     _check_same_flight(compiled, log, shots)
     sim = simulate(compiled)
     rep = report(compiled, sim)
+    expected = None if sortie is None else sortie_photos(compiled, sortie)
     steps = []
     for area in compiled.areas:
         for name in area.payloads:
-            planned_cov = next((r.coverage.get(name, float("nan")) for r in rep.areas if r.step == area.step),
-                               float("nan"))
-            steps.append(_audit_step(area, name, compiled.payload(name), shots, sim, planned_cov, mount))
+            planned_cov = float("nan") if sortie is not None else next(
+                (r.coverage.get(name, float("nan")) for r in rep.areas if r.step == area.step), float("nan"))
+            steps.append(_audit_step(area, name, compiled.payload(name), shots, sim, planned_cov, mount,
+                                     (compiled, sim) if compiled.terrain is not None else None, expected))
     notes = list(log.notes)
+    if oriented:
+        notes.append(f"{oriented} photo(s) placed by their image's gimbal angles (XMP) instead of the log's attitude")
     if source == "triggers":
         notes.append("no capture acknowledgements in the log: footprints are the autopilot's triggers, whether "
                      "the camera took them is unknown")
@@ -363,7 +456,15 @@ def audit_flight(compiled: Compiled, log: FlightLog, plan_path: str = "", mount:
     return Audit(plan_path or compiled.name, log.path, log.kind, source,
                  len(trig) if trig else None, len(log.captures) if log.captures else None, failed,
                  *(_pair(trig, captures) if trig and captures else ((), ())),
-                 tuple(steps), _flight(compiled, log), tuple(notes))
+                 tuple(steps), _flight(compiled, log, None if sortie is None else len(sortie.items)),
+                 tuple(notes), matched)
+
+
+def _heights_text(h: HeightsAboveGround | None) -> str:
+    if h is None or h.min_m is None:
+        return ""
+    where = "above the DEM" if h.source == "dem" else "above home (flat ground)"
+    return f"; height {h.min_m:.1f}-{h.max_m:.1f} m {where}"
 
 
 def gap_geojson(audit: Audit) -> dict:
@@ -371,7 +472,8 @@ def gap_geojson(audit: Audit) -> dict:
     return {"type": "FeatureCollection", "features": feats}
 
 
-def format_audit(audit: Audit) -> str:
+def format_audit(audit: Audit, verdict: bool = True) -> str:
+    """The audit as text; `verdict`: end with whether the plan's areas are covered (a sortie alone is not)."""
     def pct(v: float | None) -> str:
         return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{100 * v:.1f} %"
     lines = [f"audit of {audit.log} ({audit.log_kind}) against {audit.plan}",
@@ -388,7 +490,8 @@ def format_audit(audit: Audit) -> str:
                      f"missing {s.missing_planned}; coverage {pct(s.coverage)} (plan {pct(s.planned_coverage)}); "
                      f"front min {pct(s.front_min)} / {100 * s.requested_front:.0f} %, side min {pct(s.side_min)} "
                      f"/ {100 * s.requested_side:.0f} %; gaps {len(s.gaps)} ({s.gap_m2:.0f} m²)"
-                     + (f"; {s.photos_in_zones} photo(s) in no-photo zones" if s.photos_in_zones else ""))
+                     + (f"; {s.photos_in_zones} photo(s) in no-photo zones" if s.photos_in_zones else "")
+                     + _heights_text(s.heights))
     f = audit.flight
     lines.append(f"  flight: modes {' > '.join(f.modes) or 'unknown'}; last item "
                  f"{'unknown' if f.last_item is None else f.last_item} of {f.mission_items}")
@@ -399,5 +502,6 @@ def format_audit(audit: Audit) -> str:
                      f"{len(im.without_log_entry)} without a log entry, {len(im.captured_without_image)} "
                      "captured but not in the folder")
     lines += [f"  note: {n}" for n in audit.notes]
-    lines.append("  complete" if audit.complete else "  INCOMPLETE: fly the refly plan")
+    if verdict:
+        lines.append("  complete" if audit.complete else "  INCOMPLETE: fly the refly plan")
     return "\n".join(lines)

@@ -84,8 +84,10 @@ def _png(img: Any) -> bytes:
     return buf.getvalue()
 
 
-def write_audit(out_dir: str | Path, compiled: Compiled, audit: Audit, plan_path: str | None) -> list[Path]:
-    """Write the audit's files into `out_dir`; returns their paths."""
+def write_audit(out_dir: str | Path, compiled: Compiled, audit: Audit, plan_path: str | None,
+                doc: dict | None = None) -> list[Path]:
+    """Write the audit's files into `out_dir`; returns their paths. `audit` gives the gaps and the refly (the
+    union of several flights'); `doc` is NAME.audit.json when it is more than `audit` (several flights)."""
     from missions.compile import compile_plan
     from missions.formats.outputs import write_outputs
     from wiris_tools.audit.refly import refly_yaml
@@ -99,7 +101,7 @@ def write_audit(out_dir: str | Path, compiled: Compiled, audit: Audit, plan_path
             p = Path(tmp) / f"{name}-refly.yaml"
             p.write_text(refly_text, encoding="utf-8")
             refly_compiled = compile_plan(p)
-    files = {out / f"{name}.audit.json": json.dumps(audit.to_json(), indent=1).encode(),
+    files = {out / f"{name}.audit.json": json.dumps(doc or audit.to_json(), indent=1).encode(),
              out / f"{name}.gaps.geojson": json.dumps(gap_geojson(audit), indent=1).encode(),
              out / f"{name}.audit.png": audit_png(compiled, audit)}
     if refly_text is not None:

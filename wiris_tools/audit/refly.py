@@ -45,11 +45,14 @@ def _grown(rings: list, margin_m: float) -> list[list[tuple[float, float]]]:
 
 
 def _absolute(value: Any, base: Path) -> Any:
-    """Paths of area files (exclude zones) made absolute: the refly plan is written elsewhere."""
+    """Paths of files the plan names (exclude zones, the terrain block's DEMs) made absolute: the refly plan is
+    written elsewhere."""
     if isinstance(value, str) and not Path(value).is_absolute() and (base / value).exists():
         return str((base / value).resolve())
     if isinstance(value, list):
         return [_absolute(v, base) for v in value]
+    if isinstance(value, dict):
+        return {k: _absolute(v, base) for k, v in value.items()}
     return value
 
 

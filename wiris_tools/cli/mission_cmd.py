@@ -116,42 +116,49 @@ def preview_cmd(plan: str, out: str, firmware: str | None, tiles: str | None, at
 
 @mission.command("audit")
 @click.argument("plan", type=click.Path(dir_okay=False))
-@click.argument("log", type=click.Path(dir_okay=False))
+@click.argument("logs", metavar="LOG...", nargs=-1, required=True, type=click.Path(dir_okay=False))
 @click.option("-o", "--output", "out_dir", type=click.Path(file_okay=False),
               help="directory for NAME.audit.json, NAME.gaps.geojson, NAME.audit.png and the refly plan "
                    "NAME-refly.yaml with its mission in NAME-refly/")
 @click.option("--json", "as_json", is_flag=True, help="print the audit as JSON")
 @click.option("--images", "images_dir", type=click.Path(file_okay=False),
               help="the folder of the flight's JPEGs: matched to the captures by the number in their names or by "
-                   "EXIF time")
+                   "EXIF time; their XMP gimbal angles (DJI's or Pix4D's tags) place their footprints")
 @click.option("--mount", type=click.Choice(["gimbal", "fixed"]), default="gimbal", show_default=True,
               help="gimbal: the camera looks straight down; fixed: the airframe's logged pitch and roll tilt it")
 @click.option("--firmware", type=click.Choice(["ardupilot", "px4"]), help="override the plan's vehicle.firmware")
-def audit_cmd(plan: str, log: str, out_dir: str | None, as_json: bool, images_dir: str | None, mount: str,
-              firmware: str | None) -> None:
+def audit_cmd(plan: str, logs: tuple[str, ...], out_dir: str | None, as_json: bool, images_dir: str | None,
+              mount: str, firmware: str | None) -> None:
     """Audit a flight: what LOG (.tlog, DataFlash .BIN or PX4 .ulg) says was captured against PLAN.yaml --
-    coverage from the captured footprints, overlaps, missing photos, gaps, where the flight left the plan."""
+    coverage from the captured footprints, overlaps, missing photos, gaps, where the flight left the plan.
+    Several LOGs of one plan (its sorties, or a mission resumed after a battery swap) are audited each
+    against the sortie it flew and all together: the union decides what is left to refly."""
     from wiris_tools.audit.logs import read_log
     from wiris_tools.audit.measure import audit_flight, format_audit
     from wiris_tools.cli.jsonout import echo_json
 
     compiled = _compile(plan, firmware)
     with _located(plan):
-        flight_log = read_log(log)
-        result = audit_flight(compiled, flight_log, plan, mount=mount)
+        flight_logs = [read_log(log) for log in logs]
+        images = None
         if images_dir:
-            import dataclasses
-
-            from wiris_tools.audit.images import match_images, read_folder
-            result = dataclasses.replace(result, images=match_images(read_folder(images_dir), flight_log.captures))
+            from wiris_tools.audit.images import read_folder
+            images = read_folder(images_dir)
+        if len(flight_logs) == 1:
+            result = audit_flight(compiled, flight_logs[0], plan, mount=mount, images=images)
+            union, doc, text = result, result.to_json(), format_audit(result)
+        else:
+            from wiris_tools.audit.flights import audit_flights, format_multi
+            multi = audit_flights(compiled, flight_logs, plan, mount=mount, images=images)
+            union, doc, text = multi.union, multi.to_json(), format_multi(multi)
         paths = []
         if out_dir:
             from wiris_tools.audit.outputs import write_audit
-            paths = write_audit(out_dir, compiled, result, plan)
+            paths = write_audit(out_dir, compiled, union, plan, doc)
     if as_json:
-        echo_json({**result.to_json(), "written": [str(p) for p in paths]}, indent=1)
+        echo_json({**doc, "written": [str(p) for p in paths]}, indent=1)
         return
-    click.echo(format_audit(result))
+    click.echo(text)
     if paths:
         click.echo("wrote:")
         for p in paths:
