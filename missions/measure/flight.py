@@ -770,6 +770,24 @@ def _timeline(verts: Sequence[Vertex], copter: bool, radius_m: float | None = No
         t[k + 1] = t[k] + p.hold_s + max(th, tv)
     return t
 
+# A PX4 fixed-wing reaches a waypoint, and runs the DO items after it, at the larger of NAV_ACC_RAD (10 m in
+# rc.fw_defaults) and the acceptance radius its position controller publishes: NPFG's switch distance,
+# NPFG_SW_DST_MLT x the track-error bound (ground speed x NPFG_PERIOD x NPFG_DAMPING), all PX4 defaults. Measured
+# in PX4 1.16 SITL (sihsim_airplane): acceptance_radius 28.5-32.1 m at 12.7-14.3 m/s ground speed, the plane
+# flying its lines at 13.8 m/s for DO_CHANGE_SPEED 15 (true airspeed 13.7 m/s, no wind).
+PX4_FW_NAV_ACC_RAD_M = 10.0
+PX4_NPFG_SWITCH_S = 0.32 * 10.0 * 0.7
+PX4_FW_GROUND_SPEED_RATIO = 0.92
+
+
+def px4_do_item_lead_m(frame: str, speed_mps: float) -> float:
+    """How far before a waypoint PX4 counts it reached and runs the DO items after it: NAV_ACC_RAD on a
+    multicopter, NPFG's switch distance at the ground speed it flies for `speed_mps` on a fixed-wing."""
+    if frame == "copter":
+        return PX4_ACCEPTANCE_M
+    return max(PX4_FW_NAV_ACC_RAD_M, PX4_NPFG_SWITCH_S * PX4_FW_GROUND_SPEED_RATIO * speed_mps)
+
+
 # --------------------------------------------------------------------------------------------- placing photos
 
 class _Shot(NamedTuple):
@@ -807,7 +825,7 @@ def _photos(compiled: Compiled, verts: Sequence[Vertex], times: np.ndarray, flig
     path = _Path.of(verts, times)
     shots: list[_Shot] = []
     span_id = _distance_photos(path, flight.distance_spans, flight.trigger_payloads, shots, 0,
-                               px4=compiled.firmware == "px4")
+                               px4=compiled.firmware == "px4", frame=compiled.frame)
     span_id = _interval_photos(path, flight.interval_spans, shots, span_id)
     span_id = _single_photos(path, flight.singles, shots, span_id)
     _self_triggered_photos(compiled, path, shots, span_id)
@@ -845,11 +863,12 @@ def px4_trigger_spacing_m(distance_m: float, speed_mps: float) -> float:
 
 
 def _distance_photos(path: _Path, spans: Sequence[DistanceSpan], payloads: tuple[str, ...], shots: list[_Shot],
-                     span_id: int, *, px4: bool = False) -> int:
+                     span_id: int, *, px4: bool = False, frame: str = "copter") -> int:
     """Distance triggering, re-run as the firmware fires it; returns the next span id. PX4 shoots once whenever
     the trigger is switched on (update_distance's first valid position, or param3's one shot: never both),
-    flies px4_trigger_spacing_m, and runs the DO items after a waypoint when it comes within PX4_ACCEPTANCE_M
-    of it: every shot of the span comes that much earlier along the line (measured: 2.0 m median offset)."""
+    flies px4_trigger_spacing_m, and runs the DO items after a waypoint when it comes within px4_do_item_lead_m
+    of it: every shot of the span comes that much earlier along the line (measured: 2.0 m median offset on a
+    multicopter; on a plane NPFG's switch distance, about 30 m)."""
     verts, times, xy, alts, holds = path
     for span in spans:
         d, at_start = span.distance_m, span.shoot_at_start
@@ -868,8 +887,9 @@ def _distance_photos(path: _Path, spans: Sequence[DistanceSpan], payloads: tuple
         depart = times[k] + holds[k]
         tt = np.where(k >= len(times) - 1, times[-1], depart + f * (times[k1] - depart)).tolist()
         if px4:
-            pts = [p._replace(x=p.x - PX4_ACCEPTANCE_M * math.sin(math.radians(p.heading_deg)),
-                              y=p.y - PX4_ACCEPTANCE_M * math.cos(math.radians(p.heading_deg))) for p in pts]
+            lead = px4_do_item_lead_m(frame, spd)
+            pts = [p._replace(x=p.x - lead * math.sin(math.radians(p.heading_deg)),
+                              y=p.y - lead * math.cos(math.radians(p.heading_deg))) for p in pts]
         for j, p in enumerate(pts):
             if span.start == span.end:      # on and off at one vertex: the photos are taken there
                 hd, nav = _vertex_heading(verts, seg_idx[j], p.heading_deg), verts[span.start].item

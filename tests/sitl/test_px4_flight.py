@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 from click.testing import CliRunner
 
@@ -115,7 +116,11 @@ mission:
 
 def test_px4_plane_survey_flies_on_sihsim_airplane(px4_dir, tmp_path):
     # NAME.params sets MIS_TKO_LAND_REQ 0 for a fixed-wing mission ending in RTL: with PX4's fixed-wing
-    # default (2) the mission is rejected ("Landing waypoint/pattern required") and arming refused
+    # default (2) the mission is rejected ("Landing waypoint/pattern required") and arming refused.
+    # A PX4 plane runs the DO items after a waypoint NPFG's switch distance (about 30 m here) before it, so
+    # each line's shots start and stop that much early (the report places them there: px4_do_item_lead_m);
+    # the first shot of a line comes while the plane is still closing onto the line after its turn
+    # (6-9 m across it measured), the others within a few metres
     path = tmp_path / "plane.yaml"
     path.write_text(PLANE, encoding="utf-8")
     _compile(path, tmp_path / "out")
@@ -123,9 +128,18 @@ def test_px4_plane_survey_flies_on_sihsim_airplane(px4_dir, tmp_path):
         fired = flight.trigger_shots()
         assert flight.sitl.get_param("MIS_TKO_LAND_REQ") == 0.0
         logs = flight.sitl.ulogs()
-    predicted = len(simulate(compile_plan(path)).photos)
+        images = _positions(flight.photos)
+    compiled = compile_plan(path)
+    check = check_photos(compiled, "thermal", shots(images))
     assert flight.upload["verified"]
     assert logs and logs[-1].stat().st_size > 100_000
-    # flown through take-off, the lines and RTL to the loiter over home, the camera triggered on the lines
-    # (where the shots fall is not held to the report: see the module docstring of px4_flight)
-    assert fired > predicted // 2, (fired, predicted)
+    assert abs(fired - check.predicted) <= max(2, 0.01 * check.predicted), (fired, check)
+    assert check.count_ok, check
+    assert check.coverage_captured >= check.coverage_predicted - 0.005, check
+    assert check.median_offset_m < 3.0 and check.worst_offset_m < 10.0, check
+    sim = simulate(compiled)
+    proj = sim.projection
+    taken = np.array([proj.point_to_xy(lat, lon) for lat, lon, _ in shots(images)])
+    on_line = [(p.x, p.y) for p, q in zip(sim.photos[1:], sim.photos) if p.span == q.span]
+    off = [float(np.min(np.hypot(*(taken - xy).T))) for xy in on_line]
+    assert max(off) < 5.0, sorted(off)[-5:]
