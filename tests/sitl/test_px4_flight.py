@@ -114,6 +114,11 @@ mission:
 """
 
 
+# the two commands of a shot (and a resend) reach the camera up to a few hundred ms apart on a loaded machine:
+# 12-15 m/s carries a plane several metres in that, well under its 32 m trigger spacing
+PLANE_SAME_SHOT_M = 10.0
+
+
 def test_px4_plane_survey_flies_on_sihsim_airplane(px4_dir, tmp_path):
     # NAME.params sets MIS_TKO_LAND_REQ 0 for a fixed-wing mission ending in RTL: with PX4's fixed-wing
     # default (2) the mission is rejected ("Landing waypoint/pattern required") and arming refused.
@@ -130,16 +135,46 @@ def test_px4_plane_survey_flies_on_sihsim_airplane(px4_dir, tmp_path):
         logs = flight.sitl.ulogs()
         images = _positions(flight.photos)
     compiled = compile_plan(path)
-    check = check_photos(compiled, "thermal", shots(images))
+    check = check_photos(compiled, "thermal", shots(images, within_m=PLANE_SAME_SHOT_M))
     assert flight.upload["verified"]
     assert logs and logs[-1].stat().st_size > 100_000
     assert abs(fired - check.predicted) <= max(2, 0.01 * check.predicted), (fired, check)
     assert check.count_ok, check
     assert check.coverage_captured >= check.coverage_predicted - 0.005, check
     assert check.median_offset_m < 3.0 and check.worst_offset_m < 10.0, check
+    from pyulog import ULog
+    status = ULog(str(log), ["vehicle_status"]).data_list[0].data
+    assert set(status["vehicle_type"].tolist()) >= {1, 2}       # it flew as a rotary wing and as a fixed-wing
     sim = simulate(compiled)
     proj = sim.projection
-    taken = np.array([proj.point_to_xy(lat, lon) for lat, lon, _ in shots(images)])
+    taken = np.array([proj.point_to_xy(lat, lon) for lat, lon, _ in shots(images, within_m=PLANE_SAME_SHOT_M)])
     on_line = [(p.x, p.y) for p, q in zip(sim.photos[1:], sim.photos) if p.span == q.span]
     off = [float(np.min(np.hypot(*(taken - xy).T))) for xy in on_line]
     assert max(off) < 5.0, sorted(off)[-5:]
+
+
+def test_px4_vtol_survey_flies_on_sihsim_standard_vtol(px4_dir, tmp_path):
+    # VTOL take-off, the transition to fixed-wing, the lines flown fixed-wing, RTL. The plan's 12 m/s is the
+    # airframe's FW_AIRSPD_MAX (PX4 clips DO_CHANGE_SPEED to it: at 15 m/s planned it flew 11.5 m/s and every
+    # shot came 3-7 m later than the report put it); the trigger items run NPFG's switch distance early, as
+    # on a plane
+    path = tmp_path / "vtol.yaml"
+    path.write_text(PLANE.replace("frame: plane, speed_mps: 15", "frame: vtol, speed_mps: 12")
+                    .replace("name: plane", "name: vtol"), encoding="utf-8")
+    _compile(path, tmp_path / "out")
+    # at 12 m/s and 6x the 4 kB/s payload link lost shots on a loaded machine (66 of 75 heard): 4x, and the
+    # shots PX4 fired counted from its ULog
+    with fly_compiled_px4(px4_dir, tmp_path / "out", "vtol", vehicle="vtol", workdir=tmp_path / "px4",
+                          speedup=4.0) as flight:
+        images = _positions(flight.photos)
+        log = flight.sitl.ulogs()[-1]
+    from pyulog import ULog
+    topics = {d.name: d.data for d in ULog(str(log), ["vehicle_status", "camera_trigger"]).data_list}
+    fired = len({int(s) for s in topics["camera_trigger"]["seq"]})
+    check = check_photos(compile_plan(path), "thermal", shots(images, within_m=PLANE_SAME_SHOT_M))
+    assert flight.upload["verified"]
+    assert set(topics["vehicle_status"]["vehicle_type"].tolist()) >= {1, 2}   # flown as rotary and fixed wing
+    assert abs(fired - check.predicted) <= max(2, 0.01 * check.predicted), (fired, check)
+    assert check.count_ok, check
+    assert check.coverage_captured >= check.coverage_predicted - 0.005, check
+    assert check.median_offset_m < 3.0 and check.worst_offset_m < 10.0, check
