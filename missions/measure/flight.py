@@ -40,8 +40,8 @@ How the items are flown (the model, stated so it can be checked):
   stops at turns of 90° and more, at holds and where the path turns vertical); a plane keeps its speed, and
   so does a VTOL between its vertical take-off and landing (it flies the mission fixed-wing).
   A PX4 multicopter is timed at PX4_MC_TRACKED_SPEED_RATIO of the commanded speed (its position smoothing
-  slows down while the vehicle lags it; measured in SITL). Climbs and descents are limited to CLIMB_MPS / DESCENT_MPS, the last LAND_FINAL_M of a landing to
-  LAND_MPS. Holds (NAV_WAYPOINT param1 on multirotors, LOITER_TIME, NAV_DELAY) add their time.
+  slows down while the vehicle lags it; measured in SITL). Climbs and descents are limited to CLIMB_MPS /
+  DESCENT_MPS, the last LAND_FINAL_M of a landing to LAND_MPS. Holds (NAV_WAYPOINT param1 on multirotors, LOITER_TIME, NAV_DELAY) add their time.
   For comparison `flight_time_qgc_s` is QGroundControl's statistic (MissionController: horizontal distance /
   cruise speed + hold times, no acceleration, no climbs); Mission Planner shows distance / (0.8·speed).
   Our model is longer than QGC's on every survey with turns — that is the point of it.
@@ -776,7 +776,7 @@ def _timeline(verts: Sequence[Vertex], copter: bool, radius_m: float | None = No
 # in PX4 1.16 SITL (sihsim_airplane): acceptance_radius 28.5-32.1 m at 12.7-14.3 m/s ground speed, the plane
 # flying its lines at 13.8 m/s for DO_CHANGE_SPEED 15 (true airspeed 13.7 m/s, no wind).
 PX4_FW_NAV_ACC_RAD_M = 10.0
-PX4_NPFG_SWITCH_S = 0.32 * 10.0 * 0.7
+PX4_NPFG_SWITCH_S = 0.32 * 10.0 * 0.7          # NPFG_SW_DST_MLT x NPFG_PERIOD x NPFG_DAMPING: 2.24 s of travel
 PX4_FW_GROUND_SPEED_RATIO = 0.92
 
 
