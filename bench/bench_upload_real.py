@@ -1,12 +1,13 @@
 #!/usr/bin/env python3
 """Mission upload through bench/relay.py into real mission servers: ours vs MAVSDK's uploader vs the bound.
 
-    WIRIS_SITL_DIR=/work/shared/sitl .venv/bin/python bench/bench_upload_real.py [--servers mavsdk,sitl]
+    WIRIS_SITL_DIR=/work/shared/sitl WIRIS_PX4_SITL_DIR=/work/shared/px4-sitl .venv/bin/python \
+        bench/bench_upload_real.py [--servers mavsdk,sitl,px4]
         [--items 100] [--seed 25]
 
-Servers: MAVSDK 4.1.0's mission_raw_server (in a child process, tests/mission_peers.py) and ArduPilot SITL
+Servers: MAVSDK 4.1.0's mission_raw_server (in a child process, tests/mission_peers.py), ArduPilot SITL
 arducopter at speedup 1 (its mission protocol timers run in real time), reached through its SERIAL2 as a UDP
-client of the relay. Link: bench/relay.py, 57600 baud 8N1 each way, 20 ms each way, the loss on both
+client of the relay, and PX4 SITL (WIRIS_PX4_SITL_DIR) at speedup 1 on its payload link. Link: bench/relay.py, 57600 baud 8N1 each way, 20 ms each way, the loss on both
 directions from the same seed for both uploaders. Ours: `wiris mission upload FILE.plan --json` (its own
 upload time); MAVSDK: MissionRaw.upload_mission (the time of the call). Bound: bench_upload.lower_bound_s,
 the bytes of the strict ping-pong at 57600 baud plus 2n+2 one-way latencies. ArduPilot gets n+1 items on
@@ -38,6 +39,8 @@ from wiris_tools.readback import compare_items  # noqa: E402
 from wiris_tools.transfer import home_item  # noqa: E402
 
 SITL_UPLOAD_TIMEOUT_S = 10.0
+# MavlinkMissionManager's transfer timeout (MAVLINK_MISSION_PROTOCOL_TIMEOUT_DEFAULT, 5 s) with a margin
+PX4_UPLOAD_TIMEOUT_S = 7.0
 
 
 def ours(plan: Path, relay_port: int) -> tuple[float | None, str]:
@@ -130,13 +133,53 @@ class SitlVehicle:
         self.relay.close()
 
 
+class Px4Vehicle:
+    """One PX4 SITL (SIH quad, speedup 1: its mission timers run in simulated time) for all runs, reached on its
+    payload link (PX4 listens on 14280+N and answers the first address it hears from: the relay's vehicle
+    side); a fresh loss stream per upload. The link's streams are turned off through the relay before the
+    first run, so the radio carries the mission protocol and heartbeats only."""
+    name = "PX4 SITL (sihsim_quadx)"
+    home_row = False
+
+    def __init__(self) -> None:
+        from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+        from wiris_tools.link import Link
+        from wiris_tools.sitl import SitlOptions, find_px4_dir, start_sitl
+        from wiris_tools.sitl.px4 import ports
+        self.sitl = start_sitl("px4", find_px4_dir(near=ROOT), SitlOptions(speedup=1))
+        self.sitl.wait_ready(timeout=120)
+        self.relay = Relay(ports(self.sitl.instance)["payload"], loss=0.0, baud=BAUD, latency_s=LATENCY_S)
+        with Link(f"udpout:127.0.0.1:{self.relay.port}") as link:
+            # PX4 learns the relay as its peer from the first packet
+            link.send(link.mav.heartbeat_encode(mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0, 0))
+            self.sitl.quieten(link)
+
+    def run(self, upload, loss: float, seed: int, sent) -> tuple[float | None, str]:
+        from relay import _Direction
+        import random
+        r = self.relay
+        r.loss = loss
+        r.up = _Direction(random.Random(f"{seed}-up"))
+        r.down = _Direction(random.Random(f"{seed}-down"))
+        r.gcs_peer = None
+        seconds, status = upload(r.port)
+        if status != "ok":
+            time.sleep(PX4_UPLOAD_TIMEOUT_S)    # PX4 drops a half-done transfer after its own timeout
+        return seconds, status
+
+    def close(self) -> None:
+        self.sitl.close()
+        self.relay.close()
+
+
 def fmt(v: float | None) -> str:
     return "fail" if v is None else f"{v:.2f}"
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--servers", default="mavsdk,sitl")
+    ap.add_argument("--servers", default="mavsdk,sitl,px4")
     ap.add_argument("--items", type=int, default=100)
     ap.add_argument("--seed", type=int, default=25)
     ap.add_argument("--losses", default="0,5,20", help="loss levels in percent")
@@ -149,7 +192,8 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="bench-upload-real-") as tmp:
         scratch = Path(tmp)
         for name in a.servers.split(","):
-            vehicle = MavsdkVehicle(scratch) if name == "mavsdk" else SitlVehicle()
+            vehicle = (MavsdkVehicle(scratch) if name == "mavsdk" else Px4Vehicle() if name == "px4"
+                       else SitlVehicle())
             try:
                 body = mission(a.items)
                 if vehicle.home_row:

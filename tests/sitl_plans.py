@@ -44,6 +44,16 @@ STEPS = {
       trigger: distance
   - rtl: {{}}
 """,
+    "interval": """\
+  - takeoff: {{alt_m: 40}}
+  - survey:
+      area: {field}
+      payloads: [thermal]
+      altitude_m: 40
+      overlap: {{front: 75, side: 60}}
+      trigger: interval
+  - rtl: {{}}
+""",
     "corridor": """\
   - takeoff: {{alt_m: 40}}
   - corridor:

@@ -22,7 +22,9 @@ How the items are flown (the model, stated so it can be checked):
   travel longer), and it shoots once on every switch-on whatever param3 says. IMAGE_START_CAPTURE with one image,
   DO_DIGICAM_CONTROL(shoot) and a trigger-once take one photo there; IMAGE_START_CAPTURE with an interval
   takes photos by time along the simulated timeline until IMAGE_STOP_CAPTURE; so does PX4's interval trigger
-  (DO_SET_CAM_TRIGG_INTERVAL sets the interval, DO_TRIGGER_CONTROL starts/pauses/stops it).
+  (DO_SET_CAM_TRIGG_INTERVAL sets the interval, DO_TRIGGER_CONTROL starts/pauses/stops it): camera_trigger's
+  update_intervalometer schedules the first shot at once when enabled, then one every interval until a
+  DO_TRIGGER_CONTROL stops it (measured: the first shot 60 ms after the item ran).
 * Which camera: a photo from the autopilot's trigger (distance, interval, DIGICAM) fires the payloads the
   plan surveys with that the trigger reaches — on ArduPilot its camera instances (every payload but a RedEdge,
   which is no AP_Camera backend), on PX4 every camera component (camera_trigger over MAVLink).
@@ -37,8 +39,9 @@ How the items are flown (the model, stated so it can be checked):
   speed from the plan or the last DO_CHANGE_SPEED). A multirotor slows at a corner to speed·cos(turn) (it
   stops at turns of 90° and more, at holds and where the path turns vertical); a plane keeps its speed, and
   so does a VTOL between its vertical take-off and landing (it flies the mission fixed-wing).
-  Climbs and descents are limited to CLIMB_MPS / DESCENT_MPS, the last LAND_FINAL_M of a landing to
-  LAND_MPS. Holds (NAV_WAYPOINT param1 on multirotors, LOITER_TIME, NAV_DELAY) add their time.
+  A PX4 multicopter is timed at PX4_MC_TRACKED_SPEED_RATIO of the commanded speed (its position smoothing
+  slows down while the vehicle lags it; measured in SITL). Climbs and descents are limited to CLIMB_MPS /
+  DESCENT_MPS, the last LAND_FINAL_M of a landing to LAND_MPS. Holds (NAV_WAYPOINT param1 on multirotors, LOITER_TIME, NAV_DELAY) add their time.
   For comparison `flight_time_qgc_s` is QGroundControl's statistic (MissionController: horizontal distance /
   cruise speed + hold times, no acceleration, no climbs); Mission Planner shows distance / (0.8·speed).
   Our model is longer than QGC's on every survey with turns — that is the point of it.
@@ -70,6 +73,13 @@ DESCENT_MPS = 1.5
 LAND_MPS = 0.5
 LAND_FINAL_M = 10.0
 RTL_ALT_M = 15.0
+# PX4's multicopter flies its lines slower than the cruise speed it is given: its position smoothing slows the
+# trajectory in proportion to how far the vehicle lags behind it (PositionSmoothing's time stretch against
+# MPC_XY_ERR_MAX, 2 m), and a vehicle tracking a moving setpoint always lags a little. Measured in PX4 1.16 SITL
+# (SIH quad, 5 m/s commanded): 95.8 m lines flown in 20.8-21.4 s with the trajectory's speed at 5.0 m/s and the
+# vehicle at 4.0 rising to 4.95; timed at this ratio of the commanded speed the model gives 21.3 s.
+# Only the timeline uses it (interval triggering, flight time); distance triggering is positional.
+PX4_MC_TRACKED_SPEED_RATIO = 0.9
 # A DO_JUMP loop is followed at most this many items: an infinite repeat is reported, not simulated forever.
 MAX_SIMULATED_ITEMS = 2_000_000
 
@@ -600,7 +610,8 @@ def _simulate(compiled: Compiled) -> Simulation:
     flight.fly()
     proj = flight.proj
     verts = _yaws_in_plane(_mark_stops(flight.verts, flight.copter), proj)
-    times = _timeline(verts, flight.copter, None if flight.copter else compiled.turn_radius_m)
+    times = _timeline(_px4_tracked(verts) if flight.copter and compiled.firmware == "px4" else verts,
+                      flight.copter, None if flight.copter else compiled.turn_radius_m)
     photos = _photos(compiled, verts, times, flight, proj)
     xy = np.array([(v.x, v.y) for v in verts], dtype=float)
     seg = np.hypot(*np.diff(xy, axis=0).T) if len(xy) > 1 else np.zeros(0)
@@ -614,6 +625,12 @@ def _simulate(compiled: Compiled) -> Simulation:
         vertex_times_s=tuple(times.tolist()), trigger_intervals=tuple(_trigger_intervals(compiled, flight, verts)),
         notes=tuple(flight.notes), ends_on_ground=flight.on_ground,
         camera_on=tuple(CameraOn(s.start, s.end) for s in spans))
+
+
+def _px4_tracked(verts: Sequence[Vertex]) -> list[Vertex]:
+    """The vertices at the speed a PX4 multicopter really flies for the speed commanded
+    (PX4_MC_TRACKED_SPEED_RATIO)."""
+    return [replace(v, speed_mps=v.speed_mps * PX4_MC_TRACKED_SPEED_RATIO) for v in verts]
 
 
 def _qgc_flight_time(compiled: Compiled, verts: Sequence[Vertex], seg: np.ndarray) -> float:
@@ -753,6 +770,24 @@ def _timeline(verts: Sequence[Vertex], copter: bool, radius_m: float | None = No
         t[k + 1] = t[k] + p.hold_s + max(th, tv)
     return t
 
+# A PX4 fixed-wing reaches a waypoint, and runs the DO items after it, at the larger of NAV_ACC_RAD (10 m in
+# rc.fw_defaults) and the acceptance radius its position controller publishes: NPFG's switch distance,
+# NPFG_SW_DST_MLT x the track-error bound (ground speed x NPFG_PERIOD x NPFG_DAMPING), all PX4 defaults. Measured
+# in PX4 1.16 SITL (sihsim_airplane): acceptance_radius 28.5-32.1 m at 12.7-14.3 m/s ground speed, the plane
+# flying its lines at 13.8 m/s for DO_CHANGE_SPEED 15 (true airspeed 13.7 m/s, no wind).
+PX4_FW_NAV_ACC_RAD_M = 10.0
+PX4_NPFG_SWITCH_S = 0.32 * 10.0 * 0.7          # NPFG_SW_DST_MLT x NPFG_PERIOD x NPFG_DAMPING: 2.24 s of travel
+PX4_FW_GROUND_SPEED_RATIO = 0.92
+
+
+def px4_do_item_lead_m(frame: str, speed_mps: float) -> float:
+    """How far before a waypoint PX4 counts it reached and runs the DO items after it: NAV_ACC_RAD on a
+    multicopter, NPFG's switch distance at the ground speed it flies for `speed_mps` on a fixed-wing."""
+    if frame == "copter":
+        return PX4_ACCEPTANCE_M
+    return max(PX4_FW_NAV_ACC_RAD_M, PX4_NPFG_SWITCH_S * PX4_FW_GROUND_SPEED_RATIO * speed_mps)
+
+
 # --------------------------------------------------------------------------------------------- placing photos
 
 class _Shot(NamedTuple):
@@ -790,7 +825,7 @@ def _photos(compiled: Compiled, verts: Sequence[Vertex], times: np.ndarray, flig
     path = _Path.of(verts, times)
     shots: list[_Shot] = []
     span_id = _distance_photos(path, flight.distance_spans, flight.trigger_payloads, shots, 0,
-                               px4=compiled.firmware == "px4")
+                               px4=compiled.firmware == "px4", frame=compiled.frame)
     span_id = _interval_photos(path, flight.interval_spans, shots, span_id)
     span_id = _single_photos(path, flight.singles, shots, span_id)
     _self_triggered_photos(compiled, path, shots, span_id)
@@ -828,11 +863,12 @@ def px4_trigger_spacing_m(distance_m: float, speed_mps: float) -> float:
 
 
 def _distance_photos(path: _Path, spans: Sequence[DistanceSpan], payloads: tuple[str, ...], shots: list[_Shot],
-                     span_id: int, *, px4: bool = False) -> int:
+                     span_id: int, *, px4: bool = False, frame: str = "copter") -> int:
     """Distance triggering, re-run as the firmware fires it; returns the next span id. PX4 shoots once whenever
     the trigger is switched on (update_distance's first valid position, or param3's one shot: never both),
-    flies px4_trigger_spacing_m, and runs the DO items after a waypoint when it comes within PX4_ACCEPTANCE_M
-    of it: every shot of the span comes that much earlier along the line (measured: 2.0 m median offset)."""
+    flies px4_trigger_spacing_m, and runs the DO items after a waypoint when it comes within px4_do_item_lead_m
+    of it: every shot of the span comes that much earlier along the line (measured: 2.0 m median offset on a
+    multicopter; on a plane NPFG's switch distance, about 30 m)."""
     verts, times, xy, alts, holds = path
     for span in spans:
         d, at_start = span.distance_m, span.shoot_at_start
@@ -851,8 +887,9 @@ def _distance_photos(path: _Path, spans: Sequence[DistanceSpan], payloads: tuple
         depart = times[k] + holds[k]
         tt = np.where(k >= len(times) - 1, times[-1], depart + f * (times[k1] - depart)).tolist()
         if px4:
-            pts = [p._replace(x=p.x - PX4_ACCEPTANCE_M * math.sin(math.radians(p.heading_deg)),
-                              y=p.y - PX4_ACCEPTANCE_M * math.cos(math.radians(p.heading_deg))) for p in pts]
+            lead = px4_do_item_lead_m(frame, spd)
+            pts = [p._replace(x=p.x - lead * math.sin(math.radians(p.heading_deg)),
+                              y=p.y - lead * math.cos(math.radians(p.heading_deg))) for p in pts]
         for j, p in enumerate(pts):
             if span.start == span.end:      # on and off at one vertex: the photos are taken there
                 hd, nav = _vertex_heading(verts, seg_idx[j], p.heading_deg), verts[span.start].item

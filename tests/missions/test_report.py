@@ -233,10 +233,11 @@ def test_px4_interval_trigger_shoots_only_while_enabled(tmp_path):
     # no photo on the climb, the transit or the way home: all at survey altitude, inside the legs' spans
     assert sim.photos and all(abs(p.alt_m - 40.0) < 1e-6 for p in sim.photos)
     assert rep.coverage["thermal"] >= 0.995
-    # on a straight leg at cruise speed, consecutive photos are speed x interval apart
+    # on a straight leg, consecutive photos are the speed PX4 flies (missions.measure.flight) x interval apart
+    from missions.measure.flight import PX4_MC_TRACKED_SPEED_RATIO
     interval = next(it.param1 for it in c.items if it.command == mavlink.MAV_CMD_DO_SET_CAM_TRIGG_INTERVAL) / 1000
     gaps = [math.hypot(b.x - a.x, b.y - a.y) for a, b in zip(sim.photos, sim.photos[1:]) if a.span == b.span]
-    assert max(gaps) == pytest.approx(5.0 * interval, rel=0.02)
+    assert max(gaps) == pytest.approx(5.0 * PX4_MC_TRACKED_SPEED_RATIO * interval, rel=0.02)
 
 
 def test_a_digicam_shot_fires_while_the_px4_trigger_is_stopped(tmp_path):
@@ -289,7 +290,8 @@ def test_a_vtol_keeps_its_speed_through_turns(frame):
     # off and land vertically
     from missions.geometry.geo import LocalProjection
     from missions.emit.items import FRAME_GLOBAL_RELATIVE_ALT, MissionItem, deg_to_e7
-    from missions.measure.flight import ACCEL_MPS2, CLIMB_MPS, DESCENT_MPS, LAND_FINAL_M, LAND_MPS
+    from missions.measure.flight import (ACCEL_MPS2, CLIMB_MPS, DESCENT_MPS, LAND_FINAL_M, LAND_MPS,
+                                         PX4_MC_TRACKED_SPEED_RATIO)
     home = (50.0, 14.0, 300.0)
     proj = LocalProjection(home[0], home[1])
     takeoff, land = ((mavlink.MAV_CMD_NAV_TAKEOFF, mavlink.MAV_CMD_NAV_LAND) if frame == "copter" else
@@ -302,7 +304,9 @@ def test_a_vtol_keeps_its_speed_through_turns(frame):
     items.append(MissionItem(land, FRAME_GLOBAL_RELATIVE_ALT))
     items = tuple(items)
     c = Compiled("corner", "px4", frame, home, 15.0, items, (items,), 500, (THERMAL,), (), ())
-    v, a = 15.0, ACCEL_MPS2 if frame == "copter" else 2 * ACCEL_MPS2
+    # a PX4 multicopter is timed at the speed it tracks, below the commanded (missions.measure.flight)
+    v = 15.0 * (PX4_MC_TRACKED_SPEED_RATIO if frame == "copter" else 1.0)
+    a = ACCEL_MPS2 if frame == "copter" else 2 * ACCEL_MPS2
     corner = v / a if frame == "copter" else 0.0
     expected = (30 / CLIMB_MPS + 1200 / v + v / a + corner
                 + (30 - LAND_FINAL_M) / DESCENT_MPS + LAND_FINAL_M / LAND_MPS)

@@ -10,15 +10,8 @@ its arguments minus `-w`, so stored parameters (eeprom.bin) survive it and the m
 from __future__ import annotations
 
 import contextlib
-import errno
 import io
-import fcntl
-import os
-import signal
-import socket
 import subprocess
-import tempfile
-import threading
 import time
 from pathlib import Path
 from typing import Mapping
@@ -28,13 +21,12 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from wiris_tools.errors import CommandRefused, LinkError, NoAnswer
 from wiris_tools.link import Link
-from wiris_tools.sitl.monitor import MonitorRecord
 from wiris_tools.sitl import SitlOptions
+from wiris_tools.sitl.process import Instances, InstanceLock, SitlProcess, tcp_port_free
 
 FIRST_INSTANCE = 10            # leave 0..9 to people starting SITL by hand
 LAST_INSTANCE = 59
 MONITOR_STREAM_HZ = 10
-STOP_GRACE_S = 5.0
 
 # EKF_STATUS_REPORT flags that together mean "a position estimate good enough to arm and fly a mission"
 EKF_READY = (mavlink2.EKF_ATTITUDE | mavlink2.EKF_VELOCITY_HORIZ | mavlink2.EKF_VELOCITY_VERT
@@ -48,44 +40,11 @@ def _ports(instance: int) -> tuple[int, int, int]:
     return base, base + 2, base + 3
 
 
-def _tcp_port_free(port: int) -> bool:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        try:
-            s.bind(("127.0.0.1", port))
-        except OSError:
-            return False
-    return True
+INSTANCES = Instances("wiris-sitl-ardupilot", FIRST_INSTANCE, LAST_INSTANCE, _ports, tcp_port_free, "SITL",
+                      "stop SITL processes left running (ps -ef | grep arducopter)")
 
 
-class _InstanceLock:
-    """An instance number held through a lock file, so two harnesses (or test processes) never pick the same."""
-
-    def __init__(self) -> None:
-        order = list(range(FIRST_INSTANCE, LAST_INSTANCE + 1))
-        start = os.getpid() % len(order)          # spread concurrent starters over the range
-        for n in order[start:] + order[:start]:
-            path = Path(tempfile.gettempdir()) / f"wiris-sitl-ardupilot-{n}.lock"
-            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except OSError as err:
-                os.close(fd)
-                if err.errno in (errno.EAGAIN, errno.EACCES):
-                    continue
-                raise
-            if all(_tcp_port_free(p) for p in _ports(n)):
-                self.instance, self._fd = n, fd
-                return
-            os.close(fd)
-        raise LinkError(f"no free SITL instance in {FIRST_INSTANCE}..{LAST_INSTANCE}",
-                        hint="stop SITL processes left running (ps -ef | grep arducopter)")
-
-    def release(self) -> None:
-        os.close(self._fd)
-
-
-class ArduPilotSitl(MonitorRecord):
+class ArduPilotSitl(SitlProcess):
     """One ArduPilot SITL process (see the package docstring for the interface)."""
 
     firmware = "ardupilot"
@@ -96,13 +55,8 @@ class ArduPilotSitl(MonitorRecord):
         self.options = options
         self.vehicle = options.vehicle
         self._own_workdir = options.workdir is None
-        self.workdir = Path(options.workdir or tempfile.mkdtemp(prefix="wiris-sitl-")).resolve()
-        self.workdir.mkdir(parents=True, exist_ok=True)
-        self.tlog = self.workdir / "gcs.tlog"
-        self._tlog_file = open(self.tlog, "ab")
-        self._tlog_lock = threading.Lock()
-        self._statustext: list[str] = []
-        self._lock = _InstanceLock()
+        self._open_workdir(options.workdir, prefix="wiris-sitl-")
+        self._lock = InstanceLock(INSTANCES)
         self.instance = self._lock.instance
         if options.camera_serial not in (1, 2):
             raise LinkError(f"camera on SERIAL{options.camera_serial}", hint="SITL's camera link is SERIAL1 or SERIAL2")
@@ -110,8 +64,6 @@ class ArduPilotSitl(MonitorRecord):
         tools = serial1 if options.camera_serial == 2 and options.camera_port is not None else serial2
         self.gcs_url = f"tcp:127.0.0.1:{tools}"
         self._monitor_url = f"tcp:127.0.0.1:{monitor}"
-        self._link: Link | None = None
-        self._proc: subprocess.Popen | None = None
         try:
             self._proc = self._spawn(sitl_dir)
             self._connect()
@@ -139,9 +91,6 @@ class ArduPilotSitl(MonitorRecord):
                                     start_new_session=True)
         finally:
             out.close()
-
-    def _alive(self) -> bool:
-        return self._proc is not None and self._proc.poll() is None
 
     def _connect(self, timeout: float = 30.0) -> None:
         """Open the monitor link on serial0 (SITL accepts one client there) and ask for its streams."""
@@ -304,29 +253,3 @@ class ArduPilotSitl(MonitorRecord):
     # -- results -----------------------------------------------------------------------------------
     def dataflash_logs(self) -> list[Path]:
         return sorted((self.workdir / "logs").glob("*.BIN"))
-
-    # -- stopping ----------------------------------------------------------------------------------
-    def close(self) -> None:
-        if self._link is not None:
-            self._link.close()
-            self._link = None
-        if self._proc is not None and self._proc.poll() is None:
-            try:
-                os.killpg(self._proc.pid, signal.SIGTERM)
-                self._proc.wait(STOP_GRACE_S)
-            except subprocess.TimeoutExpired:
-                os.killpg(self._proc.pid, signal.SIGKILL)
-                self._proc.wait()
-            except ProcessLookupError:
-                pass
-        with self._tlog_lock:
-            self._tlog_file.close()
-        if getattr(self, "_lock", None) is not None:
-            self._lock.release()
-            self._lock = None
-
-    def __enter__(self) -> "ArduPilotSitl":
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()

@@ -16,17 +16,12 @@ working directory, where parameters.bson keeps what was set.
 
 from __future__ import annotations
 
-import errno
-import fcntl
 import hashlib
 import os
 import shutil
-import signal
-import socket
 import struct
 import subprocess
 import tempfile
-import threading
 import time
 from pathlib import Path
 from typing import Mapping
@@ -35,12 +30,11 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from wiris_tools.errors import CommandRefused, LinkError, NoAnswer
 from wiris_tools.link import Link
-from wiris_tools.sitl.monitor import MonitorRecord
 from wiris_tools.sitl import SitlOptions
+from wiris_tools.sitl.process import Instances, InstanceLock, SitlProcess, udp_port_free
 
 FIRST_INSTANCE = 1             # 0 is the instance people start by hand
 LAST_INSTANCE = 9
-STOP_GRACE_S = 5.0
 MODELS = {"copter": "sihsim_quadx", "plane": "sihsim_airplane", "vtol": "sihsim_standard_vtol"}
 # PX4 custom mode: main mode AUTO (4), sub mode MISSION (4) (px4_custom_mode.h)
 PX4_MAIN_AUTO = 4
@@ -61,41 +55,8 @@ def ports(instance: int) -> dict[str, int]:
             "payload": 14280 + instance, "camera": 14030 + instance}
 
 
-def _udp_port_free(port: int) -> bool:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        try:
-            s.bind(("127.0.0.1", port))
-        except OSError:
-            return False
-    return True
-
-
-class _InstanceLock:
-    """An instance held through a lock file of ours, with every port it uses free (PX4 started by hand, or by
-    another harness, holds them)."""
-
-    def __init__(self) -> None:
-        order = list(range(FIRST_INSTANCE, LAST_INSTANCE + 1))
-        start = os.getpid() % len(order)
-        for n in order[start:] + order[:start]:
-            path = Path(tempfile.gettempdir()) / f"wiris-sitl-px4-{n}.lock"
-            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except OSError as err:
-                os.close(fd)
-                if err.errno in (errno.EAGAIN, errno.EACCES):
-                    continue
-                raise
-            if all(_udp_port_free(p) for p in ports(n).values()):
-                self.instance, self._fd = n, fd
-                return
-            os.close(fd)
-        raise LinkError(f"no free PX4 SITL instance in {FIRST_INSTANCE}..{LAST_INSTANCE}",
-                        hint="stop PX4 processes left running (ps -ef | grep bin/px4)")
-
-    def release(self) -> None:
-        os.close(self._fd)
+INSTANCES = Instances("wiris-sitl-px4", FIRST_INSTANCE, LAST_INSTANCE, lambda n: ports(n).values(), udp_port_free,
+                      "PX4 SITL", "stop PX4 processes left running (ps -ef | grep bin/px4)")
 
 
 def runnable_px4(px4_dir: Path) -> Path:
@@ -133,7 +94,7 @@ def _int_of_float(value: float) -> int:
     return struct.unpack("<i", struct.pack("<f", value))[0]
 
 
-class Px4Sitl(MonitorRecord):
+class Px4Sitl(SitlProcess):
     """One PX4 SITL process with SIH (see the package docstring for the interface)."""
 
     firmware = "px4"
@@ -144,15 +105,8 @@ class Px4Sitl(MonitorRecord):
         self.options = options
         self.vehicle = options.vehicle
         self.px4_dir = Path(px4_dir)
-        self.workdir = Path(options.workdir or tempfile.mkdtemp(prefix="wiris-px4-")).resolve()
-        self.workdir.mkdir(parents=True, exist_ok=True)
-        self.tlog = self.workdir / "gcs.tlog"
-        self._tlog_file = open(self.tlog, "ab")
-        self._tlog_lock = threading.Lock()
-        self._statustext: list[str] = []
-        self._link: Link | None = None
-        self._proc: subprocess.Popen | None = None
-        self._lock = _InstanceLock()
+        self._open_workdir(options.workdir, prefix="wiris-px4-")
+        self._lock = InstanceLock(INSTANCES)
         self.instance = self._lock.instance
         self.target_system = self.instance + 1
         p = ports(self.instance)
@@ -191,9 +145,6 @@ class Px4Sitl(MonitorRecord):
             out.close()
         self._connect()
 
-    def _alive(self) -> bool:
-        return self._proc is not None and self._proc.poll() is None
-
     def _connect(self, timeout: float = 30.0) -> None:
         link = Link(self._monitor_url)
         link.subscribe(self._record)
@@ -210,11 +161,11 @@ class Px4Sitl(MonitorRecord):
                 if time.monotonic() > deadline:
                     raise LinkError("no HEARTBEAT from PX4 SITL", where=self._monitor_url,
                                     hint="read px4.out in the working directory") from None
-        self._quieten(link)
+        self.quieten(link)
         with Link(self.gcs_url) as api:
-            self._quieten(api)
+            self.quieten(api)
 
-    def _quieten(self, link: Link) -> None:
+    def quieten(self, link: Link) -> None:
         """Turn off (or slow, KEEP_STREAMS) every stream `link` hears from the autopilot within a second."""
         heard: set[int] = set()
         with link.inbox(src_system=self.target_system, src_component=1) as box:
@@ -380,35 +331,6 @@ class Px4Sitl(MonitorRecord):
     def dataflash_logs(self) -> list[Path]:
         """The flight logs, as the ArduPilot backend names its own: PX4 writes ULogs."""
         return self.ulogs()
-
-    # -- stopping ----------------------------------------------------------------------------------
-    def _stop_process(self) -> None:
-        if self._link is not None:
-            self._link.close()
-            self._link = None
-        if self._proc is not None and self._proc.poll() is None:
-            try:
-                os.killpg(self._proc.pid, signal.SIGTERM)
-                self._proc.wait(STOP_GRACE_S)
-            except subprocess.TimeoutExpired:
-                os.killpg(self._proc.pid, signal.SIGKILL)
-                self._proc.wait()
-            except ProcessLookupError:
-                pass
-
-    def close(self) -> None:
-        self._stop_process()
-        with self._tlog_lock:
-            self._tlog_file.close()
-        if getattr(self, "_lock", None) is not None:
-            self._lock.release()
-            self._lock = None
-
-    def __enter__(self) -> "Px4Sitl":
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
 
 
 def _fmt(v: float) -> str:

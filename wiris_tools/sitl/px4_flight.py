@@ -69,16 +69,18 @@ UPLOAD_ATTEMPTS = 2
 SAME_SHOT_M = 2.0
 
 
-def shot_positions(images: list[tuple[float, float, float]]) -> list[tuple[float, float, float]]:
-    """(lat, lon, alt) of each shot, from the camera's images in order: consecutive images within SAME_SHOT_M
-    of the one before are the same shot (the first of them is kept)."""
+def shot_positions(images: list[tuple[float, float, float]],
+                   within_m: float = SAME_SHOT_M) -> list[tuple[float, float, float]]:
+    """(lat, lon, alt) of each shot, from the camera's images in order: consecutive images within `within_m`
+    of the one before are the same shot (the first of them is kept). A fast plane on a loaded machine gets the
+    two commands of a shot farther apart than SAME_SHOT_M: give it a bound under its trigger spacing."""
     out: list[tuple[float, float, float]] = []
     for lat, lon, alt in images:
         if out:
             plat, plon, _ = out[-1]
             dy = (lat - plat) * 111_320.0
             dx = (lon - plon) * 111_320.0 * math.cos(math.radians(lat))
-            if math.hypot(dx, dy) < SAME_SHOT_M:
+            if math.hypot(dx, dy) < within_m:
                 continue
         out.append((lat, lon, alt))
     return out
