@@ -63,7 +63,8 @@ def turn_warnings(route: Any, radius_m: float | None, turnaround_m: float | None
     if turnaround_m is not None and turnaround_m < radius_m:
         out.append(PlanWarning("turnaround_shorter_than_turn", f"turnaround_m {turnaround_m:g} is shorter than the "
                                f"turn radius ({radius_m:.0f} m): the plane may still be turning at a line's first "
-                               f"photo; leave turnaround_m out (the default is one radius) or give at least "
+                               f"photo; leave turnaround_m out (the default is one radius, on ArduPilot plus one L1 period "
+                               f"of flight for its run onto the line) or give at least "
                                f"{math.ceil(radius_m)}"))
     return out
 
