@@ -782,7 +782,8 @@ def _params(c: _Compile, emitted: Emitted) -> tuple[Param, ...]:
                                 c.payloads.instances, needs_lua=emitted.needs_lua,
                                 triggers={a.trigger for a in c.state.areas},
                                 version=c.plan.vehicle.firmware_version,
-                                fixed_wing_without_landing=_fixed_wing_without_landing(c, emitted))
+                                fixed_wing_without_landing=_fixed_wing_without_landing(c, emitted),
+                                speed_mps=c.speed_mps)
     except PlanError as e:
         raise _relocate(e, c.plan.where("mission")) from None
 

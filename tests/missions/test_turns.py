@@ -169,3 +169,19 @@ def test_arduplane_photos_come_half_a_trigger_check_further_apart_than_asked(tmp
     line = [p for p in sim.photos if p.span == sim.photos[0].span]
     steps = [math.hypot(b.x - a.x, b.y - a.y) for a, b in zip(line, line[1:])]
     assert steps and all(s == pytest.approx(trig + 14.0 / AP_CAMERA_UPDATE_HZ / 2, abs=1e-3) for s in steps)
+
+
+def test_a_fast_planes_wiris_hears_its_position_often_enough_to_geotag_within_2_m(tmp_path):
+    from missions.emit.params import GEOTAG_LAG_M
+    # the WIRIS tags a photo with the last GLOBAL_POSITION_INT it heard: at 5 Hz and 20 m/s up to 4 m behind
+    # (arduplane SITL: captured photos 1-3 m behind the report's, alternating with the 5 Hz stream)
+    fast = compile_plan(parse_plan(PLANE.format(extra="", survey="").replace("speed_mps: 14", "speed_mps: 20")
+                                   .replace("blur_px: 1.5", "blur_px: 2"),
+                                   str(tmp_path / "fast.yaml"), tmp_path))
+    rates = {n: v for n, v, _ in fast.params if n.endswith("_POSITION")}
+    assert rates and all(20.0 / v <= GEOTAG_LAG_M for v in rates.values()), rates
+    why = [w for n, v, w in fast.params if n == "MAV3_POSITION"][0]
+    assert "10 Hz" in why and "2 m" in why
+    slow = compile_plan(parse_plan(PLANE.format(extra="", survey="").replace("frame: plane", "frame: copter")
+                                   .replace("speed_mps: 14", "speed_mps: 5"), str(tmp_path / "slow.yaml"), tmp_path))
+    assert {v for n, v, _ in slow.params if n.endswith("_POSITION")} == {5}
