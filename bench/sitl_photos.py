@@ -4,6 +4,8 @@ SERIAL2 (CAMn_TYPE as NAME.params sets it, or --cam-type), and the emulator's ph
 
     python bench/sitl_photos.py [--speedup 40] [--cam-type 5|6] [EXAMPLE.yaml ...]
 
+Without plans: every bundled example (copters) and bench/plans/*.yaml (a fixed-wing survey, flown by arduplane).
+
 Needs ArduPilot SITL ($WIRIS_SITL_DIR or ../shared/sitl). Prints one row per example and payload.
 """
 
@@ -37,8 +39,9 @@ def fly_example(sitl_dir: Path, plan: Path, scratch: Path, speedup: float, cam_t
     payload = next(p for p in load_plan(plan).payloads if p.camera.startswith("wiris"))
     name, component = payload.name, payload.component_id
     t0 = time.monotonic()
+    vehicle = "copter" if compiled.frame == "copter" else "plane"    # a VTOL's survey lines are flown as a plane's
     with fly_compiled(sitl_dir, out, compiled.name, component=component, cam_type=cam_type, speedup=speedup,
-                      home=compiled.home, workdir=scratch / f"{plan.stem}-sitl") as flight:
+                      home=compiled.home, workdir=scratch / f"{plan.stem}-sitl", vehicle=vehicle) as flight:
         caps = [(p.position.lat / 1e7, p.position.lon / 1e7, p.position.relative_alt / 1e3) for p in flight.photos]
     wall = time.monotonic() - t0
     c = check_photos(compiled, name, caps)
@@ -57,7 +60,7 @@ def main() -> int:
     if sitl_dir is None:
         print(missing_sitl_reason())
         return 1
-    plans = args.plans or sorted((ROOT / "examples").glob("*.yaml"))
+    plans = args.plans or sorted((ROOT / "examples").glob("*.yaml")) + sorted((ROOT / "bench" / "plans").glob("*.yaml"))
     print(f"ArduPilot SITL ({sitl_dir}), speed-up {args.speedup:g}, CAMn_TYPE "
           f"{args.cam_type or 'as NAME.params sets it'}")
     print(f"{'example':22s} {'payload':9s} {'predicted':>9s} {'captured':>8s} {'worst m':>9s} {'median m':>8s} "

@@ -52,7 +52,7 @@ from missions.plan.load import (CameraStep, CorridorStep, LandStep, Plan, RtlSte
                                 WaypointStep, input_files, load_plan_partly, raise_problems)
 from missions.plan.meaning import Ceiling, ceiling_problem
 from missions.sorties import in_sorties
-from missions.plan_turns import default_turnaround_m, turn_radius_of, turn_warnings
+from missions.plan_turns import default_turnaround_m, line_end, turn_radius_of, turn_warnings
 from missions.plan.schema import MAX_AGL_M, MAX_ALTITUDE_M, MIN_ALTITUDE_M, SPEED_RANGE_MPS
 from missions.thermal.assess import assess
 from missions.thermal.speed import SpeedLimit, check_sharp, choose_speed, line_limits
@@ -519,7 +519,8 @@ def _line_inputs(c: _Compile, step: SurveyStep | CorridorStep, lead: PayloadInfo
     return _LineInputs(
         footprint=footprint,
         turnaround_m=step.turnaround_m if step.turnaround_m is not None
-        else default_turnaround_m(TURNAROUND_DEFAULT_M[c.plan.vehicle.frame], c.turn_radius_m),
+        else default_turnaround_m(TURNAROUND_DEFAULT_M[c.plan.vehicle.frame], c.turn_radius_m, c.profile.name,
+                                  c.speed_mps),
         start_latlon=last[:2] if last else (c.plan.home.lat, c.plan.home.lon),
         photos_left=max(0, survey.MAX_PHOTOS - sum(len(g.photos) for g in c.state.intent)),
         min_interval_s=lead.min_interval_s)
@@ -533,11 +534,14 @@ def _line_inputs_turnaround(c: _Compile, step: SurveyStep | CorridorStep) -> flo
 def _plan_survey_lines(c: _Compile, step: SurveyStep, inputs: _LineInputs) -> _Lines:
     area = area_clear_of(step.area, c.zones, c.plan.base_dir, c.plan.step_where(step, "area"))
     _check_reach(c.plan.home, area.projection.lat0, area.projection.lon0, "area", c.plan.step_where(step))
+    end = line_end(c.profile.name, c.plan.vehicle.frame, c.speed_mps,
+                   survey.trigger_distance_m(inputs.footprint, step.front_pct), survey.DEFAULT_EXIT_MARGIN_M)
     route = plan_survey(area, inputs.footprint, step.front_pct, step.side_pct, angle_deg=step.angle_deg,
                         turnaround_m=inputs.turnaround_m, speed_mps=c.speed_mps,
                         min_interval_s=inputs.min_interval_s, refly_90=step.refly_90,
                         hover=step.trigger == "hover", start_latlon=inputs.start_latlon,
-                        photos_left=inputs.photos_left, turn_radius_m=c.turn_radius_m)
+                        photos_left=inputs.photos_left, turn_radius_m=c.turn_radius_m,
+                        exit_margin_m=end.margin_m, exit_stretch=end.stretch)
     return _Lines(route, area)
 
 
@@ -778,7 +782,8 @@ def _params(c: _Compile, emitted: Emitted) -> tuple[Param, ...]:
                                 c.payloads.instances, needs_lua=emitted.needs_lua,
                                 triggers={a.trigger for a in c.state.areas},
                                 version=c.plan.vehicle.firmware_version,
-                                fixed_wing_without_landing=_fixed_wing_without_landing(c, emitted))
+                                fixed_wing_without_landing=_fixed_wing_without_landing(c, emitted),
+                                speed_mps=c.speed_mps)
     except PlanError as e:
         raise _relocate(e, c.plan.where("mission")) from None
 

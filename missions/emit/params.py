@@ -10,6 +10,8 @@ manual §5.2 (UART 57600, MAVLink 2) and §6.1 (GPS messages it geotags with).
 
 from __future__ import annotations
 
+import math
+
 from typing import Any, Iterable, Mapping
 
 from missions.errors import PlanError
@@ -55,9 +57,25 @@ def _stream_rows(version: str | None, channel: int, port: str, stream: str, valu
     return [(name, value, f"{why}; {which}; {where}") for name, which in names]
 
 
+# The WIRIS geotags each photo with the last GLOBAL_POSITION_INT it heard (manual §6.1): at a stream rate r the tag
+# is up to speed / r behind where the photo was taken. 5 Hz keeps that within 2 m up to 10 m/s; faster vehicles
+# (a plane at 20 m/s: 4 m, flown in arduplane SITL) get the rate that keeps it within GEOTAG_LAG_M.
+GEOTAG_RATE_HZ = 5
+GEOTAG_LAG_M = 2.0
+
+
+def geotag_rate_hz(speed_mps: float | None) -> int:
+    """The GLOBAL_POSITION_INT rate that keeps a WIRIS geotag within GEOTAG_LAG_M of where the photo was taken."""
+    if not speed_mps or speed_mps <= 0:
+        return GEOTAG_RATE_HZ
+    return max(GEOTAG_RATE_HZ, math.ceil(speed_mps / GEOTAG_LAG_M - 1e-9))
+
+
 def _ardupilot(payloads: list[Any], cameras: Mapping[str, Any], infos: Mapping[str, Any],
-               instances: Mapping[str, int], needs_lua: bool, version: str | None = None) -> list[Param]:
+               instances: Mapping[str, int], needs_lua: bool, version: str | None = None,
+               speed_mps: float | None = None) -> list[Param]:
     out: list[Param] = []
+    rate = geotag_rate_hz(speed_mps)
     given = {getattr(p, "autopilot_serial", None) for p in payloads} - {None}
     ports = iter(n for n in ARDUPILOT_PORTS if n not in given)
     used: list[int] = []
@@ -98,8 +116,11 @@ def _ardupilot(payloads: list[Any], cameras: Mapping[str, Any], infos: Mapping[s
                                     "port it is wired to (autopilot_serial); not private, so PARAM_EXT settings from "
                                     "the GCS are routed"),
             (f"{port}_BAUD", 57, f"{p.name}: 57600 baud (Workswell manual §5.2)"),
-            *_stream_rows(version, ch, port, "POSITION", 5, f"{p.name}: GLOBAL_POSITION_INT at 5 Hz, which the "
-                                                              "camera geotags with (manual §6.1)"),
+            *_stream_rows(version, ch, port, "POSITION", rate, f"{p.name}: GLOBAL_POSITION_INT at {rate} Hz, which "
+                                                                 "the camera geotags with (manual §6.1)"
+                                                                 + ("" if rate == GEOTAG_RATE_HZ else
+                                                                    f": at {speed_mps:g} m/s a photo's tag is then at "
+                                                                    f"most {GEOTAG_LAG_M:g} m behind it")),
             (f"CAM{i}_TYPE", 6, f"{p.name} is camera instance {i} because its component id is {p.component_id}: "
                                 "MAVLinkCamV2 looks for instance n only at component 100 + n - 1 "
                                 "(AP_Camera_MAVLinkCamV2::find_camera), with the vehicle's system id and a "
@@ -197,12 +218,12 @@ def _px4(payloads: list[Any], cameras: Mapping[str, Any], triggers: set[str],
 def autopilot_params(prof: Any, payloads: Iterable[Any], cameras: Mapping[str, Any], infos: Mapping[str, Any],
                      instances: Mapping[str, int], needs_lua: bool = False,
                      triggers: Iterable[str] = (), version: str | None = None,
-                     fixed_wing_without_landing: bool = False) -> tuple[Param, ...]:
+                     fixed_wing_without_landing: bool = False, speed_mps: float | None = None) -> tuple[Param, ...]:
     """(name, value, why) for the firmware `prof` (missions.emit.firmware.FirmwareProfile); `version` is the
     plan's vehicle.firmware_version (None: names every supported release understands)."""
     payloads = list(payloads)
     if prof.name == "ardupilot":
-        rows = _ardupilot(payloads, cameras, infos, instances, needs_lua, version)
+        rows = _ardupilot(payloads, cameras, infos, instances, needs_lua, version, speed_mps)
     else:
         rows = _px4(payloads, cameras, set(triggers), fixed_wing_without_landing)
     return tuple((n, float(v), why) for n, v, why in rows)

@@ -525,11 +525,18 @@ class _LegEnds(NamedTuple):
     exit: tuple[float, float]
 
     @classmethod
-    def of(cls, leg: Leg, rev: bool, exit_margin_m: float) -> "_LegEnds":
+    def of(cls, leg: Leg, rev: bool, exit_margin_m: float, exit_stretch: float = 0.0) -> "_LegEnds":
+        """`exit_stretch`: the exit also lies that fraction of the leg's length further on (a firmware whose
+        photos come on average further apart than the trigger distance reaches the last one that much later)."""
         (ax, ay), (bx, by) = _ends(leg, rev)
         d, _n = frame(leg.angle_deg)
         dx, dy = (-d[0], -d[1]) if rev else (d[0], d[1])
-        return cls((ax, ay), (bx, by), dx, dy, (bx + dx * exit_margin_m, by + dy * exit_margin_m))
+        m = exit_margin_m + exit_stretch * math.hypot(bx - ax, by - ay)
+        return cls((ax, ay), (bx, by), dx, dy, (bx + dx * m, by + dy * m))
+
+    @property
+    def margin_m(self) -> float:
+        return math.hypot(self.exit[0] - self.end[0], self.exit[1] - self.end[1])
 
     def before(self, m: float) -> tuple[float, float]:
         """The point `m` metres before the entry, on the line."""
@@ -573,10 +580,11 @@ class _Ways:
 class _RouteBuilder:
     """The route's points as its legs are added in flying order (see module doc, steps 3-5)."""
 
-    def __init__(self, ways: _Ways, turnaround_m: float, exit_margin_m: float) -> None:
+    def __init__(self, ways: _Ways, turnaround_m: float, exit_margin_m: float, exit_stretch: float = 0.0) -> None:
         self.ways = ways
         self.turnaround_m = turnaround_m
         self.exit_margin_m = exit_margin_m
+        self.exit_stretch = exit_stretch
         self.points: list[RoutePoint] = []
         self.spans: list[CameraSpan] = []
         self.flown: list[Leg] = []
@@ -585,7 +593,7 @@ class _RouteBuilder:
 
     def add(self, leg: Leg, rev: bool) -> None:
         """Stub in, entry, exit, stub out, after whatever connection the previous leg's exit needs."""
-        ends = _LegEnds.of(leg, rev, self.exit_margin_m)
+        ends = _LegEnds.of(leg, rev, self.exit_margin_m, self.exit_stretch)
         k = len(self.flown)
         stub_in = self.ways.stub_before_m(ends, self.turnaround_m)
         stubs = self._connect(leg, ends, stub_in, self.last_exit) if self.last_exit is not None else stub_in > 0
@@ -595,8 +603,9 @@ class _RouteBuilder:
         pts.append(RoutePoint(*ends.entry, KIND_ENTRY, k))
         pts.append(RoutePoint(*ends.exit, KIND_EXIT, k))
         self.spans.append(CameraSpan(len(pts) - 2, len(pts) - 1))
-        stub_out = self.ways.stub_after_m(ends, self.turnaround_m, self.exit_margin_m)
-        if stub_out > self.exit_margin_m:
+        margin = ends.margin_m if self.exit_stretch else self.exit_margin_m
+        stub_out = self.ways.stub_after_m(ends, self.turnaround_m, margin)
+        if stub_out > margin:
             pts.append(RoutePoint(*ends.beyond(stub_out), KIND_TURN_IN, k))
         self.flown.append(leg)
         self.reversed.append(rev)
@@ -655,15 +664,17 @@ class _RouteBuilder:
 
 def build_route(legs: Sequence[Leg], geometry: Any, turnaround_m: float, exit_margin_m: float = 0.0,
                 start_xy: tuple[float, float] | None = None, order: Sequence[FlownLeg] | None = None,
-                avoid: Any = None) -> Route:
+                avoid: Any = None, exit_stretch: float = 0.0) -> Route:
     """Waypoints for the legs in flying order (see module doc). `geometry` is the area (metres).
+    `exit_stretch`: see _LegEnds.of.
     (Hover surveys fly this route with photo stops in place of each leg's entry and exit: survey._hover_route.)
 
     `avoid`: holes and exclusion zones (shapely, metres) the stubs and connections keep out of (step 5).
     """
     if order is None:
         order = order_legs(legs, start_xy)
-    builder = _RouteBuilder(_Ways(geometry, avoid), max(0.0, turnaround_m), max(0.0, exit_margin_m))
+    builder = _RouteBuilder(_Ways(geometry, avoid), max(0.0, turnaround_m), max(0.0, exit_margin_m),
+                            max(0.0, exit_stretch))
     for li, rev in order:
         builder.add(legs[li], rev)
     return builder.route()

@@ -364,10 +364,12 @@ def plan_survey(area: Area, footprint: Footprint, front_pct: float, side_pct: fl
                 min_interval_s: float | None = None, refly_90: bool = False, hover: bool = False,
                 start_latlon: tuple[float, float] | None = None,
                 exit_margin_m: float = DEFAULT_EXIT_MARGIN_M, photos_left: int = MAX_PHOTOS,
-                objective: Objective = flight_time_s, turn_radius_m: float | None = None) -> SurveyPlan:
+                objective: Objective = flight_time_s, turn_radius_m: float | None = None,
+                exit_stretch: float = 0.0) -> SurveyPlan:
     """Plan a survey of `area` (see module doc); `photos_left`: what the plan's earlier steps left of
     MAX_PHOTOS; `objective`: what angle_deg "auto" minimises (`objectives`); `turn_radius_m`: a plane's, whose
-    consecutive lines are then flown at least two radii apart where the cell allows (skip-line order)."""
+    consecutive lines are then flown at least two radii apart where the cell allows (skip-line order);
+    `exit_stretch`: each exit lies that fraction of its leg's length further past the last photo (route._LegEnds)."""
     spacing = transect_spacing_m(footprint, side_pct)
     trig = trigger_distance_m(footprint, front_pct)
     _check_speed_and_turnaround(speed_mps, turnaround_m)
@@ -386,7 +388,7 @@ def plan_survey(area: Area, footprint: Footprint, front_pct: float, side_pct: fl
         raise PlanError("the area produced no flight lines", where=area.source or None,
                         hint="check the area's size against the footprint")
     warnings += _small_area_warnings(geom, footprint)
-    route = _flown_route(area, passes, turnaround_m, exit_margin_m, trig, hover)
+    route = _flown_route(area, passes, turnaround_m, exit_margin_m, trig, hover, exit_stretch)
     spans = () if hover else tuple(TriggerSpan(a, b, trig, True, False) for a, b in route.spans)
     return SurveyPlan(_waypoints(area, route, hover), spans, hover, trig, spacing, angle, route.legs, tuple(warnings),
                       area, route, passes.lines, float(speed_mps))
@@ -467,14 +469,14 @@ def _ordered_passes(geom: Any, angle: float, lines: LineSettings, refly_90: bool
 
 
 def _flown_route(area: Area, passes: OrderedLegs, turnaround_m: float, exit_margin_m: float, trig: float,
-                 hover: bool) -> Route:
+                 hover: bool, exit_stretch: float = 0.0) -> Route:
     # Hover lines are flown on the route distance triggering flies (turnaround stubs, connections kept out of
     # holes and exclusions), stopping at the photos instead of running the camera along the leg: see _hover_route.
     # A hover stop is held, so no exit margin against an early waypoint acceptance.
     margin = 0.0 if hover else min(exit_margin_m, 0.45 * trig)
     avoid = area.keep_out if getattr(area, "keep_out", None) is not None else area.excluded
     route = build_route(passes.legs, area.geometry, turnaround_m, exit_margin_m=margin, order=passes.order,
-                        avoid=avoid)
+                        avoid=avoid, exit_stretch=0.0 if hover else exit_stretch)
     return _hover_route(route, trig) if hover else route
 
 

@@ -95,6 +95,10 @@ NAV_LAND = {C.MAV_CMD_NAV_LAND, C.MAV_CMD_NAV_VTOL_LAND}
 
 
 AP_CAMERA_UPDATE_HZ = 50.0   # AP_Camera::update's rate in the vehicles' scheduler tables ("should be called at 50hz")
+# ArduPlane's navigate task (Plane.cpp scheduler table: SCHED_TASK(navigate, 10, ...)) runs the mission, its
+# waypoint checks and the DO items after a waypoint, at 10 Hz: DO_SET_CAM_TRIGG_DIST after a line's entry (its
+# first photo) and after its exit come up to 0.1 s of flight after the plane passes the waypoint.
+ARDUPLANE_NAV_HZ = 10.0
 
 
 @dataclass(frozen=True)
@@ -518,7 +522,9 @@ class _Flight:
         comes up to one check's travel late and the next is measured from there: the spacing is `d` rounded up
         to whole 50 Hz steps of travel at the cruise speed (measured in SITL: powerline-corridor at 6 m/s,
         d = 6.872 m -> 6.96 m, 870 photos taken where exact spacing predicts 882)."""
-        return ardupilot_trigger_spacing_m(d, self.speed) if self.ardupilot else d
+        if not self.ardupilot:
+            return d
+        return ardupilot_trigger_spacing_m(d, self.speed) if self.copter else arduplane_trigger_spacing_m(d, self.speed)
 
     def image_start(self, i: int, it: MissionItem) -> None:
         vi = self.last_vertex
@@ -824,8 +830,9 @@ def _photos(compiled: Compiled, verts: Sequence[Vertex], times: np.ndarray, flig
     trigger themselves. Span ids number camera-on stretches (front-overlap pairs never cross one)."""
     path = _Path.of(verts, times)
     shots: list[_Shot] = []
+    late = arduplane_late_m(flight.speed) if flight.ardupilot and not flight.copter else 0.0
     span_id = _distance_photos(path, flight.distance_spans, flight.trigger_payloads, shots, 0,
-                               px4=compiled.firmware == "px4", frame=compiled.frame)
+                               px4=compiled.firmware == "px4", frame=compiled.frame, late_m=late)
     span_id = _interval_photos(path, flight.interval_spans, shots, span_id)
     span_id = _single_photos(path, flight.singles, shots, span_id)
     _self_triggered_photos(compiled, path, shots, span_id)
@@ -847,6 +854,20 @@ def ardupilot_trigger_spacing_m(distance_m: float, speed_mps: float) -> float:
     return math.ceil(distance_m / step - 1e-9) * step
 
 
+def arduplane_trigger_spacing_m(distance_m: float, speed_mps: float) -> float:
+    """The mean spacing ArduPlane's distance trigger flies: the same 50 Hz check as a copter's, but a plane's ground
+    speed wanders with TECS and its turns (in SITL at 20 m/s airspeed: 20.4-21.5 m/s), so where the trigger
+    distance falls between two checks is random: each photo comes half a check's travel late on average.
+    Measured in arduplane SITL (CAMERA_FEEDBACK): 26.96 m mean spacing for 26.78 m at 20 m/s, where whole
+    steps would give 26.80."""
+    return distance_m + speed_mps / AP_CAMERA_UPDATE_HZ / 2.0
+
+
+def arduplane_late_m(speed_mps: float) -> float:
+    """How far past a line's entry ArduPlane takes its first photo on average: half a navigate tick's flight."""
+    return speed_mps / ARDUPLANE_NAV_HZ / 2.0
+
+
 def fired_spacing_m(firmware: str, distance_m: float, speed_mps: float) -> float:
     """The spacing `firmware`'s distance trigger flies for a commanded `distance_m` at `speed_mps`."""
     if firmware == "px4":
@@ -863,12 +884,13 @@ def px4_trigger_spacing_m(distance_m: float, speed_mps: float) -> float:
 
 
 def _distance_photos(path: _Path, spans: Sequence[DistanceSpan], payloads: tuple[str, ...], shots: list[_Shot],
-                     span_id: int, *, px4: bool = False, frame: str = "copter") -> int:
+                     span_id: int, *, px4: bool = False, frame: str = "copter", late_m: float = 0.0) -> int:
     """Distance triggering, re-run as the firmware fires it; returns the next span id. PX4 shoots once whenever
     the trigger is switched on (update_distance's first valid position, or param3's one shot: never both),
     flies px4_trigger_spacing_m, and runs the DO items after a waypoint when it comes within px4_do_item_lead_m
     of it: every shot of the span comes that much earlier along the line (measured: 2.0 m median offset on a
-    multicopter; on a plane NPFG's switch distance, about 30 m)."""
+    multicopter; on a plane NPFG's switch distance, about 30 m).
+    `late_m`: every shot of a span comes that much later along its line (ArduPlane: arduplane_late_m)."""
     verts, times, xy, alts, holds = path
     for span in spans:
         d, at_start = span.distance_m, span.shoot_at_start
@@ -886,10 +908,10 @@ def _distance_photos(path: _Path, spans: Sequence[DistanceSpan], payloads: tuple
         alt = (alts[k] + f * (alts[k1] - alts[k])).tolist()
         depart = times[k] + holds[k]
         tt = np.where(k >= len(times) - 1, times[-1], depart + f * (times[k1] - depart)).tolist()
-        if px4:
-            lead = px4_do_item_lead_m(frame, spd)
-            pts = [p._replace(x=p.x - lead * math.sin(math.radians(p.heading_deg)),
-                              y=p.y - lead * math.cos(math.radians(p.heading_deg))) for p in pts]
+        shift = -px4_do_item_lead_m(frame, spd) if px4 else late_m
+        if shift:
+            pts = [p._replace(x=p.x + shift * math.sin(math.radians(p.heading_deg)),
+                              y=p.y + shift * math.cos(math.radians(p.heading_deg))) for p in pts]
         for j, p in enumerate(pts):
             if span.start == span.end:      # on and off at one vertex: the photos are taken there
                 hd, nav = _vertex_heading(verts, seg_idx[j], p.heading_deg), verts[span.start].item

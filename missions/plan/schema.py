@@ -87,7 +87,8 @@ OVERLAP = _obj({
 }, required=("front", "side"), desc="photo overlap in percent")
 TRIGGER = {"enum": ["distance", "interval", "hover"], "default": "distance",
            "description": "distance: DO_SET_CAM_TRIGG_DIST; interval: timed (PX4 only); hover: stop and shoot"}
-TURNAROUND = _num(0, 500, desc="straight run-in/out beyond each line end, metres (default 10 copter, 30 plane)")
+TURNAROUND = _num(0, 500, desc="straight run-in/out beyond each line end, metres (default 10 copter; a plane: 30 or "
+               "its turn radius, on ArduPilot plus one L1 period of flight)")
 # The kinds of zone, by their key in a survey or corridor step (missions.geometry.zones says what each keeps out).
 ZONE_KINDS = ("no_fly", "no_photo", "exclude")
 # Zones a survey or corridor keeps clear of (missions.geometry.zones): every zone of the plan holds for the whole

@@ -45,18 +45,12 @@ def plane_flight(sitl_dir, tmp_path_factory):
     return check_photos(compile_plan(d / "plane.yaml"), "thermal", caps), texts
 
 
-@pytest.mark.xfail(strict=False, reason="with the plane turn model (skip-line order, Dubins turns) arduplane took "
-                   "116 photos where the report predicts 119 (-2.5 %, outside 1 % or 2): the turns' trigger "
-                   "stretches are not yet modelled as arduplane flies them")
 def test_the_plane_flies_the_survey_to_rtl_and_the_count_matches(plane_flight):
     check, texts = plane_flight
     assert any("RTL" in t for t in texts), texts[-5:]
     assert check.captured > 100 and check.count_ok, check
 
 
-@pytest.mark.xfail(strict=True, reason="the report's plane model flies the lines exactly; arduplane's turns are "
-                   "wider than the turnarounds (it passes line ends 100+ m out), so photos at line starts lie "
-                   "tens of metres off and coverage drops (measured 96.4 % against 100 %): issue 24's plane turns")
 def test_the_plane_photos_lie_where_the_report_puts_them(plane_flight):
     check, _ = plane_flight
     assert check.worst_offset_m < 5.0 and check.coverage_captured >= check.coverage_predicted - 0.005, check
