@@ -24,8 +24,6 @@ from missions.plan.load import Plan
 
 
 NEAR_MIN_INTERVAL = 1.2      # warn when photos come less than 20 % slower than the camera's minimum
-
-
 TURNAROUND_DEFAULT_M = {"copter": 10.0, "plane": 30.0, "vtol": 30.0}   # QGC's defaults (survey-planners §1.4)
 
 

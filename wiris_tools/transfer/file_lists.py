@@ -19,11 +19,7 @@ from wiris_tools.transfer.results import TYPE_NAMES
 
 
 PLAN_SUFFIXES = (".plan",)
-
-
 WPL_SUFFIXES = (".waypoints", ".wpl", ".txt")
-
-
 CAPTURE_SUFFIXES = (".yaml", ".yml")
 
 
@@ -39,9 +35,9 @@ class LoadedList(NamedTuple):
     notes: tuple[str, ...] = ()
 
 
+# The firmwares whose files differ (ArduPilot's item 0 is home, commands and frames each accepts): a file made
+# for one of them is checked against the vehicle's HEARTBEAT; a generic one (firmwareType 0) is not.
 CHECKED_FIRMWARES = {mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA: "ardupilot", mavlink2.MAV_AUTOPILOT_PX4: "px4"}
-
-
 FIRMWARE_LABELS = {"ardupilot": "ArduPilot", "px4": "PX4"}
 
 

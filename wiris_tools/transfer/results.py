@@ -25,6 +25,7 @@ def mission_result_name(result: int) -> str:
     return entry.name if entry is not None else f"MAV_MISSION_RESULT {result}"
 
 
+# What to do when the vehicle refuses a download with an answer _NACK_HINTS has no word for.
 _DOWNLOAD_NACK_HINT = "retry the download; close other ground stations that may be talking to the vehicle"
 
 
@@ -38,6 +39,8 @@ _NACK_HINTS = {
 }
 
 
+# Answers that end an upload when no further request follows (the others - ERROR,
+# INVALID_SEQUENCE - are ArduPilot's transient complaints and only noted).
 _FATAL_NACKS = frozenset({
     mavlink2.MAV_MISSION_NO_SPACE, mavlink2.MAV_MISSION_UNSUPPORTED, mavlink2.MAV_MISSION_UNSUPPORTED_FRAME,
     mavlink2.MAV_MISSION_DENIED, mavlink2.MAV_MISSION_INVALID, mavlink2.MAV_MISSION_OPERATION_CANCELLED,

@@ -18,9 +18,12 @@ class Timeouts:
     deadline_floor_s: float = 30.0  # a download's derived deadline: this plus time per item (download_deadline_s)
 
 
+# The derived download deadline: a floor (Timeouts.deadline_floor_s) for small lists and slow starts, then a
+# generous allowance per item of round trips at the link's measured pace. A link losing a third of the packets
+# each way needs about five round trips per item on average (each loss costs a re-request timer of about two
+# round trips); eight leave room for bursts. The margin is the vehicle's own time per item and a
+# MISSION_ITEM_INT's longer airtime than the MISSION_COUNT the round trip was measured on.
 DEADLINE_ROUND_TRIPS_PER_ITEM = 8
-
-
 DEADLINE_ITEM_MARGIN_S = 0.01
 
 

@@ -43,6 +43,7 @@ def with_opaque_id(msg, opaque: int):
     return _Extended(msg, struct.pack("<I", opaque)) if opaque else msg
 
 
+# Byte offset of opaque_id in the MAVLink 2 payload: after the base fields and the mission_type extension.
 _OPAQUE_OFFSET = {"MISSION_ACK": 4, "MISSION_COUNT": 5}
 
 
