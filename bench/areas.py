@@ -102,6 +102,29 @@ def bench_areas() -> list[BenchArea]:
     return areas
 
 
+M_PER_DEG_LAT = 111_320.0      # metres per degree of latitude, flat-earth: enough for a bench's areas near home
+
+
+def metres_per_degree(lat: float) -> tuple[float, float]:
+    """(north, east) metres per degree of latitude and of longitude at latitude `lat`."""
+    return M_PER_DEG_LAT, M_PER_DEG_LAT * math.cos(math.radians(lat))
+
+
+def square_ring(home: tuple[float, float], side_m: float, offset_deg: float = 0.0005) -> list[list[float]]:
+    """A plan's area: the [lat, lon] corners of a `side_m` square, its south-west corner `offset_deg` north and
+    east of `home`."""
+    m_lat, m_lon = metres_per_degree(home[0])
+    dlat, dlon = side_m / m_lat, side_m / m_lon
+    lat0, lon0 = home[0] + offset_deg, home[1] + offset_deg
+    return [[lat0, lon0], [lat0, lon0 + dlon], [lat0 + dlat, lon0 + dlon], [lat0 + dlat, lon0]]
+
+
+def built_area(a: BenchArea) -> Any:
+    """The area as the plan reader builds it (missions.geometry.area.build_area), from its [lat, lon] rings."""
+    from missions.geometry.area import build_area
+    return build_area(to_latlon_polygons(a), source=a.name)
+
+
 def to_latlon_polygons(a: BenchArea) -> list[Any]:
     """The area as missions.geometry.area.LatLonPolygon values (what a KML/GeoJSON file would give)."""
     import numpy as np

@@ -22,6 +22,10 @@ import subprocess
 import sys
 import tempfile
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from areas import square_ring  # noqa: E402
+
 ROOT = Path(__file__).resolve().parents[1]
 HOME = (50.0000, 14.5000)
 PLAN = """\
@@ -67,11 +71,7 @@ print(json.dumps({"photos": photos, "items": len(c.items), "sorties": len(c.sort
 
 
 def square_plan(directory: Path, km2: float) -> Path:
-    side = math.sqrt(km2 * 1e6)
-    dlat = side / 111_320.0
-    dlon = side / (111_320.0 * math.cos(math.radians(HOME[0])))
-    lat0, lon0 = HOME[0] + 0.0005, HOME[1] + 0.0005
-    ring = [[lat0, lon0], [lat0, lon0 + dlon], [lat0 + dlat, lon0 + dlon], [lat0 + dlat, lon0]]
+    ring = square_ring(HOME, math.sqrt(km2 * 1e6))
     path = directory / f"sq{km2:g}.yaml"
     path.write_text(PLAN.format(tag=f"{km2:g}", lat=HOME[0], lon=HOME[1], ring=ring), encoding="utf-8")
     return path

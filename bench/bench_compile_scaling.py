@@ -26,6 +26,9 @@ import tracemalloc
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "bench"))
+
+from areas import square_ring  # noqa: E402
 
 # 1 ha, 10 ha, 1 km², 10 km² in one mission (item limit 65535); bench_big_areas.py flies 1 to 100 km² in sorties
 SIZES_M2 = (1e4, 1e5, 1e6, 1e7)
@@ -47,11 +50,7 @@ mission:
 
 
 def square_plan(directory: Path, area_m2: float) -> Path:
-    side = math.sqrt(area_m2)
-    dlat = side / 111_320.0
-    dlon = side / (111_320.0 * math.cos(math.radians(HOME[0])))
-    lat0, lon0 = HOME[0] + 0.0005, HOME[1] + 0.0005
-    ring = [[lat0, lon0], [lat0, lon0 + dlon], [lat0 + dlat, lon0 + dlon], [lat0 + dlat, lon0]]
+    ring = square_ring(HOME, math.sqrt(area_m2))
     body = (f"  - survey:\n      area: {ring}\n      payloads: [thermal]\n      altitude_m: 60\n"
             f"      overlap: {{front: 75, side: 70}}\n      angle_deg: 0\n")
     path = directory / f"sq{int(area_m2)}.yaml"

@@ -37,8 +37,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from areas import bench_areas, to_latlon_polygons  # noqa: E402
-from missions.geometry.area import build_area  # noqa: E402
+from areas import bench_areas, built_area  # noqa: E402
 from missions.measure.coverage import measure  # noqa: E402
 from missions.geometry.footprint import Footprint, transect_spacing_m, trigger_distance_m  # noqa: E402
 from missions.geometry.objectives import estimated_time_s  # noqa: E402
@@ -157,7 +156,7 @@ def main(argv: list[str]) -> int:
           f"overlap {FRONT:.0f}/{SIDE:.0f} %, turnaround {TURNAROUND_M:.0f} m")
     rows = []
     for a in bench_areas():
-        area = build_area(to_latlon_polygons(a), source=a.name)
+        area = built_area(a)
         geom = area.geometry
         t = time.perf_counter()
         xy, spans, photos = qgc_plan(geom, 0.0, spacing, trig, TURNAROUND_M)
@@ -234,7 +233,7 @@ def low_overlap_section() -> None:
     print("  ".join(h.rjust(16) if i else h.ljust(20) for i, h in enumerate(head)))
     mins = [100.0] * (3 * len(configs))
     for a in bench_areas():
-        area = build_area(to_latlon_polygons(a), source=a.name)
+        area = built_area(a)
         geom = area.geometry
         vals = []
         for front, side in configs:

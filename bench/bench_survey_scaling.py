@@ -28,6 +28,9 @@ import time
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "bench"))
+
+from areas import metres_per_degree  # noqa: E402
 
 PARTS = (10, 100, 300, 1000, 3000)
 SITE = (50.08, 14.42)          # Prague
@@ -55,8 +58,7 @@ mission:
 def triangle_grid(n: int, pitch_m: float = PITCH_M) -> dict:
     """A GeoJSON MultiPolygon of n separated triangles on a square grid (lon/lat, RFC 7946)."""
     cols = max(1, math.ceil(math.sqrt(n)))
-    m_lat = 111_320.0
-    m_lon = 111_320.0 * math.cos(math.radians(SITE[0]))
+    m_lat, m_lon = metres_per_degree(SITE[0])
     polys = []
     for k in range(n):
         r, c = divmod(k, cols)

@@ -7,6 +7,7 @@ The folders are the pipeline, in the order a plan goes through them (`compile.co
     emit/       MAVLink mission items per firmware profile and camera, setup sequence, Lua bridge, parameters
     formats/    files: QGroundControl .plan, WPL 110, GeoJSON, KML, preview pictures, atomic outputs
     measure/    the re-flight of the emitted items and the report measured from it
+    compiler/   the stages `compile.compile_plan` runs them in: payloads, speed, steps, lines, zones, preflight, fence
 
 `compiled.py` holds the compiler's result types, `errors.py` the one error family (`PlanError`).
 """

@@ -33,78 +33,55 @@ SECOND = """\
 # a 100 m x 80 m field 100 m north-east of home
 FIELD = "[[50.0810, 14.4210], [50.0810, 14.4224], [50.0817, 14.4224], [50.0817, 14.4210]]"
 
-STEPS = {
-    "survey": """\
-  - takeoff: {{alt_m: 40}}
-  - survey:
-      area: {field}
-      payloads: [thermal]
-      altitude_m: 40
-      overlap: {{front: 75, side: 60}}
-      trigger: distance
-  - rtl: {{}}
-""",
-    "interval": """\
-  - takeoff: {{alt_m: 40}}
-  - survey:
-      area: {field}
-      payloads: [thermal]
-      altitude_m: 40
-      overlap: {{front: 75, side: 60}}
-      trigger: interval
-  - rtl: {{}}
-""",
-    "corridor": """\
-  - takeoff: {{alt_m: 40}}
+WAYPOINT_START = (50.0805, 14.4205)   # the first waypoint of the waypoint missions, south-west of the field
+
+
+def _takeoff(alt_m: int) -> str:
+    return f"  - takeoff: {{alt_m: {alt_m}}}\n"
+
+
+def _survey(*, front: int, trigger: str, payloads: str = "thermal", note: str = "") -> str:
+    """A survey of FIELD at 40 m with side overlap 60 %; `note` a YAML comment after the trigger."""
+    return ("  - survey:\n"
+            f"      area: {FIELD}\n"
+            f"      payloads: [{payloads}]\n"
+            "      altitude_m: 40\n"
+            f"      overlap: {{front: {front}, side: 60}}\n"
+            f"      trigger: {trigger}{note}\n")
+
+
+def _waypoint(lat: float, lon: float, alt_m: int, *, hold_s: int | None = None, capture: str = "thermal") -> str:
+    hold = f", hold_s: {hold_s}" if hold_s is not None else ""
+    return f"  - waypoint: {{lat: {lat}, lon: {lon}, alt_m: {alt_m}{hold}, capture: {capture}}}\n"
+
+
+CORRIDOR = """\
   - corridor:
       line: [[50.0805, 14.4205], [50.0815, 14.4225], [50.0820, 14.4245]]
       width_m: 40
       payloads: [thermal]
       altitude_m: 40
-      overlap: {{front: 70, side: 50}}
+      overlap: {front: 70, side: 50}
       trigger: distance
-  - land: {{}}
-""",
-    "waypoints": """\
-  - takeoff: {{alt_m: 30}}
-  - waypoint: {{lat: 50.0805, lon: 14.4205, alt_m: 30, hold_s: 3, capture: thermal}}
-  - waypoint: {{lat: 50.0808, lon: 14.4212, alt_m: 35, capture: thermal}}
-  - waypoint: {{lat: 50.0803, lon: 14.4215, alt_m: 30, hold_s: 2, capture: thermal}}
-  - rtl: {{}}
-""",
-    "hover": """\
-  - takeoff: {{alt_m: 40}}
-  - survey:
-      area: {field}
-      payloads: [thermal]
-      altitude_m: 40
-      overlap: {{front: 70, side: 60}}
-      trigger: hover
-  - rtl: {{}}
-""",
-    "camera_change": """\
-  - takeoff: {{alt_m: 40}}
-  - survey:
-      area: {field}
-      payloads: [thermal]
-      altitude_m: 40
-      overlap: {{front: 75, side: 60}}
-      trigger: distance
-  - camera: {{payload: thermal, settings: {{range_mode: auto}}}}
-  - waypoint: {{lat: 50.0805, lon: 14.4205, alt_m: 30, hold_s: 2, capture: thermal}}
-  - rtl: {{}}
-""",
-    "two_payloads": """\
-  - takeoff: {{alt_m: 40}}
-  - survey:
-      area: {field}
-      payloads: [thermal, wide]
-      altitude_m: 40
-      overlap: {{front: 70, side: 60}}
-      trigger: hover          # ArduPilot distance-triggers its primary camera only
-  - waypoint: {{lat: 50.0805, lon: 14.4205, alt_m: 30, hold_s: 2, capture: wide}}
-  - rtl: {{}}
-""",
+"""
+
+RTL = "  - rtl: {}\n"
+
+# each kind's mission steps
+STEPS = {
+    "survey": _takeoff(40) + _survey(front=75, trigger="distance") + RTL,
+    "interval": _takeoff(40) + _survey(front=75, trigger="interval") + RTL,
+    "corridor": _takeoff(40) + CORRIDOR + "  - land: {}\n",
+    "waypoints": (_takeoff(30) + _waypoint(*WAYPOINT_START, 30, hold_s=3) + _waypoint(50.0808, 14.4212, 35)
+                  + _waypoint(50.0803, 14.4215, 30, hold_s=2) + RTL),
+    "hover": _takeoff(40) + _survey(front=70, trigger="hover") + RTL,
+    "camera_change": (_takeoff(40) + _survey(front=75, trigger="distance")
+                      + "  - camera: {payload: thermal, settings: {range_mode: auto}}\n"
+                      + _waypoint(*WAYPOINT_START, 30, hold_s=2) + RTL),
+    "two_payloads": (_takeoff(40)
+                     + _survey(front=70, trigger="hover", payloads="thermal, wide",
+                               note="          # ArduPilot distance-triggers its primary camera only")
+                     + _waypoint(*WAYPOINT_START, 30, hold_s=2, capture="wide") + RTL),
 }
 
 
@@ -118,7 +95,7 @@ def plan_text(kind: str, *, name: str | None = None, frame: str = "copter", spee
                        component=component, serial=serial)
     if kind == "two_payloads":
         text += SECOND
-    return text + "mission:\n" + STEPS[kind].format(field=FIELD)
+    return text + "mission:\n" + STEPS[kind]
 
 
 def write_plan(directory: Path, kind: str, **kw) -> Path:

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Any, NamedTuple, Sequence
+from typing import Any, Callable, NamedTuple, Sequence
 
 import numpy as np
 
@@ -331,6 +331,21 @@ def keep_photos_out(points: Sequence[CameraPoint], spans: Sequence[tuple[int, in
         return _hover_photos_out(points, spans, forbidden, fp)
     exit_margin = min(DEFAULT_EXIT_MARGIN_M, 0.45 * trigger_m)
     reach = _Reach(forbidden, fp)
+
+    def camera_on(line: _Polyline) -> list[tuple[float, float]] | None:
+        on = _camera_on_stretches(line, _good_stretches(line, reach), trigger_m, exit_margin)
+        return None if on == [(0.0, line.length)] else on
+
+    out, new_spans, added = _walk_spans(points, spans, camera_on)
+    return CameraPlan(tuple(out), tuple(new_spans), added, 0)
+
+
+def _walk_spans(points: Sequence[CameraPoint], spans: Sequence[tuple[int, int]],
+                camera_on: Callable[[_Polyline], list[tuple[float, float]] | None],
+                ) -> tuple[list[CameraPoint], list[tuple[int, int]], int]:
+    """The track with each camera-on span cut to the stretches `camera_on` gives for its line (distances along it;
+    None: the span is kept whole), its points outside spans kept; and how many camera-off stretches the cut spans
+    now have (`_split_span`)."""
     starts = {a: b for a, b in spans}
     out: list[CameraPoint] = []
     new_spans: list[tuple[int, int]] = []
@@ -344,14 +359,14 @@ def keep_photos_out(points: Sequence[CameraPoint], spans: Sequence[tuple[int, in
         a, b = i, starts[i]
         seg = points[a:b + 1]
         line = _Polyline(np.array([(p.x, p.y) for p in seg], dtype=float))
-        on = _camera_on_stretches(line, _good_stretches(line, reach), trigger_m, exit_margin)
-        if on == [(0.0, line.length)]:
+        on = camera_on(line)
+        if on is None:
             new_spans.append((len(out), len(out) + b - a))
             out.extend(seg)
         else:
             added += _split_span(seg, line, on, out, new_spans)
         i = b + 1
-    return CameraPlan(tuple(out), tuple(new_spans), added, 0)
+    return out, new_spans, added
 
 
 def _split_span(seg: Sequence[CameraPoint], line: _Polyline, on: list[tuple[float, float]],
@@ -524,27 +539,12 @@ def keep_path_out(points: Sequence[CameraPoint], spans: Sequence[tuple[int, int]
 def _cut_spans_at(points: Sequence[CameraPoint], spans: Sequence[tuple[int, int]],
                   grown: Any) -> tuple[list[CameraPoint], list[tuple[int, int]]]:
     """The camera-on spans less their stretches inside `grown`."""
-    starts = {a: b for a, b in spans}
-    out: list[CameraPoint] = []
-    new_spans: list[tuple[int, int]] = []
-    i = 0
-    while i < len(points):
-        if i not in starts:
-            out.append(points[i])
-            i += 1
-            continue
-        a, b = i, starts[i]
-        seg = points[a:b + 1]
-        line = _Polyline(np.array([(p.x, p.y) for p in seg], dtype=float))
-        bad = [(line.s[k] + t0, line.s[k] + t1) for k in range(len(seg) - 1)
+    def outside(line: _Polyline) -> list[tuple[float, float]] | None:
+        bad = [(line.s[k] + t0, line.s[k] + t1) for k in range(len(line.xy) - 1)
                for t0, t1 in _bad_stretches(line.xy[k], line.xy[k + 1], grown)]
-        on = _complement(bad, line.length)
-        if not bad:
-            new_spans.append((len(out), len(out) + b - a))
-            out.extend(seg)
-        else:
-            _split_span(seg, line, on, out, new_spans)
-        i = b + 1
+        return _complement(bad, line.length) if bad else None
+
+    out, new_spans, _stretches_off = _walk_spans(points, spans, outside)
     return out, new_spans
 
 

@@ -203,12 +203,12 @@ def test_an_explicit_speed_above_max_speed_is_an_error(tmp_path):
 
 
 def test_hover_holds_long_enough_for_the_time_constant(tmp_path):
-    from missions.compile import _hover_hold_s
+    from missions.compiler.lines import hover_hold_s
     from missions.compiled import PayloadInfo
 
     slow = PayloadInfo("t", "wiris-pro", "thermal", 100, 13, (10.9, 8.7), (640, 512), min_interval_s=1.0,
                        time_constant_ms=1000.0)
-    assert _hover_hold_s(slow) == pytest.approx(6.0)            # 5 time constants + the capture interval
+    assert hover_hold_s(slow) == pytest.approx(6.0)            # 5 time constants + the capture interval
 
 
 # ------------------------------------------------------------------------------------------------ overlaps
