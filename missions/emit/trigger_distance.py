@@ -1,12 +1,16 @@
-"""How ArduPilot's distance trigger measures: at what rate it checks, and in which metres.
+"""The DO_SET_CAM_TRIGG_DIST a firmware is given for a planned photo spacing: shorter than the spacing, so that
+the distance its trigger really flies (it checks the distance at a fixed rate and fires at the first check at
+or past it) is never longer than planned and the requested front overlap holds.
 
-    ardupilot_metre(50.16).along(278.0)     # 1.0019 true metres per metre of ArduPilot's
+    commanded_trigger_distance("ardupilot", "copter", 10.043, 5.0, lat_deg=50.16)   # 9.85 m: flies 9.9 (9.92 true)
 """
 
 from __future__ import annotations
 
 import math
 from typing import NamedTuple
+
+from missions.emit.firmware import px4_commanded_distance
 
 # AP_Camera_Backend::update runs at 50 Hz in the vehicles' scheduler tables ("should be called at 50hz"): it
 # fires when the straight-line distance from the last photo is no longer `< CAMn_TRIGG_DIST`, and measures the
@@ -48,3 +52,30 @@ def ardupilot_metre(lat_deg: float) -> ApMetre:
 def ardupilot_check_step_m(speed_mps: float) -> float:
     """Travel between two of ArduPilot's distance checks at `speed_mps`."""
     return speed_mps / AP_CAMERA_UPDATE_HZ
+
+
+def ardupilot_commanded_distance(spacing_m: float, speed_mps: float, lat_deg: float) -> float:
+    """The trigger distance that makes ArduPilot fly at most `spacing_m` (true metres, in any direction at
+    `lat_deg`) less half a check's travel between photos at `speed_mps`: n whole checks of travel in its metres,
+    commanded half a check short of them. Exactly n checks would be a tie at the n-th (positions are 1e-7°
+    integers, the speed never exactly the plan's), lost about half the time to n + 1; the half check of slack
+    keeps n for speeds within ±1/(2n) of the plan's, and the half check shorter than the spacing keeps a line's
+    last photo, planned on its end, at least that much before it, where the trigger is switched off."""
+    step = ardupilot_check_step_m(speed_mps)
+    longest = max(ardupilot_metre(lat_deg))
+    steps = math.floor((spacing_m / longest - step / 2) / step + 1e-9)
+    if step <= 0 or steps < 2:
+        return spacing_m
+    return (steps - 0.5) * step
+
+
+def commanded_trigger_distance(firmware: str, frame: str, spacing_m: float, speed_mps: float,
+                               lat_deg: float) -> float:
+    """DO_SET_CAM_TRIGG_DIST's distance for `spacing_m` between photos at `speed_mps` near `lat_deg` on
+    `firmware`/`frame`. ArduPilot's fixed-wing frames get the spacing itself (their photos against arduplane
+    SITL are measured apart from the copter's)."""
+    if firmware == "px4":
+        return px4_commanded_distance(spacing_m, speed_mps)
+    if firmware == "ardupilot" and frame == "copter":
+        return ardupilot_commanded_distance(spacing_m, speed_mps, lat_deg)
+    return spacing_m

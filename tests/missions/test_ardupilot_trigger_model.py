@@ -11,14 +11,16 @@ from __future__ import annotations
 
 import collections
 import dataclasses
+import math
 from pathlib import Path
 
 import pytest
 
 from missions.compile import compile_plan
 from missions.emit.items import mavlink
-from missions.emit.trigger_distance import ardupilot_metre
-from missions.measure.flight import simulate
+from missions.emit.trigger_distance import AP_CAMERA_UPDATE_HZ, ardupilot_commanded_distance, ardupilot_metre
+from missions.measure.flight import ardupilot_trigger_spacing_m, simulate
+from missions.measure.report import report
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -49,3 +51,37 @@ def test_field_multispectral_is_predicted_as_ardupilot_sitl_flew_it():
     # flew it, 0.2 m past as modelled; every other line as flown
     assert predicted[1:15] + predicted[16:] == SITL_PER_LINE[1:15] + SITL_PER_LINE[16:]
     assert abs(len(photos) - sum(SITL_PER_LINE)) <= 2
+
+
+@pytest.mark.parametrize("speed", [2.0, 4.5, 5.0, 6.3, 12.0])
+@pytest.mark.parametrize("lat", [-35.26, 0.0, 50.16, 69.0])
+@pytest.mark.parametrize("spacing", [3.1, 5.356307692, 10.043076923, 10.0, 25.0])
+def test_the_commanded_distance_flies_half_a_check_short_of_the_spacing_and_is_never_a_tie(speed, lat, spacing):
+    step = speed / AP_CAMERA_UPDATE_HZ
+    cmd = ardupilot_commanded_distance(spacing, speed, lat)
+    flown_true = ardupilot_trigger_spacing_m(cmd, speed) * max(ardupilot_metre(lat))
+    assert flown_true <= spacing - step / 2 * (1 - 1e-9)
+    assert flown_true > spacing - 2 * step * max(ardupilot_metre(lat))        # and no shorter than it must be
+    assert (cmd / step) % 1.0 == pytest.approx(0.5)                           # half way between two checks
+
+
+def _straight_gaps(photos) -> list[float]:
+    return [math.hypot(b.x - a.x, b.y - a.y) for a, b in zip(photos, photos[1:])
+            if a.span == b.span and abs(a.heading_deg - b.heading_deg) < 1e-6]
+
+
+@pytest.mark.parametrize("example", ["field-multispectral", "solar-park", "pv-inspection", "powerline-corridor"])
+def test_the_examples_hold_the_requested_front_overlap_on_ardupilot(example):
+    """Before: solar-park 79.8 % for 80 % asked, field-multispectral 74.9 % for 75 % (the 50 Hz rounding)."""
+    compiled = compile_plan(ROOT / "examples" / f"{example}.yaml", firmware="ardupilot")
+    rep = report(compiled)
+    for area in compiled.areas:
+        if area.trigger != "distance":
+            continue
+        lead = area.payloads[0]
+        along = compiled.payload(lead).footprint_m(area.altitude_m)[1]
+        photos = [p for p in simulate(compiled).photos if lead in p.payloads]
+        # photo to photo on a straight line, every pair of the example
+        assert max(_straight_gaps(photos)) <= along * (1 - area.front_overlap)
+        if area.kind == "survey":      # a corridor's bends turn the footprints, and lose overlap, by geometry
+            assert rep.overlap[lead].front_min >= area.front_overlap
