@@ -32,6 +32,34 @@ from wiris_tools.sitl.flight import fly_compiled  # noqa: E402
 from wiris_tools.sitl.photos import check_photos  # noqa: E402
 
 
+def captured_in_tlog(tlog: Path, component: int) -> dict[int, tuple[float, float, float]]:
+    """image_index -> (lat, lon, altitude above home m) of every CAMERA_IMAGE_CAPTURED the camera at `component`
+    sent, as the ground station heard it through the autopilot's routing (the tlog keeps them all; the
+    emulator's own history keeps the last 1000)."""
+    from pymavlink import mavutil
+
+    log = mavutil.mavlink_connection(str(tlog))
+    out: dict[int, tuple[float, float, float]] = {}
+    try:
+        while (m := log.recv_match(type="CAMERA_IMAGE_CAPTURED", blocking=False)) is not None:
+            if m.get_srcComponent() == component:
+                out[m.image_index] = (m.lat / 1e7, m.lon / 1e7, m.relative_alt / 1e3)
+    finally:
+        log.close()
+    return out
+
+
+def photos_taken(flight, component: int) -> list[tuple[float, float, float]]:
+    """(lat, lon, altitude above home m) of each photo the emulator took, in order: from its history when that
+    holds them all, else from the tlog with the history's own entries on top."""
+    kept = {p.index: (p.position.lat / 1e7, p.position.lon / 1e7, p.position.relative_alt / 1e3)
+            for p in flight.photos}
+    if not kept or len(kept) == max(kept) + 1:
+        return [kept[i] for i in sorted(kept)]
+    every = {**captured_in_tlog(flight.sitl.tlog, component), **kept}
+    return [every[i] for i in sorted(every)]
+
+
 def line_rows(compiled, payload: str, caps: list[tuple[float, float, float]]) -> list[str]:
     """One row per camera-on stretch whose count differs: predicted and taken (the nearest predicted photo's)."""
     import numpy as np
@@ -63,7 +91,8 @@ def fly_example(sitl_dir: Path, plan: Path, scratch: Path, speedup: float, cam_t
     timeout = 600.0 + simulate(compiled).flight_time_s / 2.0
     with fly_compiled(sitl_dir, out, compiled.name, component=component, cam_type=cam_type, speedup=speedup,
                       home=compiled.home, workdir=scratch / f"{plan.stem}-sitl", mission_timeout_s=timeout) as flight:
-        caps = [(p.position.lat / 1e7, p.position.lon / 1e7, p.position.relative_alt / 1e3) for p in flight.photos]
+        pass
+    caps = photos_taken(flight, component)       # after SITL has stopped: its tlog is complete
     wall = time.monotonic() - t0
     c = check_photos(compiled, name, caps)
     row = (f"{plan.stem:22s} {name:9s} {c.predicted:9d} {c.captured:8d} {c.worst_offset_m:9.2f} {c.median_offset_m:8.2f} "
