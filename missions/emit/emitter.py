@@ -35,7 +35,8 @@ from typing import Any, Sequence
 
 from missions.compiled import PlanWarning
 from missions.errors import PlanError
-from missions.emit.firmware import FirmwareProfile, px4_commanded_distance
+from missions.emit.firmware import FirmwareProfile
+from missions.emit.trigger_distance import commanded_trigger_distance
 from missions.geometry.geo import great_circle_m
 from missions.emit.items import FRAME_GLOBAL, FRAME_GLOBAL_RELATIVE_ALT, FRAME_MISSION, MissionItem, deg_to_e7, mavlink
 from missions.emit import lua as bridge
@@ -248,9 +249,9 @@ class Emitter:
                           comment=f"camera every {ms} ms (PX4 camera_trigger)"))
             self._add(_do(mavlink.MAV_CMD_DO_TRIGGER_CONTROL, 1.0, -1.0, -1.0, comment="camera trigger on"))
         else:
-            d = t.trigger_distance_m
-            if self.profile.name == "px4":   # PX4 fires up to 50 ms late: see px4_commanded_distance
-                d = px4_commanded_distance(d, self.speed_mps)
+            # the firmware fires up to one distance check late: see missions.emit.trigger_distance
+            d = commanded_trigger_distance(self.profile.name, self.frame, t.trigger_distance_m, self.speed_mps,
+                                           self.home[0])
             self._add(_do(mavlink.MAV_CMD_DO_SET_CAM_TRIGG_DIST, d, 0.0, 1.0 if shoot_now else 0.0,
                           comment=f"camera every {d:.2f} m, one photo now"))
 

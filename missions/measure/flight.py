@@ -17,7 +17,9 @@ How the items are flown (the model, stated so it can be checked):
 * Camera: DO commands execute when the vehicle leaves the previous NAV position, so a command takes effect
   at the path vertex it follows. DO_SET_CAM_TRIGG_DIST (on/off, param3 "trigger once") is re-run through
   `missions.geometry.triggers.simulate_distance_trigger`, which fires as ArduPilot's AP_Camera and PX4's
-  camera_trigger do (straight-line distance from the last photo). PX4 checks that distance every 50 ms and
+  camera_trigger do (straight-line distance from the last photo). ArduPilot checks it at 50 Hz, so it flies the
+  distance rounded up to whole checks of travel, and measures it in its own metres (Location's sphere: 0.2 %
+  longer than true east-west at 50° N, see missions.emit.trigger_distance). PX4 checks that distance every 50 ms and
   measures the next from where it fired, so it flies the spacing `px4_trigger_spacing_m` (half a check's
   travel longer), and it shoots once on every switch-on whatever param3 says. IMAGE_START_CAPTURE with one image,
   DO_DIGICAM_CONTROL(shoot) and a trigger-once take one photo there; IMAGE_START_CAPTURE with an interval
@@ -62,7 +64,8 @@ from missions.geometry.geo import LocalProjection
 from missions.geometry.survey import check_photo_budget
 from missions.emit.firmware import PX4_ACCEPTANCE_M, PX4_TRIGGER_CHECK_S
 from missions.geometry.turns import dubins_length_m
-from missions.geometry.triggers import TriggerSpan, simulate_distance_trigger
+from missions.geometry.triggers import PhotoPoint, TriggerSpan, simulate_distance_trigger
+from missions.emit.trigger_distance import AP_CAMERA_UPDATE_HZ, ApMetre, ardupilot_metre
 
 # ArduCopter defaults (WPNAV_ACCEL 250 cm/s², WPNAV_SPEED_UP 250 cm/s, WPNAV_SPEED_DN 150 cm/s,
 # LAND_SPEED 50 cm/s below LAND_ALT_LOW 10 m, RTL_ALT 15 m); PX4's multicopter defaults are close
@@ -94,7 +97,6 @@ NAV_TAKEOFF = {C.MAV_CMD_NAV_TAKEOFF, C.MAV_CMD_NAV_VTOL_TAKEOFF}
 NAV_LAND = {C.MAV_CMD_NAV_LAND, C.MAV_CMD_NAV_VTOL_LAND}
 
 
-AP_CAMERA_UPDATE_HZ = 50.0   # AP_Camera::update's rate in the vehicles' scheduler tables ("should be called at 50hz")
 # ArduPlane's navigate task (Plane.cpp scheduler table: SCHED_TASK(navigate, 10, ...)) runs the mission, its
 # waypoint checks and the DO items after a waypoint, at 10 Hz: DO_SET_CAM_TRIGG_DIST after a line's entry (its
 # first photo) and after its exit come up to 0.1 s of flight after the plane passes the waypoint.
@@ -521,7 +523,8 @@ class _Flight:
         photo in AP_Camera_Backend::update() at 50 Hz and shoots at the first check at or past `d`, so each photo
         comes up to one check's travel late and the next is measured from there: the spacing is `d` rounded up
         to whole 50 Hz steps of travel at the cruise speed (measured in SITL: powerline-corridor at 6 m/s,
-        d = 6.872 m -> 6.96 m, 870 photos taken where exact spacing predicts 882)."""
+        d = 6.872 m -> 6.96 m, 870 photos taken where exact spacing predicts 882). The spacing is in ArduPilot's
+        metres: `_fire` turns it into true metres along the path. A plane's is arduplane_trigger_spacing_m."""
         if not self.ardupilot:
             return d
         return ardupilot_trigger_spacing_m(d, self.speed) if self.copter else arduplane_trigger_spacing_m(d, self.speed)
@@ -831,8 +834,9 @@ def _photos(compiled: Compiled, verts: Sequence[Vertex], times: np.ndarray, flig
     path = _Path.of(verts, times)
     shots: list[_Shot] = []
     late = arduplane_late_m(flight.speed) if flight.ardupilot and not flight.copter else 0.0
+    ap_metre = ardupilot_metre(proj.lat0) if compiled.firmware == "ardupilot" else None
     span_id = _distance_photos(path, flight.distance_spans, flight.trigger_payloads, shots, 0,
-                               px4=compiled.firmware == "px4", frame=compiled.frame, late_m=late)
+                               px4=compiled.firmware == "px4", frame=compiled.frame, late_m=late, ap_metre=ap_metre)
     span_id = _interval_photos(path, flight.interval_spans, shots, span_id)
     span_id = _single_photos(path, flight.singles, shots, span_id)
     _self_triggered_photos(compiled, path, shots, span_id)
@@ -884,12 +888,15 @@ def px4_trigger_spacing_m(distance_m: float, speed_mps: float) -> float:
 
 
 def _distance_photos(path: _Path, spans: Sequence[DistanceSpan], payloads: tuple[str, ...], shots: list[_Shot],
-                     span_id: int, *, px4: bool = False, frame: str = "copter", late_m: float = 0.0) -> int:
+                     span_id: int, *, px4: bool = False, frame: str = "copter", late_m: float = 0.0,
+                     ap_metre: ApMetre | None = None) -> int:
     """Distance triggering, re-run as the firmware fires it; returns the next span id. PX4 shoots once whenever
     the trigger is switched on (update_distance's first valid position, or param3's one shot: never both),
     flies px4_trigger_spacing_m, and runs the DO items after a waypoint when it comes within px4_do_item_lead_m
     of it: every shot of the span comes that much earlier along the line (measured: 2.0 m median offset on a
     multicopter; on a plane NPFG's switch distance, about 30 m).
+    ArduPilot (`ap_metre` given) measures the distance in its own metres (trigger_distance.AP_EARTH_RADIUS_M):
+    the trigger is re-run on the path in those metres and its photos brought back.
     `late_m`: every shot of a span comes that much later along its line (ArduPlane: arduplane_late_m)."""
     verts, times, xy, alts, holds = path
     for span in spans:
@@ -897,7 +904,7 @@ def _distance_photos(path: _Path, spans: Sequence[DistanceSpan], payloads: tuple
         if px4:
             spd = max((verts[k].speed_mps for k in range(span.start + 1, span.end + 1)), default=verts[span.start].speed_mps)
             d, at_start = px4_trigger_spacing_m(d, spd), True
-        pts = simulate_distance_trigger(xy, [TriggerSpan(span.start, span.end, d, at_start, span.shoot_at_stop)])
+        pts = _fire(xy, TriggerSpan(span.start, span.end, d, at_start, span.shoot_at_stop), ap_metre)
         if not pts:
             span_id += 1
             continue
@@ -920,6 +927,19 @@ def _distance_photos(path: _Path, spans: Sequence[DistanceSpan], payloads: tuple
             shots.append(_Shot(p.x, p.y, alt[j], hd, payloads, span_id, span.item, tt[j], nav))
         span_id += 1
     return span_id
+
+
+def _fire(xy: np.ndarray, span: TriggerSpan, ap_metre: ApMetre | None) -> list[PhotoPoint]:
+    """The distance trigger's photos over `span` of the path `xy` (true metres), measured in ArduPilot's metres
+    when `ap_metre` is given (a survey's extent is small enough for one scale east and one north)."""
+    if ap_metre is None:
+        return simulate_distance_trigger(xy, [span])
+    kx, ky = ap_metre
+    pts = simulate_distance_trigger(xy / np.array([kx, ky]), [span])
+    return [p._replace(x=p.x * kx, y=p.y * ky,
+                       heading_deg=math.degrees(math.atan2(kx * math.sin(math.radians(p.heading_deg)),
+                                                           ky * math.cos(math.radians(p.heading_deg)))) % 360.0)
+            for p in pts]
 
 
 def _interval_photos(path: _Path, spans: Sequence[IntervalSpan], shots: list[_Shot], span_id: int) -> int:

@@ -16,6 +16,7 @@ from missions.errors import PlanError
 from missions.measure.report import report
 from missions.plan import parse_plan
 from missions.emit.setup import commands_for
+from missions.emit.trigger_distance import ardupilot_commanded_distance
 
 PLANS = Path(__file__).resolve().parent / "plans"
 
@@ -101,14 +102,18 @@ def test_distance_trigger_brackets_each_leg(tmp_path):
     assert len(ons) == len(offs) >= 2
     assert all(t.param1 > 0 and t.param3 == 1 for t in ons)
     assert all(t.param1 == 0 for t in offs)
-    # trigger distance = along-track footprint × (1 − front): 512 px × 17 µm × 40 m / 13 mm × 0.2
-    assert ons[0].param1 == pytest.approx(8.704 * 40 / 13 * 0.2, rel=1e-6)
+    # trigger distance = along-track footprint × (1 − front): 512 px × 17 µm × 40 m / 13 mm × 0.2, commanded
+    # half a 50 Hz check short of whole checks of ArduPilot's metres (missions.emit.trigger_distance)
+    assert c.areas[0].trigger_distance_m == pytest.approx(8.704 * 40 / 13 * 0.2, rel=1e-6)
+    assert ons[0].param1 == pytest.approx(ardupilot_commanded_distance(c.areas[0].trigger_distance_m, c.speed_mps,
+                                                                       c.home[0]), rel=1e-9)
+    assert c.areas[0].trigger_distance_m - 3 * c.speed_mps / 50 < ons[0].param1 < c.areas[0].trigger_distance_m
     for k, it in enumerate(c.items):
         if it.command == m.MAV_CMD_DO_SET_CAM_TRIGG_DIST:
             assert c.items[k - 1].command == m.MAV_CMD_NAV_WAYPOINT
     wps = [it for it in c.items if it.command == m.MAV_CMD_NAV_WAYPOINT]
     assert all(it.frame == m.MAV_FRAME_GLOBAL_RELATIVE_ALT and it.z == 40 for it in wps)
-    assert c.areas[0].altitude_m == 40 and c.areas[0].trigger_distance_m == pytest.approx(ons[0].param1)
+    assert c.areas[0].altitude_m == 40
 
 
 def test_gsd_sets_altitude(tmp_path):

@@ -97,8 +97,9 @@ def test_cliff_is_climbed_before_it_and_left_late_never_below_the_target(tmp_pat
     row = rep.terrain.steps[0]
     # never lower than asked, to within what the DEM itself says between its samples: the follower holds the
     # target at the DEM's sample spacing, and a photo that falls between two samples at the cliff's foot reads
-    # the bilinear surface there (0.14 m under with ArduPilot's 50 Hz distance trigger placing the photos)
-    assert row.hag_min_m >= 60.0 - 0.2
+    # the bilinear surface there (0.31 m under with the photos where ArduPilot's 50 Hz distance trigger puts them,
+    # commanded half a check short of whole checks; 0.17 m under at the planned distance)
+    assert row.hag_min_m >= 60.0 - 0.35
     assert any(w.code == "terrain_rate_limited" for w in compiled.warnings)   # 60 m up at 2.5 m/s over 5 m/s
     assert rep.terrain.clearance.min_m >= 20.0
 

@@ -80,9 +80,11 @@ def fly_compiled(sitl_dir: Path | None, out_dir: Path, name: str, *, model: str 
                  cam_type: int | None = None, speedup: float = 20.0, vehicle: str = "copter",
                  home: tuple[float, float, float] = (50.08, 14.42, 262.0), fly: bool = True,
                  extra_params: dict | None = None, workdir: Path | None = None,
-                 camera_serial: int = 2, before_flight: Callable[[Flight], None] | None = None) -> Iterator[Flight]:
-    """Start SITL and the emulator, load `out_dir/name.params`, upload `name.plan` and (with `fly`) fly it; a
-    `name.lua` bridge goes into the working folder's scripts/ (SCR_ENABLE comes from NAME.params)."""
+                 camera_serial: int = 2, before_flight: Callable[[Flight], None] | None = None,
+                 mission_timeout_s: float = 600.0) -> Iterator[Flight]:
+    """Start SITL and the emulator, load `out_dir/name.params`, upload `name.plan` and (with `fly`) fly it, for
+    at most `mission_timeout_s` of wall time; a `name.lua` bridge goes into the working folder's scripts/
+    (SCR_ENABLE comes from NAME.params)."""
     import shutil
     import tempfile
     from wiris_tools.emulate.runner import start_emulator
@@ -118,7 +120,7 @@ def fly_compiled(sitl_dir: Path | None, out_dir: Path, name: str, *, model: str 
         if fly:
             _wait_camera_known(sitl, asked, component, int(params.get(f"CAM{instance}_TYPE", 0)), timeout=90)
             sitl.arm_and_start_mission()
-            sitl.wait_mission_end(timeout=600)
+            sitl.wait_mission_end(timeout=mission_timeout_s)
             time.sleep(0.5)   # the last CAMERA_IMAGE_CAPTURED
             with emu.lock:
                 flight.photos = list(emu.state.history)
