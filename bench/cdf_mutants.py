@@ -267,13 +267,13 @@ def make_mutants(count: int, double: float, seed: int) -> list[Mutant]:
     rng = random.Random(seed)
     pool = seeds()
     names = sorted(pool)
-    out: list[Mutant] = []
+    out: dict[bytes, Mutant] = {}  # distinct mutants only: the same bytes would be judged twice
     while len(out) < count:
         name = rng.choice(names)
         m = mutate(name, pool[name], rng, 2 if rng.random() < double else 1)
         if m is not None:
-            out.append(m)
-    return out
+            out.setdefault(m.data, m)
+    return list(out.values())
 
 
 # ---- judging ---------------------------------------------------------------------------------------------------
@@ -285,7 +285,7 @@ def run_mavsdk(mutants: list[Mutant], workers: int, cache_path: Path | None) -> 
     """MAVSDK's result for each mutant; from the cache when it has the mutant, else measured (and cached)."""
     keys = [hashlib.sha256(m.data).hexdigest() for m in mutants]
     cache = json.loads(cache_path.read_text()) if cache_path is not None and cache_path.exists() else {}
-    todo = list(dict.fromkeys(k for k in keys if k not in cache))  # each distinct mutant once
+    todo = [k for k in keys if k not in cache]
     data = {k: m.data for k, m in zip(keys, mutants)}
     # in chunks, the cache written after each: a long run that is stopped keeps what it measured
     for start in range(0, len(todo), CACHE_CHUNK):
@@ -483,7 +483,7 @@ def main() -> None:
         verdicts[v] += 1
         if v in ("loads", "drops", "rejects", "crash"):  # a timeout or a harness failure says nothing
             judged += judge(mut, ms, v)
-    print(f"{len(mutants)} mutants ({sum(len(m.faults) == 2 for m in mutants)} double-fault) of "
+    print(f"{len(mutants)} distinct mutants ({sum(len(m.faults) == 2 for m in mutants)} double-fault) of "
           f"{len({m.seed for m in mutants})} seeds, seed {args.seed}; MAVSDK: "
           + ", ".join(f"{k} {n}" for k, n in sorted(verdicts.items())))
     print()
