@@ -3,10 +3,12 @@ definitions through real MAVSDK 4.1.0 (camera plugin over HTTP) and MAVProxy's C
 `wiris cdf validate` in each profile.
 
     .venv/bin/python bench/cdf_mutants.py [--count N] [--double 0.5] [--seed 1] [--workers 3] [--show 3]
-                                          [--peers-cache FILE]
+                                          [--peers-cache FILE [--cached-only]]
 
---peers-cache keeps what MAVSDK made of each mutant (keyed by the mutant's SHA-256) in a JSON file, so the
-validator can be judged again after a fix without running MAVSDK again (same seed = same mutants).
+--peers-cache keeps what MAVSDK made of each mutant (keyed by the mutant's SHA-256) in a JSON file, written
+as it goes, so the validator can be judged again after a fix without running MAVSDK again (same seed = same
+mutants); --cached-only judges just the mutants the file has (e.g. while a long run is still measuring).
+Delete the file after a change to the harness or to MAVSDK: its results are the old harness's.
 
 Seeds: the corpus files MAVSDK loads (../shared/corpus/cdf), the wild files of tests/data/cdf and the
 generated WIRIS/RedEdge definitions. Each mutant applies one fault (or two, with probability --double)
@@ -16,7 +18,9 @@ harness got an answer from MAVSDK (loads / drops / rejects / crash; timeouts are
   dropped set     = the parameters the mavsdk profile says MAVSDK skips equal the ones it skipped;
   strict          = has an error whenever MAVSDK or MAVProxy rejects/drops (strict is a superset).
 QGroundControl is not run (no headless QGC peer), so the qgc profile is not measured here.
-Disagreements are grouped into classes (direction, fault kinds, rules) with an example each.
+It prints the agreement per profile and per mutation class, the disagreements that a row of RULES.md's
+disagreement table (cdf/validation/rules.py DISAGREEMENTS) explains, skipped by class with an example, and
+every other disagreement class with examples; it exits 1 when there is any of those.
 """
 
 from __future__ import annotations
@@ -32,7 +36,7 @@ import time
 from collections import Counter, defaultdict
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import Callable, NamedTuple
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(REPO), str(REPO / "tests")]
@@ -263,29 +267,39 @@ def make_mutants(count: int, double: float, seed: int) -> list[Mutant]:
     rng = random.Random(seed)
     pool = seeds()
     names = sorted(pool)
-    out: list[Mutant] = []
+    out: dict[bytes, Mutant] = {}  # distinct mutants only: the same bytes would be judged twice
     while len(out) < count:
         name = rng.choice(names)
         m = mutate(name, pool[name], rng, 2 if rng.random() < double else 1)
         if m is not None:
-            out.append(m)
-    return out
+            out.setdefault(m.data, m)
+    return list(out.values())
 
 
 # ---- judging ---------------------------------------------------------------------------------------------------
+
+CACHE_CHUNK = 60  # mutants measured between two writes of the peers cache
+
 
 def run_mavsdk(mutants: list[Mutant], workers: int, cache_path: Path | None) -> list[peers.MavsdkResult]:
     """MAVSDK's result for each mutant; from the cache when it has the mutant, else measured (and cached)."""
     keys = [hashlib.sha256(m.data).hexdigest() for m in mutants]
     cache = json.loads(cache_path.read_text()) if cache_path is not None and cache_path.exists() else {}
-    todo = [i for i, k in enumerate(keys) if k not in cache]
-    if todo:
+    todo = [k for k in keys if k not in cache]
+    data = {k: m.data for k, m in zip(keys, mutants)}
+    # in chunks, the cache written after each: a long run that is stopped keeps what it measured
+    for start in range(0, len(todo), CACHE_CHUNK):
+        chunk = todo[start:start + CACHE_CHUNK]
         with tempfile.TemporaryDirectory(prefix="cdf-mutants-") as tmp:
-            fresh = peers.mavsdk_load_definitions([mutants[i].data for i in todo], Path(tmp), workers=workers)
-        for i, r in zip(todo, fresh):
-            cache[keys[i]] = _result_json(r)
+            fresh = peers.mavsdk_load_definitions([data[k] for k in chunk], Path(tmp), workers=workers)
+        for k, r in zip(chunk, fresh):
+            cache[k] = _result_json(r)
         if cache_path is not None:
-            cache_path.write_text(json.dumps(cache))
+            tmp_path = cache_path.with_name(cache_path.name + ".part")
+            tmp_path.write_text(json.dumps(cache))
+            tmp_path.replace(cache_path)
+        print(f"MAVSDK: {min(start + CACHE_CHUNK, len(todo))}/{len(todo)} mutants measured", file=sys.stderr,
+              flush=True)
     # file_parameters from the current harness (it reads the file as MAVSDK does), not from the cache
     return [dataclasses.replace(_result_from_json(cache[k]),
                                 file_parameters=peers._file_parameter_names(peers.plain_xml(m.data)))
@@ -314,89 +328,171 @@ def mavsdk_verdict(m: peers.MavsdkResult) -> str:
     return "rejects" if m.outcome == "rejected" else m.outcome  # timeout / no-system / harness-error
 
 
-def main() -> None:
-    from cdf.validate import PROFILES, validate_bytes
+class Klass(NamedTuple):
+    """A disagreement class: which measure, which way, the mutant's fault kinds and the mavsdk profile's
+    error rules."""
 
+    measure: str  # mavsdk | drops | strict
+    direction: str  # profile-errors | profile-valid | dropped-set
+    kinds: tuple[str, ...]
+    errors: tuple[str, ...]
+
+    def title(self) -> str:
+        return (f"{self.measure}: {DIRECTIONS[self.direction]}; faults {'+'.join(self.kinds)}; "
+                f"mavsdk errors {','.join(self.errors) or '-'}")
+
+
+DIRECTIONS = {"profile-errors": "the profile has an error, MAVSDK loads every parameter",
+              "profile-valid": "MAVSDK rejects, crashes or drops (or MAVProxy rejects), the profile has no error",
+              "dropped-set": "MAVSDK loaded the file; the parameters it dropped are not the predicted ones"}
+MEASURES = {"mavsdk": "mavsdk profile has an error = MAVSDK rejects, crashes or drops a parameter",
+            "drops": "mavsdk profile's drop findings = the parameters MAVSDK dropped (MAVSDK loaded the file)",
+            "strict": "strict profile has an error where MAVSDK or MAVProxy rejects or drops"}
+
+
+class Judgement(NamedTuple):
+    """One measure on one mutant: agreed (disagreement None), or the class it disagrees in, with a row to print
+    and the key of the RULES.md row that explains it (None: unexplained)."""
+
+    measure: str
+    kinds: tuple[str, ...]
+    disagreement: Klass | None
+    row: str
+    explained_by: str | None = None
+
+
+def judge(mut: Mutant, ms: peers.MavsdkResult, verdict: str) -> list[Judgement]:
+    from cdf.validate import validate_bytes
+
+    px = peers.mavproxy_load_definition(mut.data)
+    reports = {p: validate_bytes(mut.data, "mutant.xml", p) for p in ("mavsdk", "strict")}
+    unhappy = verdict != "loads"
+    kinds = tuple(sorted({f.split(":")[0] for f in mut.faults}))
+    errs = tuple(sorted(reports["mavsdk"].rules("error")))
+    messages = tuple(f.message for f in reports["mavsdk"].errors)
+    label = f"{mut.seed} {' + '.join(mut.faults)}"
+    out = []
+    said = not reports["mavsdk"].valid
+    klass = None if said == unhappy else Klass("mavsdk", "profile-errors" if said else "profile-valid", kinds, errs)
+    out.append(Judgement("mavsdk", kinds, klass,
+                         f"{label} | MAVSDK: {_why(ms)} | profile: {_errors(reports['mavsdk'])}"))
+    if ms.accepted:
+        predicted = {f.parameter for f in reports["mavsdk"].findings
+                     if f.rule in peers.MAVSDK_DROP_RULES and f.parameter is not None} & set(ms.file_parameters)
+        klass = None if predicted == set(ms.dropped) else Klass("drops", "dropped-set", kinds, errs)
+        out.append(Judgement("drops", kinds, klass,
+                             f"{label} | dropped {sorted(ms.dropped)} predicted {sorted(predicted)}"))
+    if unhappy or not px.accepted:
+        who = f"MAVSDK {verdict}" if unhappy else f"MAVProxy rejects ({px.error})"
+        klass = None if not reports["strict"].valid else Klass("strict", "profile-valid", kinds, errs)
+        out.append(Judgement("strict", kinds, klass, f"{label} | {who}"))
+    return [j._replace(explained_by=explanation(j.disagreement, messages)) if j.disagreement else j for j in out]
+
+
+def explanation(k: Klass, messages: tuple[str, ...]) -> str | None:
+    """The key of the RULES.md disagreement row that explains a disagreement of class k whose mavsdk profile
+    errors say `messages`, if one does."""
+    import re
+
+    from cdf.validation.rules import DISAGREEMENTS
+
+    for d in DISAGREEMENTS:
+        if (f"{k.measure}/{k.direction}" in d.where and set(d.kinds) & set(k.kinds) and k.errors in d.errors
+                and all(re.search(d.messages, m) for m in messages)):
+            return d.key
+    return None
+
+
+def _errors(report) -> str:
+    return "; ".join(f"{f.rule} {f.message}" for f in report.errors)[:300] or "no error"
+
+
+def _counts(rows: list[Judgement]) -> str:
+    if not rows:
+        return "0 | - | - | - | - | -"
+    agree = sum(j.disagreement is None for j in rows)
+    explained = sum(j.explained_by is not None for j in rows)
+    return (f"{len(rows)} | {agree} | {explained} | {len(rows) - agree - explained} | "
+            f"{agree / len(rows):.3f} | {(agree + explained) / len(rows):.3f}")
+
+
+HEAD = "| judged | agree | explained | unexplained | agree ratio | agree+explained |"
+
+
+def print_tables(judged: list[Judgement], show: int) -> int:
+    """The agreement per profile and per mutation class, the explained classes skipped and the unexplained
+    ones with examples; returns the number of unexplained disagreements."""
+    print("| profile | measured against " + HEAD)
+    print("|---|---|---|---|---|---|---|---|")
+    for measure, what in MEASURES.items():
+        profile = "strict" if measure == "strict" else "mavsdk"
+        print(f"| {profile} | {what} | {_counts([j for j in judged if j.measure == measure])} |")
+    print("| qgc | not measured: no headless QGroundControl peer | 0 | - | - | - | - | - |")
+    print()
+    print("mavsdk profile vs MAVSDK per mutation class (a double-fault mutant counts in each of its kinds):")
+    print()
+    print("| mutation class " + HEAD)
+    print("|---|---|---|---|---|---|---|")
+    mavsdk = [j for j in judged if j.measure == "mavsdk"]
+    for kind in sorted({k for j in mavsdk for k in j.kinds}):
+        print(f"| {kind} | {_counts([j for j in mavsdk if kind in j.kinds])} |")
+    print()
+    skipped: dict[str, list[str]] = defaultdict(list)
+    unexplained: dict[Klass, list[str]] = defaultdict(list)
+    for j in judged:
+        if j.explained_by is not None:
+            skipped[j.explained_by].append(f"{j.measure}: {j.row}")
+        elif j.disagreement is not None:
+            unexplained[j.disagreement].append(j.row)
+    print("explained in cdf/schema/RULES.md (its disagreement table), skipped:" + ("" if skipped else " none"))
+    for key, rows in sorted(skipped.items(), key=lambda kv: -len(kv[1])):
+        print(f"- {key}: {len(rows)} disagreements, e.g. {rows[0][:300]}")
+    print()
+    print(f"{len(unexplained)} unexplained disagreement classes" + (":" if unexplained else ""))
+    for k, rows in sorted(unexplained.items(), key=lambda kv: -len(kv[1])):
+        print(f"- [{len(rows)}] {k.title()}")
+        for r in rows[:show]:
+            print(f"    {r[:500]}")
+    return sum(len(rows) for rows in unexplained.values())
+
+
+def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--count", type=int, default=400)
     ap.add_argument("--double", type=float, default=0.5, help="share of double-fault mutants")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--workers", type=int, default=3)
-    ap.add_argument("--show", type=int, default=2, help="examples printed per disagreement class")
+    ap.add_argument("--show", type=int, default=3, help="examples printed per unexplained class")
     ap.add_argument("--peers-cache", help="JSON file of MAVSDK results to reuse and extend")
+    ap.add_argument("--cached-only", action="store_true",
+                    help="judge only the mutants the peers cache already has (no MAVSDK run)")
     args = ap.parse_args()
     t0 = time.monotonic()
     mutants = make_mutants(args.count, args.double, args.seed)
-    msdk = run_mavsdk(mutants, args.workers, Path(args.peers_cache) if args.peers_cache else None)
+    cache_path = Path(args.peers_cache) if args.peers_cache else None
+    if args.cached_only:
+        if cache_path is None or not cache_path.exists():
+            sys.exit("--cached-only needs an existing --peers-cache FILE (hint: run once without --cached-only)")
+        have = json.loads(cache_path.read_text())
+        mutants = [m for m in mutants if hashlib.sha256(m.data).hexdigest() in have]
+    msdk = run_mavsdk(mutants, args.workers, cache_path)
     verdicts = Counter()
-    agree = Counter()
-    judged = Counter()
-    classes: dict[tuple, list[str]] = defaultdict(list)
+    judged: list[Judgement] = []
     for mut, ms in zip(mutants, msdk):
         v = mavsdk_verdict(ms)
         verdicts[v] += 1
-        if v not in ("loads", "drops", "rejects", "crash"):
-            continue
-        px = peers.mavproxy_load_definition(mut.data)
-        reports = {p: validate_bytes(mut.data, "mutant.xml", p) for p in PROFILES}
-        unhappy = v != "loads"
-        kinds = tuple(sorted(f.split(":")[0] for f in mut.faults))
-        label = f"{mut.seed} {' + '.join(mut.faults)}"
-        # mavsdk profile
-        judged["mavsdk"] += 1
-        said = not reports["mavsdk"].valid
-        errs = tuple(sorted(reports["mavsdk"].rules("error")))
-        if said == unhappy:
-            agree["mavsdk"] += 1
-        else:
-            direction = "mavsdk profile errors, MAVSDK loads all" if said else f"MAVSDK {v}, mavsdk profile valid"
-            classes[(direction, kinds, errs)].append(f"{label} | MAVSDK: {_why(ms)}")
-        # dropped parameters, where MAVSDK loaded the file
-        if ms.accepted:
-            judged["drops"] += 1
-            predicted = {f.parameter for f in reports["mavsdk"].findings
-                         if f.rule in peers.MAVSDK_DROP_RULES and f.parameter is not None}
-            predicted &= set(ms.file_parameters)
-            if predicted == set(ms.dropped):
-                agree["drops"] += 1
-            else:
-                classes[("dropped set differs", kinds, errs)].append(
-                    f"{label} | dropped {sorted(ms.dropped)} predicted {sorted(predicted)}")
-        # strict: an error whenever a real parser rejects or drops
-        if unhappy or not px.accepted:
-            judged["strict"] += 1
-            if not reports["strict"].valid:
-                agree["strict"] += 1
-            else:
-                who = f"MAVSDK {v}" if unhappy else f"MAVProxy rejects ({px.error})"
-                classes[(f"{who.split(' (')[0]}, strict valid", kinds, ())].append(f"{label} | {who}")
-    print(f"{len(mutants)} mutants ({sum(len(m.faults) == 2 for m in mutants)} double-fault) of "
-          f"{len({m.seed for m in mutants})} seeds; MAVSDK: "
+        if v in ("loads", "drops", "rejects", "crash"):  # a timeout or a harness failure says nothing
+            judged += judge(mut, ms, v)
+    print(f"{len(mutants)} distinct mutants ({sum(len(m.faults) == 2 for m in mutants)} double-fault) of "
+          f"{len({m.seed for m in mutants})} seeds, seed {args.seed}; MAVSDK: "
           + ", ".join(f"{k} {n}" for k, n in sorted(verdicts.items())))
     print()
-    print("| measure | judged | agree | ratio |")
-    print("|---|---|---|---|")
-    for key, what in (("mavsdk", "mavsdk profile error = MAVSDK rejects/crashes/drops"),
-                      ("drops", "dropped parameters = mavsdk profile's drop findings (MAVSDK loaded)"),
-                      ("strict", "strict errors where MAVSDK or MAVProxy rejects/drops")):
-        n = judged[key]
-        print(f"| {what} | {n} | {agree[key]} | {agree[key] / n:.3f} |" if n else f"| {what} | 0 | 0 | - |")
-    print()
-    explained = [k for k in classes if _explained(*k)]
-    print(f"{len(classes)} disagreement classes, {len(explained)} of them explained in cdf/schema/RULES.md "
-          "(its last table)")
-    for (direction, kinds, errs), rows in sorted(classes.items(), key=lambda kv: -len(kv[1])):
-        mark = " [RULES.md]" if _explained(direction, kinds, errs) else ""
-        print(f"- [{len(rows)}]{mark} {direction}; faults {'+'.join(kinds)}; errors {','.join(errs) or '-'}")
-        for r in rows[: args.show]:
-            print(f"    {r[:400]}")
+    unexplained = print_tables(judged, args.show)
     print(f"\n{time.monotonic() - t0:.0f} s")
-
-
-def _explained(direction: str, kinds: tuple[str, ...], errs: tuple[str, ...]) -> bool:
-    """Whether a class is one RULES.md's disagreement table explains: an integer MAVSDK's std::stoi reads a
-    prefix of (CDF120 alone, on a file MAVSDK loads completely)."""
-    return direction.startswith("mavsdk profile errors") and errs == ("CDF120",) and "bad-value" in kinds
+    if unexplained:
+        print(f"FAIL: {unexplained} disagreements that no row of RULES.md's disagreement table explains",
+              file=sys.stderr)
+        sys.exit(1)
 
 
 def _why(ms: peers.MavsdkResult) -> str:

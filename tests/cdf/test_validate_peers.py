@@ -121,3 +121,42 @@ def test_strict_errors_where_mavproxy_rejects(case):
     px = peers.mavproxy_load_definition(data)
     assert not px.accepted, case
     assert not validate_bytes(data, f"{case}.xml", "strict").valid
+
+
+# The rows of RULES.md's disagreement table (rules.DISAGREEMENTS): MAVSDK loads each of these completely, the
+# mavsdk profile keeps its error on purpose, and the row that explains it in bench/cdf_mutants.py matches it.
+KEPT = {
+    ("stoi-lenient", "digits-then-junk"): cdf(base=BASE.replace('name="Rainbow" value="1"',
+                                                                'name="Rainbow" value="1abc"')),
+    ("stoi-lenient", "hex-integer"): cdf('<parameter name="WW_X" type="int32" default="1" min="0x10" max="20">'
+                                         "<description>x</description></parameter>"),
+    ("stoi-lenient", "uint8-over-255"): cdf('<parameter name="WW_X" type="uint8" default="0"><description>x'
+                                            '</description><options><option name="a" value="0"/>'
+                                            '<option name="b" value="300"/></options></parameter>'),
+    ("stof-lenient", "hex-float"): cdf(base=BASE.replace('max="1.0"', 'max="0x1"')),
+    # the harness's blind spot: MAVSDK skips the custom parameter, but it has no name to ask MAVSDK for
+    ("nameless-skipped", "custom"): cdf('<parameter name="" type="custom" control="0"><description>x'
+                                        "</description></parameter>"),
+}
+
+
+@pytest.fixture(scope="module")
+def kept(tmp_path_factory):
+    results = peers.mavsdk_load_definitions(list(KEPT.values()), tmp_path_factory.mktemp("mavsdk-kept"), workers=2)
+    return dict(zip(KEPT, results))
+
+
+@pytest.mark.parametrize("case", sorted(KEPT))
+def test_kept_disagreement_is_what_mavsdk_does_and_its_row_explains_it(kept, case):
+    import re
+
+    from cdf.validation.rules import DISAGREEMENTS
+
+    key, _what = case
+    m = kept[case]
+    assert m.accepted and m.dropped == (), (case, m.outcome, m.dropped, m.log[-800:])
+    report = validate_bytes(KEPT[case], "kept.xml", "mavsdk")
+    assert not report.valid
+    row = next(d for d in DISAGREEMENTS if d.key == key)
+    assert tuple(sorted(report.rules("error"))) in row.errors, report.errors
+    assert all(re.search(row.messages, f.message) for f in report.errors), report.errors
