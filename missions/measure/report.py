@@ -457,6 +457,22 @@ def _measure_step(compiled: Compiled, area_info: AreaInfo, path: np.ndarray | No
     return StepMeasure(area_info, payloads, StepPath(_outside_m(sim.xy, path, geom), over_m, over_camera_m), table)
 
 
+def measured_ground(compiled: Compiled, sim: Simulation, payload: str) -> Any | None:
+    """The ground the report measures `payload`'s coverage on (shapely, the simulation's metres): the areas of
+    the steps it photographs, less what their zones leave uncoverable. None when it photographs no area. A
+    coverage measured elsewhere (from the photos a flight took) is comparable with the report's only on this."""
+    import shapely   # heavy: loads only when a plan has an area
+
+    photos_of = {p.name: [ph for ph in sim.photos if p.name in ph.payloads] for p in compiled.payloads}
+    grounds = []
+    for a in compiled.areas:
+        if payload not in a.payloads:
+            continue
+        geom = area_geometry(a.area, sim.projection)
+        grounds.append(geom if a.zones is None else _zone_table(compiled, a, geom, photos_of, sim).coverable)
+    return shapely.union_all(grounds) if grounds else None
+
+
 def _footprint_union(ph: _PhotoArrays, idx: np.ndarray, payload: PayloadInfo) -> Any:
     """The ground under the footprints of the photos `idx` (the simulation's metres)."""
     import shapely   # heavy: loads only when a plan has an area

@@ -16,7 +16,7 @@ from missions.geometry.footprint import Footprint
 from missions.geometry.triggers import PhotoPoint
 from missions.measure.coverage import coverage_fraction, footprint_polygons
 from missions.measure.flight import simulate
-from missions.measure.report import area_geometry, report
+from missions.measure.report import measured_ground, report
 
 
 @dataclass(frozen=True)
@@ -69,10 +69,9 @@ def _captured_coverage(compiled: Any, sim: Any, payload: str, predicted: list, p
     to the heading of the nearest predicted photo (the camera reports no attitude: Workswell manual §6.4.5)."""
     import shapely   # heavy: only here
 
-    areas = [a for a in compiled.areas if payload in a.payloads]
-    if not areas:
+    geom = measured_ground(compiled, sim, payload)   # the report's own: the areas less what zones make uncoverable
+    if geom is None:
         return float("nan")
-    geom = shapely.union_all([area_geometry(a.area, sim.projection) for a in areas])
     if len(got_xy) == 0 or len(pred_xy) == 0:
         return 0.0
     d = np.hypot(got_xy[:, None, 0] - pred_xy[None, :, 0], got_xy[:, None, 1] - pred_xy[None, :, 1])
