@@ -20,12 +20,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
 from missions.terrain.clearance import Clearance, is_terrain_item, path_clearance
 from missions.terrain.dem import PlaneGround
+
+if TYPE_CHECKING:
+    from missions.compiled import PayloadInfo
 
 GROUND_FLAT = "ground assumed flat at home elevation"
 _RAY_ITERATIONS = 24
@@ -96,6 +99,28 @@ def camera_amsl(compiled: Any, photos: Sequence[Any], ground_below: np.ndarray) 
     return np.where(terrain, ground_below + alt, compiled.home[2] + alt)
 
 
+
+def footprint_ring(heading_deg: np.ndarray, payload: PayloadInfo) -> np.ndarray:
+    """Each photo's footprint outline per metre of height above the ground, (n, 8, 2) in the ring order of
+    _RING (corners and edge midpoints), turned to its heading."""
+    h = np.radians(heading_deg)
+    d = np.column_stack([np.sin(h), np.cos(h)])
+    nrm = np.column_stack([np.cos(h), -np.sin(h)])
+    across, along = payload.footprint_m(1.0)
+    return d[:, None, :] * (_RING[None, :, 0:1] * along / 2) + nrm[:, None, :] * (_RING[None, :, 1:2] * across / 2)
+
+
+def flat_ground_photos(centres: np.ndarray, alt_m: np.ndarray, heading_deg: np.ndarray,
+                       payload: PayloadInfo) -> GroundPhotos:
+    """Footprints on flat ground: each photo's rectangle at its own height, as GroundPhotos, so that one set of
+    overlap measures serves flat ground and a DEM."""
+    import shapely
+
+    ring = centres[:, None, :] + footprint_ring(heading_deg, payload) * np.maximum(alt_m, 0.0)[:, None, None]
+    closed = np.concatenate([ring, ring[:, :1]], axis=1)
+    return GroundPhotos(alt_m.astype(float), ring, shapely.polygons(closed) if len(alt_m) else np.zeros(0, object))
+
+
 def ground_photos(compiled: Any, sim: Any, photos: Sequence[Any], payload: Any) -> GroundPhotos:
     import shapely
 
@@ -107,11 +132,7 @@ def ground_photos(compiled: Any, sim: Any, photos: Sequence[Any], payload: Any) 
     below = _ground_xy(dem, proj, c[:, 0], c[:, 1])
     z = camera_amsl(compiled, photos, below)
     hag = z - below
-    h = np.radians([p.heading_deg for p in photos])
-    d = np.column_stack([np.sin(h), np.cos(h)])
-    nrm = np.column_stack([np.cos(h), -np.sin(h)])
-    across, along = payload.footprint_m(1.0)
-    u = (d[:, None, :] * (_RING[None, :, 0:1] * along / 2) + nrm[:, None, :] * (_RING[None, :, 1:2] * across / 2))
+    u = footprint_ring(np.array([p.heading_deg for p in photos], dtype=float), payload)
     drop = np.repeat(np.maximum(hag, 0.0)[:, None], len(_RING), axis=1)
     # the rays land within a footprint of their photo, 1.5 times its reach covers every iteration's guess
     reach = 1.5 * float(np.max(np.abs(u))) * float(np.nanmax(np.maximum(hag, 0.0)) if len(hag) else 0.0) + 1.0

@@ -247,24 +247,9 @@ def _footprints(shots: Sequence[Shot], proj: Any, info: PayloadInfo, fallback_al
         from missions.terrain.reflight import ground_photos
         gp, source = ground_photos(*over_dem, shots_xy, info), "dem"
     else:
-        gp, source = _flat_ground(centres, alt, heading, info), "home"
+        from missions.terrain.reflight import flat_ground_photos
+        gp, source = flat_ground_photos(centres, alt, heading, info), "home"
     return _measure(shots_xy, gp, source, info)
-
-
-def _flat_ground(centres: np.ndarray, alt: np.ndarray, heading: np.ndarray, info: PayloadInfo) -> Any:
-    """Footprints on flat ground at home's elevation: each photo's rectangle at its own height above home, as
-    missions.terrain.reflight's GroundPhotos (outline in its ring order), so one set of overlap measures serves
-    both grounds."""
-    import shapely
-    from missions.terrain.reflight import _RING, GroundPhotos
-    h = np.radians(heading)
-    d = np.column_stack([np.sin(h), np.cos(h)])
-    nrm = np.column_stack([np.cos(h), -np.sin(h)])
-    across, along = info.footprint_m(1.0)
-    u = (d[:, None, :] * (_RING[None, :, 0:1] * along / 2) + nrm[:, None, :] * (_RING[None, :, 1:2] * across / 2))
-    ring = centres[:, None, :] + u * np.maximum(alt, 0.0)[:, None, None]
-    closed = np.concatenate([ring, ring[:, :1]], axis=1)
-    return GroundPhotos(alt.astype(float), ring, shapely.polygons(closed) if len(alt) else np.zeros(0, object))
 
 
 def _measure(shots: Sequence[_GroundShot], gp: Any, source: str, info: PayloadInfo) -> _Measured:
