@@ -447,7 +447,7 @@ def _measure_step(compiled: Compiled, area_info: AreaInfo, path: np.ndarray | No
     if not area_info.payloads:
         return StepMeasure(area_info, (), None)
     geom = area_geometry(area_info.area, sim.projection)
-    zones = _zones(area_info.area, sim.projection)
+    zones = photo_zones(area_info.area, sim.projection)
     own = self_triggering(compiled)
     table = _zone_table(compiled, area_info, geom, photos_of, sim) if area_info.zones is not None else None
     measured = geom if table is None else table.coverable
@@ -526,7 +526,7 @@ def _outside_m(xy: np.ndarray, path: np.ndarray | None, geom: Any) -> float:
     return sum(outside_length_m(xy[a:b + 2], geom) for a, b in zip(np.r_[k[0], k[cut + 1]], np.r_[k[cut], k[-1]]))
 
 
-def _zones(area: Any, proj: Any) -> Any:
+def photo_zones(area: Any, proj: Any) -> Any:
     """The area's holes and exclusion zones as drawn (`Area.excluded`: an exclusion that touches, crosses or
     splits the boundary is no hole of the surveyed geometry) in projection `proj`. An Area built without that
     record (by hand) has only its geometry's holes."""

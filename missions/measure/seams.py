@@ -48,7 +48,7 @@ def measure_sorties(compiled: Compiled) -> SortieTable | None:
         if not a.payloads:
             continue
         geom = rp.area_geometry(a.area, projection)
-        zones = rp._zones(a.area, projection)
+        zones = rp.photo_zones(a.area, projection)
         if getattr(a, "zones", None) is not None:      # the ground the step can cover (missions.measure.zones)
             photos_of = {p.name: [q for q in photos if p.name in q.payloads] for p in compiled.payloads}
             geom = rp._zone_table(compiled, a, geom, photos_of, sims[0]).coverable

@@ -23,7 +23,7 @@ from typing import Any, NamedTuple, Sequence
 import numpy as np
 
 from missions.compiled import AreaInfo, Compiled, PayloadInfo
-from missions.measure.report import COVERAGE_TARGET, _zones, area_geometry
+from missions.measure.report import COVERAGE_TARGET, area_geometry, photo_zones
 from wiris_tools.audit.logs import FlightLog, Shot
 from wiris_tools.errors import LinkError
 
@@ -299,7 +299,7 @@ def _audit_step(area: AreaInfo, name: str, info: PayloadInfo, shots: Sequence[Sh
     import shapely
     proj = sim.projection
     geom = area_geometry(area.area, proj)
-    zones = _zones(area.area, proj)
+    zones = photo_zones(area.area, proj)
     photos = sim.photos if expected is None else expected
     predicted = [p for p in photos if name in p.payloads
                  and (area.items is None or area.items[0] <= p.item < area.items[1])]
