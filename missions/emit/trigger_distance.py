@@ -62,9 +62,11 @@ def ardupilot_commanded_distance(spacing_m: float, speed_mps: float, lat_deg: fl
     keeps n for speeds within ±1/(2n) of the plan's, and the half check shorter than the spacing keeps a line's
     last photo, planned on its end, at least that much before it, where the trigger is switched off."""
     step = ardupilot_check_step_m(speed_mps)
+    if step <= 0:
+        return spacing_m
     longest = max(ardupilot_metre(lat_deg))
     steps = math.floor((spacing_m / longest - step / 2) / step + 1e-9)
-    if step <= 0 or steps < 2:
+    if steps < 2:
         return spacing_m
     return (steps - 0.5) * step
 
