@@ -67,6 +67,9 @@ CORRIDOR = """\
 
 RTL = "  - rtl: {}\n"
 
+# kinds only PX4 flies: ArduPilot's missions take no DO_SET_CAM_TRIGG_INTERVAL (the compiler refuses them)
+PX4_ONLY = frozenset({"interval"})
+
 # each kind's mission steps
 STEPS = {
     "survey": _takeoff(40) + _survey(front=75, trigger="distance") + RTL,
