@@ -39,7 +39,7 @@ from wiris_tools.camera_definition import Definition, DefParam, parse_definition
 from wiris_tools.errors import CommandRefused, LinkError, NoAnswer
 from wiris_tools.link import IN_PROGRESS_TIMEOUTS, Link, command_name, result_name
 from wiris_tools.mavftp import download
-from wiris_tools.camera_setup import MESSAGE_GAP_S, Step, _message_fields, _nan_params
+from wiris_tools.camera_setup import MESSAGE_GAP_S, Step, message_fields, nan_params
 
 # also importable from here, where the rest of the tools import them
 from wiris_tools.camera_setup import load_setup, parse_setup, steps_of_payload
@@ -227,7 +227,7 @@ class CameraClient:
 
     # -- requests ------------------------------------------------------------------------------
     def command(self, command: int, params: list[float | None], *, timeout_s: float | None = None) -> Any:
-        return self.link.command_long(self.system, self.component, command, _nan_params(params),
+        return self.link.command_long(self.system, self.component, command, nan_params(params),
                                       timeout=timeout_s or self.timeout_s, retries=self.retries)
 
     def request(self, message: str, param2: float = 0.0, *, fallback: int | None = None,
@@ -659,7 +659,7 @@ class CameraClient:
             raise LinkError(f"component {target.component} speaks MAVLink 1 and does not answer {step.message}, so a "
                             "MAVLink 2 frame it cannot read would be lost without a trace; nothing was sent",
                             where=step.label, hint="run again with --mavlink1")
-        values = dict.fromkeys(_message_fields(step.message), 0)
+        values = dict.fromkeys(message_fields(step.message), 0)
         values.update(step.fields)
         msg = getattr(self.link.mav, f"{step.message.lower()}_encode")(target.system, target.component, **values)
         tries = self.retries + 1

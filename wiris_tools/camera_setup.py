@@ -50,7 +50,7 @@ class Step:
         return f"step {self.number} ({self.description})" if self.description else f"step {self.number}"
 
 
-def _nan_params(values: list[float | None]) -> list[float]:
+def nan_params(values: list[float | None]) -> list[float]:
     return [math.nan if v is None else float(v) for v in values]
 
 
@@ -66,7 +66,7 @@ def _is_number(value: Any) -> bool:
     return not isinstance(value, bool) and isinstance(value, (int, float)) and math.isfinite(value)
 
 
-def _message_fields(name: str) -> dict[str, str]:
+def message_fields(name: str) -> dict[str, str]:
     """A message's settable fields (all but the target ids, in order) and their C types, from pymavlink's
     dialect."""
     cls = getattr(mavlink2, f"MAVLink_{name.lower()}_message")
@@ -82,7 +82,7 @@ def _checked_message(s: dict, loc: str) -> tuple[str, tuple[tuple[str, float | i
     if not isinstance(fields, dict):
         raise LinkError("fields must be a JSON object of field name -> number", where=loc,
                         hint='e.g. "fields": {"mode": 2, "shutter_speed": 2000, "extra_param": 255}')
-    types = _message_fields(name)
+    types = message_fields(name)
     out = []
     for key, value in fields.items():
         ctype = types.get(key)
@@ -190,7 +190,7 @@ def _parse_command_step(head: _StepHead, s: dict) -> Step:
         if isinstance(s.get("expect") or {}, dict) else "MAV_RESULT_ACCEPTED"
     if not isinstance(getattr(mavlink2, str(expect), None), int) or not str(expect).startswith("MAV_RESULT_"):
         raise LinkError(f"unknown expected result {expect!r}", where=loc, hint="e.g. MAV_RESULT_ACCEPTED")
-    return Step(head.index, head.description, head.kind, head.component, cmd, tuple(_nan_params(params)),
+    return Step(head.index, head.description, head.kind, head.component, cmd, tuple(nan_params(params)),
                 str(expect))
 
 

@@ -13,7 +13,7 @@ from missions.emit.items import MissionItem
 from wiris_tools.errors import LinkError
 from wiris_tools.transfer.results import (Progress, TYPE_NAMES, TransferResult, UploadUnconfirmed, VehicleRefused,
                                           _FATAL_NACKS, _NACK_HINTS, mission_result_name)
-from wiris_tools.transfer.wire import _describe, opaque_id_of
+from wiris_tools.transfer.wire import describe_item, opaque_id_of
 
 
 class Upload:
@@ -223,7 +223,7 @@ class Upload:
                                             or (waited_out and self.tries >= t.retries)):
             result, seq = self.fatal_nack
             raise VehicleRefused(f"the vehicle answered {mission_result_name(result)}"
-                                 + (f" to item {seq} ({_describe(self.items[seq])})" if seq >= 0 else
+                                 + (f" to item {seq} ({describe_item(self.items[seq])})" if seq >= 0 else
                                     f" to MISSION_COUNT ({self.count} items)"), result=result, where=self.where,
                                  hint=_NACK_HINTS.get(result, "check the item the error names"))
         if now - self.last_progress > self.stall_s:

@@ -14,7 +14,7 @@ from wiris_tools.errors import LinkError
 from wiris_tools.link import command_name
 
 
-def _describe(item: MissionItem) -> str:
+def describe_item(item: MissionItem) -> str:
     return command_name(item.command)
 
 
@@ -64,14 +64,14 @@ def check_encodable(items: Sequence[MissionItem], where: str) -> None:
         for name in ("param1", "param2", "param3", "param4", "z"):
             v = getattr(it, name)
             if math.isfinite(v) and abs(v) > FLOAT32_MAX:
-                raise LinkError(f"item {i} ({_describe(it)}) has {name} = {v:g}, beyond the float32 range "
+                raise LinkError(f"item {i} ({describe_item(it)}) has {name} = {v:g}, beyond the float32 range "
                                 "MISSION_ITEM_INT carries", where=f"{where}, item {i}",
                                 hint="fix the value in the file (at most ±3.4e38); nothing was sent")
         for name, lo, hi in (("x", -2**31, 2**31 - 1), ("y", -2**31, 2**31 - 1), ("command", 0, 65535),
                              ("frame", 0, 255), ("autocontinue", 0, 255), ("current", 0, 255)):
             v = getattr(it, name)
             if not lo <= v <= hi:
-                raise LinkError(f"item {i} ({_describe(it)}) has {name} = {v}, outside {lo}..{hi}",
+                raise LinkError(f"item {i} ({describe_item(it)}) has {name} = {v}, outside {lo}..{hi}",
                                 where=f"{where}, item {i}", hint="fix the value in the file; nothing was sent")
 
 
